@@ -1,0 +1,270 @@
+// The whole actuator as one ODE: valves, tube, chambers, rod, friction, end
+// stops and the simulated effects of the catalog.
+//
+// Model/data split: `ActuatorLayout` (which states exist) and
+// `ActuatorCoefficients<T>` (every number the equations use) are built once
+// from a parameter set and never change; the state and the valve command are
+// passed in. Everything is templated on the scalar so that ceres::Jet gives
+// exact Jacobians (and, later, parameter sensitivities).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "pneumaid/model/chamber.h"
+#include "pneumaid/model/friction.h"
+#include "pneumaid/model/kvp.h"
+#include "pneumaid/model/load.h"
+#include "pneumaid/model/orifice.h"
+#include "pneumaid/model/parameters.h"
+#include "pneumaid/model/valve_bank.h"
+
+namespace pneumaid {
+
+// Numerical treatments that are not physical parameters of the unit. Each one
+// replaces a non-smooth feature of the paper's model by a stiff but smooth
+// one; docs/model.md explains the choices.
+struct ModelRegularization {
+  // Half-width of the friction saturation around v = 0. A rod whose net
+  // force is below Fs creeps at less than this speed.
+  double stick_velocity_m_per_s = 1.0e-5;
+  // Contact spring of the end stops. 1e7 N/m lets the full supply force on the
+  // cap side (100 N) push the rod 10 um past the stop.
+  double end_stop_stiffness_N_per_m = 1.0e7;
+  // Damping ratio of the rod mass on the contact spring (1 = critical).
+  double end_stop_damping_ratio = 1.0;
+  // Depth over which the contact damper engages, so the force has no jump.
+  double end_stop_engagement_depth_m = 1.0e-5;
+  // Pressure ratio above which valve flow is linear in the pressure difference.
+  double linear_flow_ratio = kDefaultLinearFlowRatio;
+  // pipeline.model: flow_lag only: below this absolute chamber pressure the
+  // lagged outflow is faded out so that no pressure reaches zero.
+  double flow_lag_pressure_floor_Pa = 1.0e3;
+  // A chamber volume never falls below this fraction of its dead volume.
+  double minimum_volume_fraction = 0.1;
+
+  bool IsValid(std::string* error) const;
+};
+
+// Fixed state indices; optional states follow from index 4 in the order of
+// the layout's fields.
+enum StateIndex : int { kPosition = 0, kVelocity = 1, kPressure1 = 2, kPressure2 = 3 };
+
+inline constexpr int kMaxStates = 14;
+
+struct ActuatorLayout {
+  bool valve_lag = false;          // 4 states: lagged valve openings [V]
+  bool conductance_lag = false;    // 4 states: lagged K_vp of each valve [kg/s]
+  bool flow_lag = false;           // 2 states: lagged mass flows into chambers [kg/s]
+  bool flow_sensor_lag = false;    // 2 states: flows as the meters read them [kg/s]
+  int opening_begin = -1, conductance_begin = -1, flow_begin = -1, sensor_begin = -1;
+  int size = 4;
+
+  // Which states the parameter set needs. Requires a validated parameter set.
+  static ActuatorLayout For(const Parameters& params);
+};
+
+template <typename T>
+struct ActuatorCoefficients {
+  OrificeCoefficients<T> orifice;
+  KvpCoefficients<T> increasing, decreasing;
+  T heat_capacity_ratio, k_RT;
+  T supply_pressure_Pa, atmospheric_pressure_Pa;
+  ChamberGeometry<T> chamber_1, chamber_2;
+  T area_1_m2, area_2_m2, load_mass_kg, weight_N;
+  StribeckCoefficients<T> friction_positive, friction_negative;
+  T stick_velocity_m_per_s;
+  EndStopCoefficients<T> end_stop;
+  T pipeline_delta_per_s;
+  T flow_lag_pressure_floor_Pa;
+  // Effects; zero when the effect is absent (and then unused).
+  T valve_lag_tau_s, flow_sensor_tau_s, leak_conductance_kg_per_s_Pa;
+  T friction_pressure_per_Pa, deadzone_V;
+};
+
+// The valve inputs held constant over one input segment.
+struct ValveCommand {
+  ValveOpenings opening{0, 0, 0, 0};
+  std::array<bool, kValveCount> decreasing_branch{false, false, false, false};
+};
+
+// What the sensors of a rig would see, besides the state itself.
+template <typename T>
+struct ActuatorOutputs {
+  T q1_kg_per_s, q2_kg_per_s;  // mass flows into the chambers at the valve side
+};
+
+namespace internal {
+inline double EffectValue(const Parameters& p, const char* name, const char* key) {
+  const auto effect = p.effects.find(name);
+  return effect == p.effects.end() ? 0.0 : effect->second.at(key);
+}
+}  // namespace internal
+
+template <typename T>
+ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
+                                                 const ModelRegularization& reg) {
+  ActuatorCoefficients<T> c;
+  const double k = p.gas.heat_capacity_ratio;
+  c.orifice = MakeOrificeCoefficients<T>(k, p.gas.gas_constant_J_per_kgK, p.gas.temperature_K,
+                                         p.valve.normalization, reg.linear_flow_ratio);
+  c.increasing = MakeKvpCoefficients<T>(p.valve.increasing);
+  c.decreasing = MakeKvpCoefficients<T>(p.valve.decreasing);
+  c.heat_capacity_ratio = T(k);
+  c.k_RT = T(k * p.gas.gas_constant_J_per_kgK * p.gas.temperature_K);
+  c.supply_pressure_Pa = T(p.supply.supply_pressure_Pa);
+  c.atmospheric_pressure_Pa = T(p.supply.atmospheric_pressure_Pa);
+  const auto& cyl = p.cylinder;
+  const double half_stroke = 0.5 * cyl.stroke_m;
+  c.chamber_1 = {T(cyl.area_1_m2), T(cyl.dead_volume_1_m3), T(half_stroke), T(1.0),
+                 T(reg.minimum_volume_fraction * cyl.dead_volume_1_m3)};
+  c.chamber_2 = {T(cyl.area_2_m2), T(cyl.dead_volume_2_m3), T(half_stroke), T(-1.0),
+                 T(reg.minimum_volume_fraction * cyl.dead_volume_2_m3)};
+  c.area_1_m2 = T(cyl.area_1_m2);
+  c.area_2_m2 = T(cyl.area_2_m2);
+  c.load_mass_kg = T(cyl.load_mass_kg);
+  c.weight_N = T(cyl.orientation == Orientation::kVertical
+                     ? cyl.load_mass_kg * kStandardGravity_m_per_s2
+                     : 0.0);
+  c.friction_positive = MakeStribeckCoefficients<T>(p.friction.positive);
+  c.friction_negative = MakeStribeckCoefficients<T>(p.friction.negative);
+  c.stick_velocity_m_per_s = T(reg.stick_velocity_m_per_s);
+  const double stiffness = reg.end_stop_stiffness_N_per_m;
+  c.end_stop = {T(half_stroke), T(stiffness),
+                T(2.0 * reg.end_stop_damping_ratio * std::sqrt(stiffness * cyl.load_mass_kg)),
+                T(reg.end_stop_engagement_depth_m)};
+  const bool lag_from_effect = p.pipeline.model == PipelineModel::kNone;
+  c.pipeline_delta_per_s =
+      T(lag_from_effect ? internal::EffectValue(p, "pipeline_lag", "delta") : p.pipeline.delta_per_s);
+  c.flow_lag_pressure_floor_Pa = T(reg.flow_lag_pressure_floor_Pa);
+  c.valve_lag_tau_s = T(internal::EffectValue(p, "valve_lag", "tau"));
+  c.flow_sensor_tau_s = T(internal::EffectValue(p, "flow_sensor_lag", "tau"));
+  c.leak_conductance_kg_per_s_Pa = T(internal::EffectValue(p, "cross_leakage", "c"));
+  c.friction_pressure_per_Pa = T(internal::EffectValue(p, "friction_pressure", "kp"));
+  c.deadzone_V = T(internal::EffectValue(p, "valve_deadzone", "u0"));
+  return c;
+}
+
+// valve_deadzone: no flow below u0, the remaining range rescaled to [0, 1].
+template <typename T>
+T EffectiveOpening(const T& opening_V, const T& deadzone_V) {
+  if (opening_V <= deadzone_V) return T(0.0);
+  return (opening_V - deadzone_V) / (T(1.0) - deadzone_V);
+}
+
+// Valve openings the orifices see: the command, or its lagged state.
+template <typename T>
+std::array<T, kValveCount> ValveOpeningsInUse(const ActuatorLayout& layout,
+                                              const ValveCommand& command, const T* y) {
+  std::array<T, kValveCount> opening;
+  for (int i = 0; i < kValveCount; ++i) {
+    opening[i] = layout.valve_lag ? y[layout.opening_begin + i] : T(command.opening[i]);
+  }
+  return opening;
+}
+
+// Commanded K_vp [kg/s] of each valve (before any tube lag).
+template <typename T>
+std::array<T, kValveCount> ValveGains(const ActuatorCoefficients<T>& c,
+                                      const ValveCommand& command,
+                                      const std::array<T, kValveCount>& opening) {
+  std::array<T, kValveCount> gain;
+  for (int i = 0; i < kValveCount; ++i) {
+    const auto& branch = command.decreasing_branch[i] ? c.decreasing : c.increasing;
+    gain[i] = Kvp(EffectiveOpening(opening[i], c.deadzone_V), branch);
+  }
+  return gain;
+}
+
+// Mass flows [kg/s] into chambers 1 and 2 through the valves, for given gains.
+template <typename T>
+std::array<T, 2> ValveFlows(const ActuatorCoefficients<T>& c,
+                            const std::array<T, kValveCount>& gain, const T& p1, const T& p2) {
+  const auto flow = [&](int valve, const T& from, const T& to) {
+    // A closed valve passes nothing; skipping it saves the costly powers.
+    return gain[valve] > T(0.0) ? OrificeMassFlow(gain[valve], from, to, c.orifice) : T(0.0);
+  };
+  return {flow(kSupplyToChamber1, c.supply_pressure_Pa, p1) -
+              flow(kChamber1ToExhaust, p1, c.atmospheric_pressure_Pa),
+          flow(kSupplyToChamber2, c.supply_pressure_Pa, p2) -
+              flow(kChamber2ToExhaust, p2, c.atmospheric_pressure_Pa)};
+}
+
+// flow_lag guard: fades an outflow out between floor and 2 x floor.
+template <typename T>
+T GuardedOutflow(const T& flow, const T& pressure_Pa, const T& floor_Pa) {
+  if (flow >= T(0.0)) return flow;
+  T fraction = (pressure_Pa - floor_Pa) / floor_Pa;
+  if (fraction < T(0.0)) fraction = T(0.0);
+  if (fraction > T(1.0)) fraction = T(1.0);
+  return flow * fraction;
+}
+
+// The right-hand side dy/dt = f(y, command). `outputs` may be null.
+template <typename T>
+void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                         const ValveCommand& command, const T* y, T* dydt,
+                         ActuatorOutputs<T>* outputs) {
+  const T& x = y[kPosition];
+  const T& v = y[kVelocity];
+  const T& p1 = y[kPressure1];
+  const T& p2 = y[kPressure2];
+
+  const auto opening = ValveOpeningsInUse(layout, command, y);
+  if (layout.valve_lag) {
+    for (int i = 0; i < kValveCount; ++i) {
+      dydt[layout.opening_begin + i] = (T(command.opening[i]) - opening[i]) / c.valve_lag_tau_s;
+    }
+  }
+  auto gain = ValveGains(c, command, opening);
+  if (layout.conductance_lag) {
+    for (int i = 0; i < kValveCount; ++i) {
+      const T& lagged = y[layout.conductance_begin + i];
+      dydt[layout.conductance_begin + i] = c.pipeline_delta_per_s * (gain[i] - lagged);
+      gain[i] = lagged;
+    }
+  }
+  auto flow = ValveFlows(c, gain, p1, p2);
+  if (layout.flow_lag) {
+    const T* lagged = y + layout.flow_begin;
+    dydt[layout.flow_begin] = c.pipeline_delta_per_s * (flow[0] - lagged[0]);
+    dydt[layout.flow_begin + 1] = c.pipeline_delta_per_s * (flow[1] - lagged[1]);
+    flow = {GuardedOutflow(lagged[0], p1, c.flow_lag_pressure_floor_Pa),
+            GuardedOutflow(lagged[1], p2, c.flow_lag_pressure_floor_Pa)};
+  }
+  if (layout.flow_sensor_lag) {
+    for (int i = 0; i < 2; ++i) {
+      dydt[layout.sensor_begin + i] = (flow[i] - y[layout.sensor_begin + i]) / c.flow_sensor_tau_s;
+    }
+  }
+  if (outputs != nullptr) {
+    outputs->q1_kg_per_s = layout.flow_sensor_lag ? y[layout.sensor_begin] : flow[0];
+    outputs->q2_kg_per_s = layout.flow_sensor_lag ? y[layout.sensor_begin + 1] : flow[1];
+  }
+
+  const T leak = c.leak_conductance_kg_per_s_Pa * (p1 - p2);  // cross_leakage, 1 -> 2
+  const T volume_1 = ChamberVolume(x, c.chamber_1);
+  const T volume_2 = ChamberVolume(x, c.chamber_2);
+  dydt[kPressure1] = ChamberPressureRate(p1, volume_1, flow[0] - leak, v, c.heat_capacity_ratio,
+                                         c.k_RT, c.chamber_1);
+  dydt[kPressure2] = ChamberPressureRate(p2, volume_2, flow[1] + leak, v, c.heat_capacity_ratio,
+                                         c.k_RT, c.chamber_2);
+
+  const T friction_scale =
+      T(1.0) + c.friction_pressure_per_Pa * (T(0.5) * (p1 + p2) - c.atmospheric_pressure_Pa);
+  const T friction = friction_scale * FrictionForce(v, c.friction_positive, c.friction_negative,
+                                                    c.stick_velocity_m_per_s);
+  const T drive = PneumaticAndGravityForce(p1, p2, c.atmospheric_pressure_Pa, c.area_1_m2,
+                                           c.area_2_m2, c.weight_N);
+  dydt[kPosition] = v;
+  dydt[kVelocity] = (drive - friction + EndStopForce(x, v, c.end_stop)) / c.load_mass_kg;
+}
+
+// Sets the lag states of `y` to their steady values for `command` at the
+// pressures already in `y`, as if the command had been held for a long time.
+void SetLagStatesToEquilibrium(const ActuatorLayout& layout,
+                               const ActuatorCoefficients<double>& c,
+                               const ValveCommand& command, double* y);
+
+}  // namespace pneumaid

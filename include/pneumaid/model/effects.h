@@ -1,0 +1,36 @@
+// The effect catalog: named, optional extensions of the base model.
+//
+// One catalog is shared by the parameter loader, the simulator, the synthetic
+// rig and the discrepancy workflow. An effect is present in a parameter set
+// when its name is a key of `effects`; its parameters are then all required.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pneumaid/model/parameter_table.h"
+
+namespace pneumaid {
+
+struct EffectParameterInfo {
+  const char* name;  // "tau"
+  const char* unit;  // "s"
+  const char* doc;
+  ValueRange range;
+};
+
+struct EffectInfo {
+  const char* name;  // "valve_lag"
+  const char* doc;
+  std::vector<EffectParameterInfo> parameters;
+  // False for effects the catalog names but the simulator cannot honour yet;
+  // simulating a parameter set that holds one is refused, never ignored.
+  bool simulated;
+};
+
+const std::vector<EffectInfo>& EffectCatalog();
+
+// nullptr when `name` is not in the catalog.
+const EffectInfo* FindEffect(const std::string& name);
+
+}  // namespace pneumaid

@@ -1,0 +1,79 @@
+// Forward simulation of the actuator with SUNDIALS CVODES (BDF, Newton with a
+// dense, exact Jacobian from automatic differentiation of the model).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pneumaid/model/actuator.h"
+#include "pneumaid/model/parameters.h"
+#include "pneumaid/sim/command.h"
+#include "pneumaid/trajectory.h"
+
+namespace pneumaid {
+
+struct SimulationOptions {
+  // Relative tolerance of every state.
+  double relative_tolerance = 1e-6;
+  // Absolute tolerances per kind of state.
+  double position_tolerance_m = 1e-9;
+  double velocity_tolerance_m_per_s = 1e-7;
+  double pressure_tolerance_Pa = 1.0;
+  // Lagged conductances and flows, and measured flows (q_max is about 1e-4).
+  double mass_flow_tolerance_kg_per_s = 1e-11;
+  // Lagged valve openings (valve_lag effect).
+  double opening_tolerance_V = 1e-7;
+  // Work bound: the run fails (never hangs) past this many solver steps.
+  long max_steps = 5'000'000;
+  // Hysteresis mode: change of a valve opening that re-latches its branch.
+  double hysteresis_threshold_V = 0.01;
+  // A command change at a knot larger than this (or a branch switch) restarts
+  // the integrator at low order; smaller changes (sampled, noisy commands) are
+  // left to the step-size control, which is much cheaper at 1 kHz.
+  double restart_jump_V = 0.02;
+  // Numerical treatment of stick, end stops and the orifice near ratio 1.
+  ModelRegularization regularization;
+
+  bool IsValid(std::string* error) const;
+};
+
+struct InitialState {
+  double position_m = 0.0;  // from mid-stroke
+  double velocity_m_per_s = 0.0;
+  double p1_Pa = 1e5;
+  double p2_Pa = 1e5;
+};
+
+// The paper's start: rod at the retracted end, at rest, both chambers at p_atm.
+InitialState RetractedAtRest(const Parameters& params);
+
+enum class SimulationStatus { kSuccess, kInvalidInput, kSolverFailure };
+
+struct SimulationSummary {
+  SimulationStatus status = SimulationStatus::kSuccess;
+  std::string message;  // why it failed; empty on success
+  long steps = 0;
+  long rhs_evaluations = 0;
+  long jacobian_evaluations = 0;
+  long error_test_failures = 0;
+  long convergence_failures = 0;
+  long restarts = 0;
+  double simulated_time_s = 0.0;
+  double wall_time_s = 0.0;
+
+  bool ok() const { return status == SimulationStatus::kSuccess; }
+  std::string BriefReport() const;
+};
+
+// Simulates from `initial` at output_times_s[0] to the last output time and
+// fills `out` with t, u, x, v, p1, p2, q1, q2 at every output time (which must
+// be non-decreasing). Lag states start settled for command.initial_V. Never
+// throws for numerical trouble: the summary says what went wrong.
+SimulationSummary Simulate(const Parameters& params, const CommandSignal& command,
+                           const InitialState& initial, const std::vector<double>& output_times_s,
+                           const SimulationOptions& options, Trajectory* out);
+
+// Uniform output times from t0 to t_end inclusive at `rate_Hz`.
+std::vector<double> UniformTimes(double t0_s, double t_end_s, double rate_Hz);
+
+}  // namespace pneumaid

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# The full test suite: installs what is missing, builds Release and runs every
+# test with CTest. Then the same suite built with AddressSanitizer and
+# UndefinedBehaviorSanitizer (skip with PNEUMAID_SKIP_SANITIZERS=1).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+scripts/setup.sh
+ctest --test-dir build --output-on-failure -j"$(nproc)"
+
+if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
+  BUILD_DIR=build-asan CMAKE_ARGS="-DPNEUMAID_SANITIZE=ON -DPNEUMAID_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo" \
+    scripts/setup.sh
+  ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --test-dir build-asan --output-on-failure -j"$(nproc)"
+fi

@@ -1,0 +1,24 @@
+// The `pneumaid` subcommands. Each registers its options on the app and
+// returns the function that runs it; that function returns the exit status.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace pneumaid::cli {
+
+// Exit statuses of every command (params spec).
+enum ExitStatus : int {
+  kSuccess = 0,
+  kUnexpected = 1,
+  kBadInput = 2,
+  kNumericalFailure = 3,
+  kQualityMissed = 4,
+};
+
+using CommandRunner = std::function<int()>;
+
+CommandRunner AddSimulateCommand(CLI::App* app);
+
+}  // namespace pneumaid::cli

@@ -1,0 +1,35 @@
+// pneumaid: parse the command line, run one workflow, map errors to the exit
+// statuses of the params spec. No numerics here.
+#include <iostream>
+#include <map>
+
+#include "commands.h"
+#include "pneumaid/io/input_error.h"
+
+int main(int argc, char** argv) {
+  using namespace pneumaid::cli;
+  CLI::App app{"pneumaid: identify pneumatic actuators from rig logs"};
+  app.set_version_flag("--version", std::string(PNEUMAID_VERSION));
+  app.require_subcommand(1);
+  std::map<CLI::App*, CommandRunner> runners;
+  CLI::App* simulate = app.add_subcommand("simulate", "simulate a parameter set for a command");
+  runners[simulate] = AddSimulateCommand(simulate);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    const int status = app.exit(error);
+    return status == 0 ? kSuccess : kBadInput;
+  }
+  try {
+    for (const auto& [subcommand, run] : runners) {
+      if (subcommand->parsed()) return run();
+    }
+  } catch (const pneumaid::InputError& error) {
+    std::cerr << "error: " << error.what() << "\n";
+    return kBadInput;
+  } catch (const std::exception& error) {
+    std::cerr << "internal error: " << error.what() << "\n";
+    return kUnexpected;
+  }
+  return kUnexpected;
+}

@@ -1,0 +1,161 @@
+#include <cmath>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "pneumaid/eval/stroke_summary.h"
+#include "pneumaid/io/csv_table.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/trajectory_csv.h"
+#include "pneumaid/io/units.h"
+#include "pneumaid/sim/simulate.h"
+
+namespace pneumaid::cli {
+namespace {
+
+struct SimulateArgs {
+  std::string params_path;
+  std::vector<std::string> steps;  // "U@T0"
+  std::string input_path;
+  double until_s = NAN;
+  double rate_Hz = 1000.0;
+  std::string out_path;
+};
+
+// "U@T0" -> (T0, U).
+std::pair<double, double> ParseStep(const std::string& text) {
+  const auto at = text.find('@');
+  try {
+    if (at == std::string::npos) throw std::invalid_argument("no @");
+    std::size_t used_u = 0, used_t = 0;
+    const std::string u_text = text.substr(0, at), t_text = text.substr(at + 1);
+    const double u = std::stod(u_text, &used_u);
+    const double t = std::stod(t_text, &used_t);
+    if (used_u != u_text.size() || used_t != t_text.size() || !std::isfinite(u) ||
+        !std::isfinite(t) || std::fabs(u) > 1) {
+      throw std::invalid_argument("bad number");
+    }
+    return {t, u};
+  } catch (const std::logic_error&) {
+    throw InputError("--step", 0, 0,
+                     "'" + text + "': expected U@T0 with U in [-1, 1] V and T0 in s, e.g. 1@0");
+  }
+}
+
+// Column `name` of a log in SI, or empty when absent.
+std::vector<double> ColumnInSI(const CsvTable& table, const std::string& name, Quantity quantity,
+                               double atmospheric_pressure_Pa, bool required) {
+  const CsvColumn* column = table.Find(name);
+  if (column == nullptr) {
+    if (required) throw InputError(table.file, table.header_line, 0, "missing column '" + name + "'");
+    return {};
+  }
+  const UnitInfo* unit = column->unit.empty() ? nullptr : FindUnit(column->unit);
+  if (!column->unit.empty() && (unit == nullptr || unit->quantity != quantity)) {
+    throw InputError(table.file, table.header_line, column->column,
+                     "column '" + name + "': unit '" + column->unit + "' not accepted; expected " +
+                         AcceptedUnits({quantity}));
+  }
+  std::vector<double> values = column->values;
+  if (unit != nullptr) {
+    for (double& value : values) value = ToSI(*unit, value, atmospheric_pressure_Pa);
+  }
+  return values;
+}
+
+struct LoggedRun {
+  CommandSignal command;
+  std::vector<double> t_s;
+  InitialState initial;
+};
+
+// The command of a log (and its first state, when the log has x, p1, p2).
+LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
+  const CsvTable table = ReadCsv(path);
+  const double p_atm = params.supply.atmospheric_pressure_Pa;
+  LoggedRun run;
+  run.t_s = ColumnInSI(table, "t", Quantity::kTime, p_atm, true);
+  const auto u = ColumnInSI(table, "u", Quantity::kCommand, p_atm, true);
+  for (std::size_t i = 1; i < run.t_s.size(); ++i) {
+    if (!(run.t_s[i] > run.t_s[i - 1])) {
+      throw InputError(path, table.row_lines[i], 1, "column 't': expected strictly increasing time");
+    }
+  }
+  run.command = SampledCommand(run.t_s, u);
+  run.initial = RetractedAtRest(params);
+  const auto x = ColumnInSI(table, "x", Quantity::kLength, p_atm, false);
+  const auto p1 = ColumnInSI(table, "p1", Quantity::kPressure, p_atm, false);
+  const auto p2 = ColumnInSI(table, "p2", Quantity::kPressure, p_atm, false);
+  if (!x.empty() && !p1.empty() && !p2.empty()) {
+    run.initial.position_m = x.front();
+    run.initial.p1_Pa = p1.front();
+    run.initial.p2_Pa = p2.front();
+  }
+  return run;
+}
+
+int RunSimulate(const SimulateArgs& args) {
+  const Parameters params = LoadParams(args.params_path);
+  CommandSignal command;
+  InitialState initial = RetractedAtRest(params);
+  double t0 = 0.0;
+  double until = args.until_s;
+  if (!args.input_path.empty()) {
+    const LoggedRun run = ReadLoggedRun(args.input_path, params);
+    command = run.command;
+    initial = run.initial;
+    t0 = run.t_s.front();
+    if (std::isnan(until)) until = run.t_s.back();
+  } else {
+    std::vector<std::pair<double, double>> steps;
+    for (const auto& text : args.steps) steps.push_back(ParseStep(text));
+    command = StepCommand(steps);
+    if (std::isnan(until)) throw InputError("--until", 0, 0, "required with --step");
+  }
+  if (!(until > t0)) throw InputError("--until", 0, 0, "expected a time after the start");
+  if (!(args.rate_Hz > 0)) throw InputError("--rate", 0, 0, "expected a positive rate in Hz");
+
+  Trajectory trajectory;
+  const SimulationSummary summary =
+      Simulate(params, command, initial, UniformTimes(t0, until, args.rate_Hz), SimulationOptions{},
+               &trajectory);
+  std::cout << summary.BriefReport() << "\n";
+  if (summary.status == SimulationStatus::kInvalidInput) {
+    throw InputError(args.params_path, 0, 0, summary.message);
+  }
+  if (!summary.ok()) return kNumericalFailure;  // nothing written
+  std::cout << SummarizeStroke(trajectory, 0.5 * params.cylinder.stroke_m).Describe() << "\n";
+  const std::string comment = "pneumaid " PNEUMAID_VERSION " simulate --params " +
+                              args.params_path + "\nunit " + params.unit +
+                              "; SI units, x from mid-stroke, pressures absolute";
+  WriteTrajectoryCsv(trajectory, comment, args.out_path);
+  std::cout << "wrote " << args.out_path << " (" << trajectory.size() << " samples)\n";
+  return kSuccess;
+}
+
+}  // namespace
+
+CommandRunner AddSimulateCommand(CLI::App* app) {
+  auto args = std::make_shared<SimulateArgs>();
+  app->add_option("--params", args->params_path, "parameter set (params-v1 YAML)")->required();
+  auto* step = app->add_option("--step", args->steps,
+                               "command step U@T0: u = U [V] from T0 [s] on (repeatable)");
+  auto* input = app->add_option("--input", args->input_path,
+                                "log whose command (t, u) drives the run; starts from its first "
+                                "sample's x, p1, p2 when present");
+  step->excludes(input);
+  input->excludes(step);
+  app->add_option("--until", args->until_s, "end time [s] (default: end of --input)");
+  app->add_option("--rate", args->rate_Hz, "output rate [Hz]")->capture_default_str();
+  app->add_option("--out", args->out_path, "output CSV (a validation log)")->required();
+  app->callback([app, step, input]() {
+    if (step->count() == 0 && input->count() == 0) {
+      throw CLI::ValidationError("simulate", "one of --step or --input is required");
+    }
+  });
+  return [args]() { return RunSimulate(*args); };
+}
+
+}  // namespace pneumaid::cli

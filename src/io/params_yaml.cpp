@@ -1,0 +1,359 @@
+#include "pneumaid/io/params_yaml.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "pneumaid/io/atomic_file.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/model/effects.h"
+#include "pneumaid/model/parameter_table.h"
+
+namespace pneumaid {
+namespace {
+
+const std::set<std::string> kTopLevelKeys = {"format",  "unit",     "gas",     "supply",
+                                             "cylinder", "valve",   "pipeline", "friction",
+                                             "effects", "uncertainty", "provenance"};
+const std::set<std::string> kRequiredTopLevelKeys = {"format", "unit",    "gas",     "supply",
+                                                     "cylinder", "valve", "pipeline", "friction"};
+// Mapping-valued keys below a section (everything else is a scalar or special).
+const std::set<std::string> kSubsections = {"valve.increasing", "valve.decreasing",
+                                            "friction.positive", "friction.negative"};
+
+// Reads one document, remembering where each path was written for messages.
+class ParamsReader {
+ public:
+  explicit ParamsReader(std::string source) : source_(std::move(source)) {}
+
+  Parameters Read(const std::string& text) {
+    YAML::Node root;
+    try {
+      root = YAML::Load(text);
+    } catch (const YAML::ParserException& error) {
+      throw InputError(source_, error.mark.line + 1, error.mark.column + 1,
+                       "YAML syntax error: " + error.msg);
+    }
+    if (!root.IsMap()) Fail(root, "expected a params-v1 mapping (format: pneumaid-params/1, ...)");
+    Parameters params;
+    ReadTopLevel(root, &params);
+    CheckAllScalarsPresent(root);
+    CheckValid(params, root);
+    return params;
+  }
+
+ private:
+  [[noreturn]] void Fail(const YAML::Node& node, const std::string& message) const {
+    const YAML::Mark mark = node.Mark();
+    const int line = mark.line >= 0 ? mark.line + 1 : 0;
+    const int column = mark.column >= 0 ? mark.column + 1 : 0;
+    throw InputError(source_, line, column, message);
+  }
+
+  std::string ScalarText(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar()) Fail(node, path + ": expected a scalar value");
+    return node.Scalar();
+  }
+
+  double Number(const YAML::Node& node, const std::string& path) const {
+    const std::string text = ScalarText(node, path);
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    if (text.empty() || end == nullptr || *end != '\0' || !std::isfinite(value)) {
+      Fail(node, path + ": expected a finite number in SI units, got '" + text + "'");
+    }
+    return value;
+  }
+
+  template <typename Enum>
+  Enum Choice(const YAML::Node& node, const std::string& path,
+              const std::map<std::string, Enum>& choices) const {
+    const std::string text = ScalarText(node, path);
+    const auto found = choices.find(text);
+    if (found != choices.end()) return found->second;
+    std::string expected;
+    for (const auto& [name, value] : choices) expected += (expected.empty() ? "" : " | ") + name;
+    Fail(node, path + ": expected " + expected + ", got '" + text + "'");
+  }
+
+  void ReadTopLevel(const YAML::Node& root, Parameters* params) {
+    for (const auto& entry : root) {
+      const std::string key = entry.first.as<std::string>();
+      const YAML::Node& value = entry.second;
+      where_[key] = value;
+      if (!kTopLevelKeys.count(key)) Fail(entry.first, "unknown key '" + key + "'");
+      if (key == "format") {
+        if (ScalarText(value, key) != kParamsFormat) {
+          Fail(value, std::string("expected format: ") + kParamsFormat);
+        }
+      } else if (key == "unit") {
+        params->unit = ScalarText(value, key);
+      } else if (key == "effects") {
+        ReadEffects(value, params);
+      } else if (key == "uncertainty") {
+        ReadUncertainty(value, params);
+      } else if (key == "provenance") {
+        if (!value.IsMap()) Fail(value, "provenance: expected a mapping");
+        YAML::Emitter emitter;
+        emitter << value;
+        params->provenance_yaml = emitter.c_str();
+      } else {
+        ReadSection(value, key, params);
+      }
+    }
+    for (const auto& key : kRequiredTopLevelKeys) {
+      if (!root[key]) Fail(root, "missing required key '" + key + "'");
+    }
+  }
+
+  void ReadSection(const YAML::Node& node, const std::string& prefix, Parameters* params) {
+    if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
+    for (const auto& entry : node) {
+      const std::string path = prefix + "." + entry.first.as<std::string>();
+      const YAML::Node& value = entry.second;
+      where_[path] = value;
+      if (const ScalarParameterInfo* info = FindScalarParameter(path)) {
+        info->ref(*params) = Number(value, path);
+      } else if (kSubsections.count(path)) {
+        ReadSection(value, path, params);
+      } else if (!ReadSpecial(value, path, params)) {
+        Fail(entry.first, "unknown key '" + path + "'");
+      }
+    }
+  }
+
+  // Non-numeric keys of the sections. False when `path` is not one.
+  bool ReadSpecial(const YAML::Node& value, const std::string& path, Parameters* params) {
+    if (path == "cylinder.orientation") {
+      params->cylinder.orientation = Choice<Orientation>(
+          value, path, {{"vertical", Orientation::kVertical}, {"horizontal", Orientation::kHorizontal}});
+    } else if (path == "valve.model") {
+      Choice<int>(value, path, {{"kvp_poly4", 0}});
+    } else if (path == "friction.model") {
+      Choice<int>(value, path, {{"stribeck", 0}});
+    } else if (path == "valve.branch") {
+      params->valve.branch = Choice<ValveBranchMode>(value, path,
+                                                     {{"increasing", ValveBranchMode::kIncreasing},
+                                                      {"decreasing", ValveBranchMode::kDecreasing},
+                                                      {"hysteresis", ValveBranchMode::kHysteresis}});
+    } else if (path == "pipeline.model") {
+      params->pipeline.model = Choice<PipelineModel>(
+          value, path, {{"conductance_lag", PipelineModel::kConductanceLag},
+                        {"flow_lag", PipelineModel::kFlowLag},
+                        {"none", PipelineModel::kNone}});
+    } else if (path == "pipeline.delta_by_length") {
+      ReadDeltaByLength(value, params);
+    } else {
+      return false;
+    }
+    return true;
+  }
+
+  void ReadDeltaByLength(const YAML::Node& node, Parameters* params) {
+    if (!node.IsSequence()) Fail(node, "pipeline.delta_by_length: expected a list");
+    for (const auto& item : node) {
+      if (!item.IsMap()) Fail(item, "pipeline.delta_by_length: expected {tube_length, delta}");
+      DeltaAtLength entry;
+      for (const auto& field : item) {
+        const std::string key = field.first.as<std::string>();
+        const std::string path = "pipeline.delta_by_length." + key;
+        if (key == "tube_length") {
+          entry.tube_length_m = Number(field.second, path);
+        } else if (key == "delta") {
+          entry.delta_per_s = Number(field.second, path);
+        } else {
+          Fail(field.first, "unknown key '" + path + "' (expected tube_length, delta)");
+        }
+      }
+      if (!item["tube_length"] || !item["delta"]) {
+        Fail(item, "pipeline.delta_by_length: each entry needs tube_length and delta");
+      }
+      params->pipeline.delta_by_length.push_back(entry);
+    }
+  }
+
+  void ReadEffects(const YAML::Node& node, Parameters* params) {
+    if (!node.IsMap()) Fail(node, "effects: expected a mapping name -> {parameter: value}");
+    for (const auto& entry : node) {
+      const std::string name = entry.first.as<std::string>();
+      const EffectInfo* effect = FindEffect(name);
+      if (effect == nullptr) {
+        std::string known;
+        for (const auto& e : EffectCatalog()) known += (known.empty() ? "" : ", ") + std::string(e.name);
+        Fail(entry.first, "unknown effect '" + name + "' (catalog: " + known + ")");
+      }
+      where_["effects." + name] = entry.second;
+      if (!entry.second.IsMap()) Fail(entry.second, "effects." + name + ": expected a mapping");
+      auto& values = params->effects[name];
+      for (const auto& field : entry.second) {
+        const std::string path = "effects." + name + "." + field.first.as<std::string>();
+        where_[path] = field.second;
+        values[field.first.as<std::string>()] = Number(field.second, path);
+      }
+    }
+  }
+
+  void ReadUncertainty(const YAML::Node& node, Parameters* params) {
+    if (!node.IsMap()) Fail(node, "uncertainty: expected a mapping path -> standard error");
+    for (const auto& entry : node) {
+      const std::string path = entry.first.as<std::string>();
+      const double value = Number(entry.second, "uncertainty." + path);
+      if (!(value >= 0)) Fail(entry.second, "uncertainty." + path + ": expected >= 0");
+      where_["uncertainty." + path] = entry.first;
+      params->uncertainty[path] = value;
+    }
+  }
+
+  void CheckAllScalarsPresent(const YAML::Node& root) const {
+    for (const auto& info : ScalarParameterTable()) {
+      if (where_.count(info.path)) continue;
+      const std::string path = info.path;
+      const std::string section = path.substr(0, path.rfind('.'));
+      const auto parent = where_.find(section);
+      Fail(parent != where_.end() ? parent->second : root,
+           "missing required key '" + path + "' [" + info.unit + "]: " + info.doc);
+    }
+  }
+
+  // The node written for `path`, or for its nearest written ancestor.
+  YAML::Node WhereWritten(std::string path, const YAML::Node& root) const {
+    while (!path.empty()) {
+      const auto found = where_.find(path);
+      if (found != where_.end()) return found->second;
+      const auto dot = path.rfind('.');
+      path = dot == std::string::npos ? "" : path.substr(0, dot);
+    }
+    return root;
+  }
+
+  void CheckValid(const Parameters& params, const YAML::Node& root) const {
+    for (const auto& problem : Validate(params)) {
+      Fail(WhereWritten(problem.path, root), problem.path + ": " + problem.message);
+    }
+    for (const auto& [path, value] : params.uncertainty) {
+      double ignored = 0;
+      if (!GetParameter(params, path, &ignored)) {
+        Fail(where_.at("uncertainty." + path), "uncertainty: '" + path + "' names no parameter");
+      }
+    }
+  }
+
+  std::string source_;
+  std::map<std::string, YAML::Node> where_;
+};
+
+YAML::Node Scalar(double value) { return YAML::Node(FormatDouble(value)); }
+
+YAML::Node FlowMap() {
+  YAML::Node node(YAML::NodeType::Map);
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  return node;
+}
+
+// The section of `path` prefix as a YAML mapping, from the parameter table.
+void FillFromTable(const Parameters& params, const std::string& prefix, YAML::Node* node) {
+  for (const auto& info : ScalarParameterTable()) {
+    const std::string path = info.path;
+    if (path.compare(0, prefix.size() + 1, prefix + ".") != 0) continue;
+    const std::string key = path.substr(prefix.size() + 1);
+    if (key.find('.') != std::string::npos) continue;  // belongs to a subsection
+    (*node)[key] = Scalar(info.get(params));
+  }
+}
+
+YAML::Node Section(const Parameters& params, const std::string& prefix, bool flow) {
+  YAML::Node node = flow ? FlowMap() : YAML::Node(YAML::NodeType::Map);
+  FillFromTable(params, prefix, &node);
+  return node;
+}
+
+}  // namespace
+
+std::string FormatDouble(double value) {
+  char buffer[32];
+  // Shortest round trip, %g-like choice between fixed and scientific.
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general);
+  return std::string(buffer, result.ptr);
+}
+
+Parameters ParamsFromYaml(const std::string& text, const std::string& source_name) {
+  return ParamsReader(source_name).Read(text);
+}
+
+Parameters LoadParams(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, 0, "cannot open parameter file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParamsFromYaml(text.str(), path);
+}
+
+std::string ParamsToYaml(const Parameters& params) {
+  YAML::Node root(YAML::NodeType::Map);
+  root["format"] = kParamsFormat;
+  root["unit"] = params.unit;
+  root["gas"] = FlowMap();
+  root["gas"]["k"] = Scalar(params.gas.heat_capacity_ratio);
+  root["gas"]["R"] = Scalar(params.gas.gas_constant_J_per_kgK);
+  root["gas"]["T"] = Scalar(params.gas.temperature_K);
+  root["supply"] = Section(params, "supply", true);
+  root["cylinder"] = Section(params, "cylinder", false);
+  root["cylinder"]["orientation"] = ToString(params.cylinder.orientation);
+  root["valve"] = YAML::Node(YAML::NodeType::Map);
+  root["valve"]["model"] = "kvp_poly4";
+  root["valve"]["normalization"] = Scalar(params.valve.normalization);
+  root["valve"]["increasing"] = Section(params, "valve.increasing", true);
+  root["valve"]["decreasing"] = Section(params, "valve.decreasing", true);
+  root["valve"]["branch"] = ToString(params.valve.branch);
+  root["pipeline"] = YAML::Node(YAML::NodeType::Map);
+  root["pipeline"]["model"] = ToString(params.pipeline.model);
+  YAML::Node pipeline = root["pipeline"];  // a handle into root
+  FillFromTable(params, "pipeline", &pipeline);
+  YAML::Node by_length(YAML::NodeType::Sequence);
+  by_length.SetStyle(YAML::EmitterStyle::Flow);
+  for (const auto& entry : params.pipeline.delta_by_length) {
+    YAML::Node item = FlowMap();
+    item["tube_length"] = Scalar(entry.tube_length_m);
+    item["delta"] = Scalar(entry.delta_per_s);
+    by_length.push_back(item);
+  }
+  root["pipeline"]["delta_by_length"] = by_length;
+  root["friction"] = YAML::Node(YAML::NodeType::Map);
+  root["friction"]["model"] = "stribeck";
+  root["friction"]["positive"] = Section(params, "friction.positive", true);
+  root["friction"]["negative"] = Section(params, "friction.negative", true);
+  YAML::Node effects = FlowMap();
+  for (const auto& [name, values] : params.effects) {
+    YAML::Node effect = FlowMap();
+    for (const auto& [key, value] : values) effect[key] = Scalar(value);
+    effects[name] = effect;
+  }
+  root["effects"] = effects;
+  YAML::Node uncertainty = params.uncertainty.empty() ? FlowMap() : YAML::Node(YAML::NodeType::Map);
+  for (const auto& [path, value] : params.uncertainty) uncertainty[path] = Scalar(value);
+  root["uncertainty"] = uncertainty;
+  YAML::Node provenance = YAML::Load(params.provenance_yaml);
+  root["provenance"] = provenance.IsMap() ? provenance : FlowMap();
+  YAML::Emitter emitter;
+  emitter << root;
+  return std::string(emitter.c_str()) + "\n";
+}
+
+void SaveParams(const Parameters& params, const std::string& path) {
+  const auto problems = Validate(params);
+  if (!problems.empty()) {
+    throw InputError(path, 0, 0,
+                     "refusing to write an invalid parameter set: " + problems.front().path + ": " +
+                         problems.front().message);
+  }
+  WriteFileAtomically(path, ParamsToYaml(params));
+}
+
+}  // namespace pneumaid

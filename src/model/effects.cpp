@@ -1,0 +1,47 @@
+#include "pneumaid/model/effects.h"
+
+#include <limits>
+
+namespace pneumaid {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr ValueRange kPositive{0, false, kInf, false};
+constexpr ValueRange kNonNegative{0, true, kInf, false};
+
+std::vector<EffectInfo> MakeCatalog() {
+  return {
+      {"valve_lag", "first-order lag between command and valve opening",
+       {{"tau", "s", "time constant of the valve opening", kPositive}}, true},
+      {"flow_sensor_lag", "first-order lag of the flow transducers (measurement only)",
+       {{"tau", "s", "time constant of the flow meters", kPositive}}, true},
+      {"pipeline_lag", "the Eq. 5 lag, when the base model has pipeline.model: none",
+       {{"delta", "1/s", "rate constant of the lag", kPositive}}, true},
+      {"cross_leakage", "laminar leak across the piston seal, q = c (p1 - p2)",
+       {{"c", "kg/(s Pa)", "leak conductance", kNonNegative}}, true},
+      {"heat_transfer", "wall heat exchange of each chamber's gas",
+       {{"h", "W/K", "wall heat transfer coefficient times area", kNonNegative}}, false},
+      {"supply_droop", "supply pressure sags with inflow: p_s = p_supply - r q_in",
+       {{"r", "Pa s/kg", "supply line resistance", kNonNegative}}, false},
+      {"friction_pressure", "friction scales by 1 + kp ((p1 + p2)/2 - p_atm)",
+       {{"kp", "1/Pa", "pressure sensitivity of the seal friction", kNonNegative}}, true},
+      {"valve_deadzone", "no flow below |u| < u0; opening rescaled above it",
+       {{"u0", "V", "dead zone of the valve opening", ValueRange{0, true, 1, false}}}, true},
+  };
+}
+
+}  // namespace
+
+const std::vector<EffectInfo>& EffectCatalog() {
+  static const std::vector<EffectInfo> catalog = MakeCatalog();
+  return catalog;
+}
+
+const EffectInfo* FindEffect(const std::string& name) {
+  for (const auto& effect : EffectCatalog()) {
+    if (name == effect.name) return &effect;
+  }
+  return nullptr;
+}
+
+}  // namespace pneumaid

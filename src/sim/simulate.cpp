@@ -1,0 +1,376 @@
+#include "pneumaid/sim/simulate.h"
+
+#include <ceres/jet.h>
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "cvode_handles.h"
+#include "pneumaid/model/effects.h"
+
+namespace pneumaid {
+namespace {
+
+using JetN = ceres::Jet<double, kMaxStates>;
+
+// Everything the CVODE callbacks need. The command changes between segments;
+// the layout and coefficients are fixed for the run.
+struct ModelData {
+  ActuatorLayout layout;
+  ActuatorCoefficients<double> coefficients;
+  ActuatorCoefficients<JetN> jet_coefficients;
+  ValveCommand command;
+  std::string last_solver_message;
+};
+
+// CVODE right-hand side. Returns 1 (recoverable: CVODE retries with a smaller
+// step) on a non-positive pressure or a non-finite rate; never throws.
+int RightHandSide(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
+  const auto* data = static_cast<const ModelData*>(user_data);
+  const double* state = N_VGetArrayPointer(y);
+  double* rate = N_VGetArrayPointer(ydot);
+  if (!(state[kPressure1] > 0) || !(state[kPressure2] > 0)) return 1;
+  ActuatorDerivatives(data->layout, data->coefficients, data->command, state, rate,
+                      static_cast<ActuatorOutputs<double>*>(nullptr));
+  for (int i = 0; i < data->layout.size; ++i) {
+    if (!std::isfinite(rate[i])) return 1;
+  }
+  return 0;
+}
+
+// Exact dense Jacobian df/dy by forward-mode automatic differentiation.
+int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_data, N_Vector,
+             N_Vector, N_Vector) {
+  const auto* data = static_cast<const ModelData*>(user_data);
+  const int n = data->layout.size;
+  const double* state = N_VGetArrayPointer(y);
+  JetN jet_state[kMaxStates];
+  JetN jet_rate[kMaxStates];
+  for (int i = 0; i < n; ++i) jet_state[i] = JetN(state[i], i);
+  ActuatorDerivatives(data->layout, data->jet_coefficients, data->command, jet_state, jet_rate,
+                      static_cast<ActuatorOutputs<JetN>*>(nullptr));
+  for (int row = 0; row < n; ++row) {
+    for (int col = 0; col < n; ++col) {
+      const double value = jet_rate[row].v[col];
+      if (!std::isfinite(value)) return 1;
+      SM_ELEMENT_D(jacobian, row, col) = value;
+    }
+  }
+  return 0;
+}
+
+// Keeps CVODE's error text for the summary instead of printing it.
+void CaptureSolverMessage(int, const char* module, const char* function, char* message,
+                          void* user_data) {
+  auto* data = static_cast<ModelData*>(user_data);
+  data->last_solver_message = std::string(module) + "::" + function + ": " + message;
+}
+
+using internal::CheckAllocated;
+using internal::CheckFlag;
+
+// One CVODES BDF integrator over the actuator ODE.
+class Integrator {
+ public:
+  Integrator(ModelData* data, const SimulationOptions& options, double t0, const double* y0)
+      : data_(data), size_(data->layout.size) {
+    SUNContext raw_context = nullptr;
+    CheckFlag(SUNContext_Create(nullptr, &raw_context), "SUNContext_Create");
+    context_.reset(raw_context);
+    state_.reset(CheckAllocated(N_VNew_Serial(size_, context_.get()), "N_VNew_Serial"));
+    tolerances_.reset(CheckAllocated(N_VNew_Serial(size_, context_.get()), "N_VNew_Serial"));
+    for (int i = 0; i < size_; ++i) N_VGetArrayPointer(state_.get())[i] = y0[i];
+    FillAbsoluteTolerances(options);
+    memory_.reset(CheckAllocated(CVodeCreate(CV_BDF, context_.get()), "CVodeCreate"));
+    void* mem = memory_.get();
+    CheckFlag(CVodeInit(mem, RightHandSide, t0, state_.get()), "CVodeInit");
+    CheckFlag(CVodeSetUserData(mem, data_), "CVodeSetUserData");
+    CheckFlag(CVodeSetErrHandlerFn(mem, CaptureSolverMessage, data_), "CVodeSetErrHandlerFn");
+    CheckFlag(CVodeSVtolerances(mem, options.relative_tolerance, tolerances_.get()),
+              "CVodeSVtolerances");
+    matrix_.reset(
+        CheckAllocated(SUNDenseMatrix(size_, size_, context_.get()), "SUNDenseMatrix"));
+    solver_.reset(CheckAllocated(SUNLinSol_Dense(state_.get(), matrix_.get(), context_.get()),
+                                 "SUNLinSol_Dense"));
+    CheckFlag(CVodeSetLinearSolver(mem, solver_.get(), matrix_.get()), "CVodeSetLinearSolver");
+    CheckFlag(CVodeSetJacFn(mem, Jacobian), "CVodeSetJacFn");
+    CheckFlag(CVodeSetMaxNumSteps(mem, 100000), "CVodeSetMaxNumSteps");
+  }
+
+  double* state() { return N_VGetArrayPointer(state_.get()); }
+
+  // Integrates to `target`, never past `stop`. Returns CVODE's flag (< 0 fails).
+  int AdvanceTo(double target, double stop) {
+    void* mem = memory_.get();
+    int flag = CVodeSetStopTime(mem, stop);
+    if (flag < 0) return flag;
+    double reached = 0;
+    return CVode(mem, target, state_.get(), &reached, CV_NORMAL);
+  }
+
+  // Restarts at low order after a jump of the right-hand side at time t.
+  int Restart(double t) {
+    banked_ = Counters();  // CVodeReInit zeroes CVODE's counters
+    ++restarts_;
+    return CVodeReInit(memory_.get(), t, state_.get());
+  }
+
+  // Work done so far, restarts included.
+  SimulationSummary Counters() const {
+    void* mem = memory_.get();
+    SimulationSummary total = banked_;
+    long value = 0;
+    CVodeGetNumSteps(mem, &value);
+    total.steps += value;
+    CVodeGetNumRhsEvals(mem, &value);
+    total.rhs_evaluations += value;
+    CVodeGetNumJacEvals(mem, &value);
+    total.jacobian_evaluations += value;
+    CVodeGetNumErrTestFails(mem, &value);
+    total.error_test_failures += value;
+    CVodeGetNumNonlinSolvConvFails(mem, &value);
+    total.convergence_failures += value;
+    total.restarts = restarts_;
+    return total;
+  }
+
+ private:
+  void FillAbsoluteTolerances(const SimulationOptions& options) {
+    double* atol = N_VGetArrayPointer(tolerances_.get());
+    const ActuatorLayout& layout = data_->layout;
+    atol[kPosition] = options.position_tolerance_m;
+    atol[kVelocity] = options.velocity_tolerance_m_per_s;
+    atol[kPressure1] = options.pressure_tolerance_Pa;
+    atol[kPressure2] = options.pressure_tolerance_Pa;
+    for (int i = 4; i < size_; ++i) atol[i] = options.mass_flow_tolerance_kg_per_s;
+    if (layout.valve_lag) {
+      for (int i = 0; i < kValveCount; ++i) {
+        atol[layout.opening_begin + i] = options.opening_tolerance_V;
+      }
+    }
+  }
+
+  ModelData* data_;
+  int size_;
+  internal::ContextPtr context_;  // first: destroyed last
+  internal::VectorPtr state_;
+  internal::VectorPtr tolerances_;
+  internal::MatrixPtr matrix_;
+  internal::LinearSolverPtr solver_;
+  internal::CvodePtr memory_;
+  SimulationSummary banked_;
+  long restarts_ = 0;
+};
+
+// Turns command values into valve commands, keeping each valve's hysteresis
+// latch across segments.
+class ValveCommandTracker {
+ public:
+  ValveCommandTracker(ValveBranchMode mode, double threshold_V)
+      : mode_(mode),
+        latches_{BranchLatch(threshold_V), BranchLatch(threshold_V), BranchLatch(threshold_V),
+                 BranchLatch(threshold_V)} {}
+
+  ValveCommand Next(double command_V) {
+    ValveCommand command;
+    command.opening = OpeningsForCommand(command_V);
+    for (int i = 0; i < kValveCount; ++i) {
+      latches_[i].Update(command.opening[i]);
+      command.decreasing_branch[i] = mode_ == ValveBranchMode::kHysteresis
+                                         ? latches_[i].decreasing()
+                                         : mode_ == ValveBranchMode::kDecreasing;
+    }
+    return command;
+  }
+
+ private:
+  ValveBranchMode mode_;
+  std::array<BranchLatch, kValveCount> latches_;
+};
+
+SimulationSummary Failure(SimulationStatus status, std::string message) {
+  SimulationSummary summary;
+  summary.status = status;
+  summary.message = std::move(message);
+  return summary;
+}
+
+// Why this input cannot be simulated; empty when it can.
+std::string CheckInputs(const Parameters& params, const CommandSignal& command,
+                        const InitialState& initial, const std::vector<double>& output_times_s,
+                        const SimulationOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) return "options: " + error;
+  if (!command.IsValid(&error)) return error;
+  const auto problems = Validate(params);
+  if (!problems.empty()) return "parameters: " + problems.front().path + ": " + problems.front().message;
+  for (const auto& [name, values] : params.effects) {
+    if (!FindEffect(name)->simulated) return "effect " + name + " is not simulated yet";
+  }
+  if (output_times_s.empty()) return "no output times";
+  for (size_t i = 0; i < output_times_s.size(); ++i) {
+    if (!std::isfinite(output_times_s[i]) || (i > 0 && output_times_s[i] < output_times_s[i - 1])) {
+      return "output times must be finite and non-decreasing";
+    }
+  }
+  if (!(initial.p1_Pa > 0 && initial.p2_Pa > 0)) return "initial pressures must be > 0 Pa absolute";
+  const double half_stroke = 0.5 * params.cylinder.stroke_m;
+  if (!(std::fabs(initial.position_m) <= half_stroke) || !std::isfinite(initial.velocity_m_per_s)) {
+    return "initial position must lie within the stroke, velocity finite";
+  }
+  return {};
+}
+
+void AppendSample(const ModelData& data, double t, double command_V, const double* y,
+                  Trajectory* out) {
+  double rate[kMaxStates];
+  ActuatorOutputs<double> outputs;
+  ActuatorDerivatives(data.layout, data.coefficients, data.command, y, rate, &outputs);
+  out->t_s.push_back(t);
+  out->u_V.push_back(command_V);
+  out->x_m.push_back(y[kPosition]);
+  out->v_m_per_s.push_back(y[kVelocity]);
+  out->p1_Pa.push_back(y[kPressure1]);
+  out->p2_Pa.push_back(y[kPressure2]);
+  out->q1_kg_per_s.push_back(outputs.q1_kg_per_s);
+  out->q2_kg_per_s.push_back(outputs.q2_kg_per_s);
+}
+
+// The run itself, once inputs are known to be valid.
+SimulationSummary Run(const Parameters& params, const CommandSignal& command,
+                      const InitialState& initial, const std::vector<double>& times,
+                      const SimulationOptions& options, Trajectory* out) {
+  ModelData data;
+  data.layout = ActuatorLayout::For(params);
+  data.coefficients = MakeActuatorCoefficients<double>(params, options.regularization);
+  data.jet_coefficients = MakeActuatorCoefficients<JetN>(params, options.regularization);
+
+  const double t0 = times.front();
+  ValveCommandTracker tracker(params.valve.branch, options.hysteresis_threshold_V);
+  data.command = tracker.Next(command.initial_V);
+  double y0[kMaxStates] = {initial.position_m, initial.velocity_m_per_s, initial.p1_Pa,
+                           initial.p2_Pa};
+  SetLagStatesToEquilibrium(data.layout, data.coefficients, data.command, y0);
+
+  // Knots at or before t0 have already happened: apply them in order.
+  size_t next_knot = 0;
+  double current_V = command.initial_V;
+  while (next_knot < command.time_s.size() && command.time_s[next_knot] <= t0) {
+    current_V = command.value_V[next_knot++];
+    data.command = tracker.Next(current_V);
+  }
+
+  Integrator integrator(&data, options, t0, y0);
+  double t = t0;
+  const double t_end = times.back();
+  *out = Trajectory{};
+  SimulationSummary summary;
+  const auto fail = [&](const char* what) {
+    summary = integrator.Counters();
+    summary.status = SimulationStatus::kSolverFailure;
+    std::ostringstream message;
+    message << what << " at t = " << t << " s";
+    if (!data.last_solver_message.empty()) message << " (" << data.last_solver_message << ")";
+    summary.message = message.str();
+    return summary;
+  };
+  for (const double t_out : times) {
+    while (next_knot < command.time_s.size() && command.time_s[next_knot] <= t_out) {
+      const double knot = command.time_s[next_knot];
+      if (knot > t && integrator.AdvanceTo(knot, knot) < 0) return fail("integration failed");
+      t = knot;
+      const double new_V = command.value_V[next_knot++];
+      const ValveCommand previous = data.command;
+      data.command = tracker.Next(new_V);
+      const bool branch_switched = previous.decreasing_branch != data.command.decreasing_branch;
+      if (std::fabs(new_V - current_V) > options.restart_jump_V || branch_switched) {
+        if (integrator.Restart(t) < 0) return fail("restart failed");
+      }
+      current_V = new_V;
+    }
+    if (t_out > t) {
+      const double stop =
+          next_knot < command.time_s.size() ? std::fmin(command.time_s[next_knot], t_end) : t_end;
+      if (integrator.AdvanceTo(t_out, stop) < 0) return fail("integration failed");
+      t = t_out;
+    }
+    if (integrator.Counters().steps > options.max_steps) return fail("step budget exhausted");
+    AppendSample(data, t_out, current_V, integrator.state(), out);
+  }
+  summary = integrator.Counters();
+  return summary;
+}
+
+}  // namespace
+
+bool SimulationOptions::IsValid(std::string* error) const {
+  const auto fail = [error](const char* what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (!(relative_tolerance > 0 && relative_tolerance < 1)) {
+    return fail("relative_tolerance must be in (0, 1)");
+  }
+  if (!(position_tolerance_m > 0 && velocity_tolerance_m_per_s > 0 && pressure_tolerance_Pa > 0 &&
+        mass_flow_tolerance_kg_per_s > 0 && opening_tolerance_V > 0)) {
+    return fail("absolute tolerances must be > 0");
+  }
+  if (max_steps <= 0) return fail("max_steps must be > 0");
+  if (!(hysteresis_threshold_V > 0 && hysteresis_threshold_V < 1)) {
+    return fail("hysteresis_threshold_V must be in (0, 1)");
+  }
+  if (!(restart_jump_V >= 0)) return fail("restart_jump_V must be >= 0");
+  return regularization.IsValid(error);
+}
+
+InitialState RetractedAtRest(const Parameters& params) {
+  InitialState state;
+  state.position_m = -0.5 * params.cylinder.stroke_m;
+  state.p1_Pa = params.supply.atmospheric_pressure_Pa;
+  state.p2_Pa = params.supply.atmospheric_pressure_Pa;
+  return state;
+}
+
+std::string SimulationSummary::BriefReport() const {
+  std::ostringstream out;
+  static const char* kStatus[] = {"success", "invalid input", "solver failure"};
+  out << "Simulation: " << kStatus[static_cast<int>(status)];
+  if (!message.empty()) out << " (" << message << ")";
+  out << ", " << simulated_time_s << " s simulated in " << wall_time_s * 1e3 << " ms; " << steps
+      << " steps, " << rhs_evaluations << " rhs, " << jacobian_evaluations << " Jacobians, "
+      << error_test_failures << " error-test and " << convergence_failures
+      << " convergence failures, " << restarts << " restarts";
+  return out.str();
+}
+
+SimulationSummary Simulate(const Parameters& params, const CommandSignal& command,
+                           const InitialState& initial, const std::vector<double>& output_times_s,
+                           const SimulationOptions& options, Trajectory* out) {
+  const auto start = std::chrono::steady_clock::now();
+  SimulationSummary summary;
+  const std::string problem = CheckInputs(params, command, initial, output_times_s, options);
+  if (!problem.empty()) {
+    summary = Failure(SimulationStatus::kInvalidInput, problem);
+  } else {
+    try {
+      summary = Run(params, command, initial, output_times_s, options, out);
+    } catch (const internal::SundialsSetupError& error) {
+      summary = Failure(SimulationStatus::kSolverFailure, error.what());
+    }
+    summary.simulated_time_s = out->size() ? out->t_s.back() - output_times_s.front() : 0.0;
+  }
+  summary.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+std::vector<double> UniformTimes(double t0_s, double t_end_s, double rate_Hz) {
+  std::vector<double> times;
+  const long count = static_cast<long>(std::floor((t_end_s - t0_s) * rate_Hz + 1e-9)) + 1;
+  times.reserve(static_cast<size_t>(std::max(count, 0L)));
+  for (long i = 0; i < count; ++i) times.push_back(t0_s + static_cast<double>(i) / rate_Hz);
+  return times;
+}
+
+}  // namespace pneumaid

@@ -1,0 +1,96 @@
+// End to end: the `pneumaid simulate` binary, its output and its exit codes.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "pneumaid/io/csv_table.h"
+
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kPaper = std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper.yaml";
+
+class SimulateCliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("pneumaid_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  int Run(const std::string& arguments) {
+    const std::string command = std::string(PNEUMAID_CLI) + " " + arguments + " > " +
+                                (dir_ / "stdout.txt").string() + " 2> " + (dir_ / "stderr.txt").string();
+    const int status = std::system(command.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+
+  std::string Stderr() const {
+    std::ifstream in(dir_ / "stderr.txt");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+
+  std::string Write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(SimulateCliTest, StepWritesAValidationLogInSI) {
+  const std::string out = (dir_ / "sim.csv").string();
+  ASSERT_EQ(Run("simulate --params " + kPaper + " --step 1@0 --step -1@0.8 --until 1.5 --rate 200 --out " + out), 0)
+      << Stderr();
+  const CsvTable table = ReadCsv(out);
+  EXPECT_EQ(table.rows(), 301u);
+  for (const char* name : {"t", "u", "x", "v", "p1", "p2", "q1", "q2"}) {
+    EXPECT_NE(table.Find(name), nullptr) << name;
+  }
+  EXPECT_EQ(table.Find("q1")->unit, "kg/s");
+  EXPECT_EQ(table.Find("u")->values[160], -1.0);
+  // The file drives a new run through --input, closing the loop.
+  const std::string again = (dir_ / "again.csv").string();
+  ASSERT_EQ(Run("simulate --params " + kPaper + " --input " + out + " --rate 200 --out " + again), 0)
+      << Stderr();
+  EXPECT_NEAR(ReadCsv(again).Find("x")->values.back(), table.Find("x")->values.back(), 2e-4);
+}
+
+TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
+  const std::string out = (dir_ / "sim.csv").string();
+  std::ifstream paper(kPaper);
+  std::string text((std::istreambuf_iterator<char>(paper)), {});
+  const std::string typo = Write("typo.yaml", text + "colour: blue\n");
+  text.replace(text.find("effects: {}"), 11, "effects: {heat_transfer: {h: 0.1}}");
+  const std::string unsimulated = Write("heat.yaml", text);
+  const std::string ragged = Write("ragged.csv", "t [s],u [V]\n0,0\n0.1\n");
+  struct Case {
+    std::string arguments;
+    std::string message;
+  } cases[] = {
+      {"--params " + typo + " --step 1@0 --until 1", "typo.yaml:34:1: unknown key 'colour'"},
+      {"--params " + unsimulated + " --step 1@0 --until 1", "heat_transfer"},
+      {"--params " + kPaper + " --step 1at0 --until 1", "expected U@T0"},
+      {"--params " + kPaper + " --step 2@0 --until 1", "expected U@T0"},
+      {"--params " + kPaper + " --step 1@0", "--until"},
+      {"--params " + kPaper + " --input " + ragged, "ragged.csv:3: ragged row"},
+      {"--params " + kPaper + " --input " + (dir_ / "missing.csv").string(), "cannot open"},
+      {"--params " + (dir_ / "none.yaml").string() + " --step 1@0 --until 1", "cannot open"},
+  };
+  for (const auto& c : cases) {
+    EXPECT_EQ(Run("simulate " + c.arguments + " --out " + out), 2) << c.arguments;
+    EXPECT_NE(Stderr().find(c.message), std::string::npos) << Stderr();
+    EXPECT_FALSE(fs::exists(out)) << c.arguments;
+  }
+  EXPECT_EQ(Run("simulate --params " + kPaper), 2);  // missing required options
+}
+
+}  // namespace
+}  // namespace pneumaid

@@ -1,0 +1,63 @@
+#include "pneumaid/io/csv_table.h"
+
+#include <gtest/gtest.h>
+
+#include "pneumaid/io/input_error.h"
+
+namespace pneumaid {
+namespace {
+
+TEST(CsvTableTest, AcceptsBomCrlfCommentsBlankLinesAndUnits) {
+  const std::string text =
+      "\xEF\xBB\xBF# rig 3, operator A\r\n\r\nt [ms], u [V],p1 [bar_g]\r\n"
+      "0,0,0.5\r\n# a comment between rows\r\n1,+0.5,1e0\r\n";
+  const CsvTable table = ParseCsv(text, "log.csv");
+  EXPECT_EQ(table.header_line, 3);
+  ASSERT_EQ(table.rows(), 2u);
+  EXPECT_EQ(table.row_lines[1], 6);
+  ASSERT_NE(table.Find("p1"), nullptr);
+  EXPECT_EQ(table.Find("p1")->unit, "bar_g");
+  EXPECT_EQ(table.Find("t")->unit, "ms");
+  EXPECT_EQ(table.Find("u")->values[1], 0.5);
+  EXPECT_EQ(table.Find("q1"), nullptr);
+}
+
+struct BadCsv {
+  const char* name;
+  const char* text;
+  int line;
+  int column;
+  const char* message;
+};
+
+class CsvBadInputTest : public ::testing::TestWithParam<BadCsv> {};
+
+TEST_P(CsvBadInputTest, NamesLineColumnAndExpectation) {
+  const BadCsv& c = GetParam();
+  try {
+    ParseCsv(c.text, "bad.csv");
+    FAIL() << "accepted " << c.name;
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.file(), "bad.csv");
+    EXPECT_EQ(error.line(), c.line) << error.what();
+    EXPECT_EQ(error.column(), c.column) << error.what();
+    EXPECT_NE(std::string(error.what()).find(c.message), std::string::npos) << error.what();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, CsvBadInputTest,
+    ::testing::Values(BadCsv{"empty", "", 0, 0, "empty file"},
+                      BadCsv{"only_comments", "# nothing\n\n", 0, 0, "no header"},
+                      BadCsv{"no_rows", "t,u\n# none\n", 1, 0, "no data rows"},
+                      BadCsv{"ragged_short", "t,u,x\n0,1,2\n1,2\n", 3, 0, "ragged row"},
+                      BadCsv{"ragged_long", "t,u\n0,1,2\n", 2, 0, "ragged row"},
+                      BadCsv{"not_numeric", "t,u\n0,1\n1,abc\n", 3, 2, "expected a finite number"},
+                      BadCsv{"not_finite", "t,u\n0,nan\n", 2, 2, "expected a finite number"},
+                      BadCsv{"empty_field", "t,u\n0,\n", 2, 2, "expected a finite number"},
+                      BadCsv{"duplicate_column", "t,u,t\n0,1,2\n", 1, 3, "duplicate column"},
+                      BadCsv{"unclosed_unit", "t [s,u\n0,1\n", 1, 1, "name [unit]"}),
+    [](const ::testing::TestParamInfo<BadCsv>& info) { return std::string(info.param.name); });
+
+}  // namespace
+}  // namespace pneumaid

@@ -1,0 +1,115 @@
+#include "pneumaid/io/params_yaml.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/model/parameter_table.h"
+
+namespace pneumaid {
+namespace {
+
+const std::string kConfigs = std::string(PNEUMAID_SOURCE_DIR) + "/configs/";
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(ParamsYamlTest, PaperConfigEqualsTheBuiltInDefaults) {
+  const Parameters loaded = LoadParams(kConfigs + "paper.yaml");
+  const Parameters defaults;
+  for (const auto& info : ScalarParameterTable()) {
+    EXPECT_EQ(info.get(loaded), info.get(defaults)) << info.path;
+  }
+  EXPECT_EQ(loaded.cylinder.orientation, Orientation::kVertical);
+  const Parameters horizontal = LoadParams(kConfigs + "paper-horizontal.yaml");
+  EXPECT_EQ(horizontal.cylinder.orientation, Orientation::kHorizontal);
+}
+
+TEST(ParamsYamlTest, RoundTripIsExact) {
+  Parameters p = LoadParams(kConfigs + "paper.yaml");
+  p.friction.positive.viscous_N_s_per_m = 0.1 + 0.2;  // not a short decimal
+  p.pipeline.delta_by_length = {{0.09, 8.1}, {1.2, 7.7}};
+  p.effects["valve_lag"] = {{"tau", 0.004}};
+  p.uncertainty["friction.positive.Fs"] = 0.25;
+  p.valve.branch = ValveBranchMode::kHysteresis;
+  p.pipeline.model = PipelineModel::kFlowLag;
+  const Parameters back = ParamsFromYaml(ParamsToYaml(p), "round-trip");
+  for (const auto& info : ScalarParameterTable()) EXPECT_EQ(info.get(back), info.get(p)) << info.path;
+  ASSERT_EQ(back.pipeline.delta_by_length.size(), 2u);
+  EXPECT_EQ(back.pipeline.delta_by_length[1].delta_per_s, 7.7);
+  EXPECT_EQ(back.effects, p.effects);
+  EXPECT_EQ(back.uncertainty, p.uncertainty);
+  EXPECT_EQ(back.valve.branch, ValveBranchMode::kHysteresis);
+  EXPECT_EQ(back.pipeline.model, PipelineModel::kFlowLag);
+  EXPECT_NE(ParamsToYaml(back).find("seed paper, Section 3"), std::string::npos);
+}
+
+struct BadCase {
+  const char* name;
+  const char* find;      // text in paper.yaml to replace
+  const char* replace;   // with this
+  int line;              // where the message must point
+  const char* message;   // a part of the message
+};
+
+class ParamsYamlBadInputTest : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(ParamsYamlBadInputTest, NamesFileLineAndExpectation) {
+  const BadCase& c = GetParam();
+  std::string text = ReadText(kConfigs + "paper.yaml");
+  const auto at = text.find(c.find);
+  ASSERT_NE(at, std::string::npos) << c.find;
+  text.replace(at, std::string(c.find).size(), c.replace);
+  try {
+    ParamsFromYaml(text, "bad.yaml");
+    FAIL() << "accepted " << c.name;
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.file(), "bad.yaml");
+    EXPECT_EQ(error.line(), c.line) << error.what();
+    EXPECT_NE(std::string(error.what()).find(c.message), std::string::npos) << error.what();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, ParamsYamlBadInputTest,
+    ::testing::Values(
+        BadCase{"unknown_top_key", "effects: {}", "effects: {}\ncolour: blue", 32, "unknown key 'colour'"},
+        BadCase{"unknown_nested_key", "  stroke: 0.05", "  stroke: 0.05\n  strok: 0.05", 12, "cylinder.strok"},
+        BadCase{"missing_key", "  load_mass: 0.15\n", "", 9, "missing required key 'cylinder.load_mass'"},
+        BadCase{"negative_volume", "dead_volume_1: 1.01e-7", "dead_volume_1: -1.01e-7", 12, "cylinder.dead_volume_1"},
+        BadCase{"u_sat_above_one", "q_max: 9.25e-5, u_sat: 0.75", "q_max: 9.25e-5, u_sat: 1.5", 19, "u_sat"},
+        BadCase{"not_a_number", "delta: 8.0", "delta: fast", 24, "expected a finite number"},
+        BadCase{"wrong_format", "pneumaid-params/1", "pneumaid-params/2", 4, "format"},
+        BadCase{"bad_enum", "branch: increasing", "branch: sideways", 21, "decreasing | hysteresis | increasing"},
+        BadCase{"unknown_effect", "effects: {}", "effects: {warp: {x: 1}}", 31, "unknown effect 'warp'"},
+        BadCase{"effect_missing_parameter", "effects: {}", "effects: {valve_lag: {}}", 31, "missing parameter"},
+        BadCase{"rod_larger_than_piston", "area_2: 1.73e-4", "area_2: 3.0e-4", 10, "smaller than area_1"},
+        BadCase{"uncertainty_unknown_path", "uncertainty: {}", "uncertainty: {friction.up.Fs: 1}", 32, "names no parameter"},
+        BadCase{"yaml_syntax", "gas: {k: 1.4, R: 287.0, T: 293.0}", "gas: {k: 1.4, R: [287.0, T: 293.0}", 6, "YAML syntax"}),
+    [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
+
+TEST(ParamsYamlTest, SaveRefusesInvalidAndLeavesNoFile) {
+  const std::string path = ::testing::TempDir() + "/pneumaid_invalid_params.yaml";
+  std::filesystem::remove(path);
+  Parameters p;
+  p.cylinder.stroke_m = -1;
+  EXPECT_THROW(SaveParams(p, path), InputError);
+  EXPECT_FALSE(std::filesystem::exists(path));
+  SaveParams(Parameters{}, path);
+  EXPECT_EQ(LoadParams(path).cylinder.stroke_m, 0.05);
+  std::filesystem::remove(path);
+}
+
+TEST(ParamsYamlTest, FormatDoubleIsShortestRoundTrip) {
+  EXPECT_EQ(FormatDouble(0.15), "0.15");
+  EXPECT_EQ(FormatDouble(5e5), "500000");
+  EXPECT_EQ(std::stod(FormatDouble(0.1 + 0.2)), 0.1 + 0.2);
+}
+
+}  // namespace
+}  // namespace pneumaid

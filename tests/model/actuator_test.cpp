@@ -1,0 +1,112 @@
+#include "pneumaid/model/actuator.h"
+
+#include <ceres/jet.h>
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+namespace pneumaid {
+namespace {
+
+using Jet = ceres::Jet<double, kMaxStates>;
+
+Parameters WithAllSimulatedEffects() {
+  Parameters p;
+  p.effects["valve_lag"] = {{"tau", 0.005}};
+  p.effects["flow_sensor_lag"] = {{"tau", 0.03}};
+  p.effects["cross_leakage"] = {{"c", 1e-11}};
+  p.effects["friction_pressure"] = {{"kp", 1e-6}};
+  p.effects["valve_deadzone"] = {{"u0", 0.05}};
+  return p;
+}
+
+TEST(ActuatorTest, LayoutCountsTheStatesOfEachOption) {
+  Parameters p;
+  EXPECT_EQ(ActuatorLayout::For(p).size, 8);
+  p.pipeline.model = PipelineModel::kFlowLag;
+  EXPECT_EQ(ActuatorLayout::For(p).size, 6);
+  p.pipeline.model = PipelineModel::kNone;
+  EXPECT_EQ(ActuatorLayout::For(p).size, 4);
+  p.effects["pipeline_lag"] = {{"delta", 8.0}};
+  EXPECT_EQ(ActuatorLayout::For(p).size, 8);
+  EXPECT_EQ(ActuatorLayout::For(WithAllSimulatedEffects()).size, 14);
+}
+
+// The Jacobian CVODE uses (forward-mode autodiff) against central differences
+// of the double right-hand side, at random states away from kinks.
+TEST(ActuatorTest, AutodiffJacobianMatchesCentralDifferences) {
+  for (PipelineModel pipeline :
+       {PipelineModel::kConductanceLag, PipelineModel::kFlowLag, PipelineModel::kNone}) {
+    Parameters params = WithAllSimulatedEffects();
+    params.pipeline.model = pipeline;
+    const ModelRegularization reg;
+    const ActuatorLayout layout = ActuatorLayout::For(params);
+    const auto cd = MakeActuatorCoefficients<double>(params, reg);
+    const auto cj = MakeActuatorCoefficients<Jet>(params, reg);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int trial = 0; trial < 20; ++trial) {
+      ValveCommand command;
+      command.opening = OpeningsForCommand(trial % 2 ? 0.5 : -0.3);
+      std::vector<double> y(layout.size);
+      y[kPosition] = -0.02 + 0.04 * unit(rng);
+      y[kVelocity] = (unit(rng) - 0.5) * 0.4;  // well outside the stick band
+      y[kPressure1] = 1.2e5 + 3e5 * unit(rng);
+      y[kPressure2] = 1.2e5 + 3e5 * unit(rng);
+      for (int i = 4; i < layout.size; ++i) y[i] = 3e-5 * unit(rng);
+      if (layout.valve_lag) {
+        for (int i = 0; i < 4; ++i) y[layout.opening_begin + i] = 0.2 + 0.6 * unit(rng);
+      }
+      Jet yj[kMaxStates], fj[kMaxStates];
+      for (int i = 0; i < layout.size; ++i) yj[i] = Jet(y[i], i);
+      ActuatorDerivatives<Jet>(layout, cj, command, yj, fj, nullptr);
+      for (int col = 0; col < layout.size; ++col) {
+        const double h = 1e-7 * std::max(std::fabs(y[col]), 1e-6);
+        auto plus = y, minus = y;
+        plus[col] += h;
+        minus[col] -= h;
+        std::vector<double> fp(layout.size), fm(layout.size);
+        ActuatorDerivatives<double>(layout, cd, command, plus.data(), fp.data(), nullptr);
+        ActuatorDerivatives<double>(layout, cd, command, minus.data(), fm.data(), nullptr);
+        for (int row = 0; row < layout.size; ++row) {
+          const double fd = (fp[row] - fm[row]) / (2 * h);
+          const double scale = std::fabs(fd) + std::fabs(fj[row].v[col]);
+          EXPECT_NEAR(fj[row].v[col], fd, 1e-5 * scale + 1e-9)
+              << ToString(pipeline) << " trial " << trial << " d f" << row << " / d y" << col;
+        }
+      }
+    }
+  }
+}
+
+TEST(ActuatorTest, AtRestWithBalancedForcesNothingChanges) {
+  Parameters params;
+  params.cylinder.orientation = Orientation::kHorizontal;
+  params.pipeline.model = PipelineModel::kNone;
+  const ActuatorLayout layout = ActuatorLayout::For(params);
+  const auto c = MakeActuatorCoefficients<double>(params, ModelRegularization{});
+  // p1 A1 = p2 A2 + p_atm A_h balances the rod exactly; valves closed.
+  const double p2 = 3e5;
+  const double p1 = (p2 * 1.73e-4 + 1e5 * (2.01e-4 - 1.73e-4)) / 2.01e-4;
+  double y[4] = {0.0, 0.0, p1, p2}, f[4];
+  ActuatorDerivatives<double>(layout, c, ValveCommand{}, y, f, nullptr);
+  for (double rate : f) EXPECT_NEAR(rate, 0.0, 1e-9);
+}
+
+TEST(ActuatorTest, EquilibriumLagStatesHaveZeroRates) {
+  Parameters params = WithAllSimulatedEffects();
+  const ActuatorLayout layout = ActuatorLayout::For(params);
+  const auto c = MakeActuatorCoefficients<double>(params, ModelRegularization{});
+  ValveCommand command;
+  command.opening = OpeningsForCommand(0.6);
+  std::vector<double> y(layout.size, 0.0), f(layout.size);
+  y[kPressure1] = 2e5;
+  y[kPressure2] = 3e5;
+  SetLagStatesToEquilibrium(layout, c, command, y.data());
+  ActuatorDerivatives<double>(layout, c, command, y.data(), f.data(), nullptr);
+  for (int i = 4; i < layout.size; ++i) EXPECT_NEAR(f[i], 0.0, 1e-12) << "state " << i;
+}
+
+}  // namespace
+}  // namespace pneumaid

@@ -1,0 +1,191 @@
+// Physics invariants and closed-form cases of the forward simulator.
+#include "pneumaid/sim/simulate.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "pneumaid/model/gas.h"
+#include "sim_test_util.h"
+
+namespace pneumaid {
+namespace {
+
+using testing::MustSimulate;
+
+Parameters HorizontalWithoutTube() {
+  Parameters p;
+  p.cylinder.orientation = Orientation::kHorizontal;
+  p.pipeline.model = PipelineModel::kNone;
+  return p;
+}
+
+double Volume1(const Parameters& p, double x) {
+  return p.cylinder.dead_volume_1_m3 + p.cylinder.area_1_m2 * (x + 0.5 * p.cylinder.stroke_m);
+}
+double Volume2(const Parameters& p, double x) {
+  return p.cylinder.dead_volume_2_m3 + p.cylinder.area_2_m2 * (0.5 * p.cylinder.stroke_m - x);
+}
+
+TEST(SimulateTest, ClosedValvesConserveChamberMassWhileTheRodMoves) {
+  Parameters p = HorizontalWithoutTube();
+  p.friction.positive = {0.2, 0.1, 0.5, 0.01};
+  p.friction.negative = {0.2, 0.1, 0.5, 0.01};
+  InitialState start{-0.01, 0.0, 3.0e5, 1.5e5};
+  SimulationOptions options;
+  const Trajectory run = MustSimulate(p, CommandSignal{}, start, UniformTimes(0, 0.5, 1000), options);
+  const double k = p.gas.heat_capacity_ratio;
+  const double invariant_1 = start.p1_Pa * std::pow(Volume1(p, start.position_m), k);
+  const double invariant_2 = start.p2_Pa * std::pow(Volume2(p, start.position_m), k);
+  double max_travel = 0, max_drift = 0;
+  for (size_t i = 0; i < run.size(); ++i) {
+    max_travel = std::max(max_travel, std::fabs(run.x_m[i] - start.position_m));
+    max_drift = std::max(max_drift, std::fabs(run.p1_Pa[i] * std::pow(Volume1(p, run.x_m[i]), k) /
+                                                  invariant_1 - 1));
+    max_drift = std::max(max_drift, std::fabs(run.p2_Pa[i] * std::pow(Volume2(p, run.x_m[i]), k) /
+                                                  invariant_2 - 1));
+  }
+  EXPECT_GT(max_travel, 0.005);  // the rod really moved
+  EXPECT_LE(max_drift, 10 * options.relative_tolerance);
+}
+
+TEST(SimulateTest, FixedVolumeChargedAtChokedFlowRisesLinearly) {
+  Parameters p = HorizontalWithoutTube();
+  p.friction.positive.static_force_N = p.friction.negative.static_force_N = 1e5;  // rod held
+  const InitialState start{0.0, 0.0, 1e5, 1e5};
+  const Trajectory run =
+      MustSimulate(p, StepCommand({{0.0, 1.0}}), start, UniformTimes(0, 0.05, 1000));
+  const OrificeConstants orifice = ComputeOrificeConstants(1.4, 287.0);
+  const double choked_flow = p.valve.increasing.q_max_kg_per_s * orifice.C1 *
+                             p.supply.supply_pressure_Pa /
+                             (p.valve.normalization * std::sqrt(p.gas.temperature_K));
+  const double rate = 1.4 * 287.0 * 293.0 * choked_flow / Volume1(p, 0.0);
+  for (size_t i = 0; i < run.size(); ++i) {
+    ASSERT_LT(run.p1_Pa[i], orifice.critical_ratio * 5e5);  // still choked
+    EXPECT_NEAR(run.p1_Pa[i], 1e5 + rate * run.t_s[i], 1e-4 * run.p1_Pa[i]) << run.t_s[i];
+    EXPECT_NEAR(run.q1_kg_per_s[i], choked_flow, 1e-9 * choked_flow);
+  }
+}
+
+TEST(SimulateTest, FullStrokeStepEndsAtSupplyAndAtmosphere) {
+  for (PipelineModel pipeline : {PipelineModel::kConductanceLag, PipelineModel::kNone}) {
+    Parameters p;
+    p.pipeline.model = pipeline;
+    const Trajectory run = MustSimulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p),
+                                        UniformTimes(0, 3.0, 100));
+    EXPECT_NEAR(run.p1_Pa.back(), 5e5, 100.0) << ToString(pipeline);
+    EXPECT_NEAR(run.p2_Pa.back(), 1e5, 100.0) << ToString(pipeline);
+    EXPECT_NEAR(run.x_m.back(), 0.025, 2e-5) << ToString(pipeline);
+    EXPECT_NEAR(run.v_m_per_s.back(), 0.0, 1e-5);
+  }
+}
+
+TEST(SimulateTest, NoPressureReachesZeroEvenWithTheLiteralFlowLag) {
+  Parameters p;
+  p.pipeline.model = PipelineModel::kFlowLag;
+  for (double u : {1.0, -1.0}) {
+    InitialState start = RetractedAtRest(p);
+    if (u < 0) start.position_m = 0.025;
+    const Trajectory run =
+        MustSimulate(p, StepCommand({{0.0, u}, {1.0, -u}}), start, UniformTimes(0, 2.0, 1000));
+    const double lowest =
+        std::min(*std::min_element(run.p1_Pa.begin(), run.p1_Pa.end()),
+                 *std::min_element(run.p2_Pa.begin(), run.p2_Pa.end()));
+    EXPECT_GT(lowest, 0.0) << "u = " << u;
+  }
+}
+
+// Net force on the rod (friction excluded) for the given chamber pressures.
+double NetForce(const Parameters& p, double p1, double p2) {
+  return p1 * p.cylinder.area_1_m2 - p2 * p.cylinder.area_2_m2 -
+         p.supply.atmospheric_pressure_Pa * (p.cylinder.area_1_m2 - p.cylinder.area_2_m2);
+}
+
+TEST(SimulateTest, RodHeldBelowStaticFrictionCreepsLessThanATenthMillimetrePerSecond) {
+  Parameters p = HorizontalWithoutTube();
+  const double fs = p.friction.positive.static_force_N;
+  const double p2 = 2e5;
+  const double hold_s = 2.0;
+  for (double fraction : {0.0, 0.5, 0.9, 0.99, -0.9}) {
+    // p1 that makes the net force `fraction` Fs; valves closed, so it holds.
+    const double p1 = (fraction * fs - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
+    const InitialState start{0.0, 0.0, p1, p2};
+    const Trajectory run = MustSimulate(p, CommandSignal{}, start, UniformTimes(0, hold_s, 100));
+    EXPECT_NEAR(NetForce(p, run.p1_Pa.back(), run.p2_Pa.back()), fraction * fs, 0.01 * fs);
+    EXPECT_LT(std::fabs(run.x_m.back()), 1e-4 * hold_s) << "net force " << fraction << " Fs";
+  }
+}
+
+TEST(SimulateTest, RodBreaksAwayAboveStaticFriction) {
+  Parameters p = HorizontalWithoutTube();
+  const double p2 = 2e5;
+  const double p1 = (1.3 * p.friction.positive.static_force_N - NetForce(p, 0.0, p2)) /
+                    p.cylinder.area_1_m2;
+  const Trajectory run =
+      MustSimulate(p, CommandSignal{}, InitialState{0.0, 0.0, p1, p2}, UniformTimes(0, 0.2, 1000));
+  EXPECT_GT(run.x_m.back(), 1e-3);
+}
+
+TEST(SimulateTest, SampledNoisyCommandRunsWithBoundedWork) {
+  Parameters p;
+  p.valve.branch = ValveBranchMode::kHysteresis;
+  std::vector<double> t, u;
+  for (int i = 0; i <= 2000; ++i) {
+    t.push_back(i * 1e-3);
+    u.push_back(0.6 * std::sin(2 * M_PI * 1.0 * t.back()) + 0.002 * std::sin(1234.5 * i));
+  }
+  Trajectory run;
+  const SimulationSummary summary =
+      Simulate(p, SampledCommand(t, u), RetractedAtRest(p), t, SimulationOptions{}, &run);
+  ASSERT_TRUE(summary.ok()) << summary.BriefReport();
+  EXPECT_LT(summary.steps, 20000) << summary.BriefReport();
+  EXPECT_GT(*std::max_element(run.x_m.begin(), run.x_m.end()), 0.0);
+}
+
+TEST(SimulateTest, EffectsChangeTheRunTheWayTheyShould) {
+  Parameters base = HorizontalWithoutTube();
+  const auto times = UniformTimes(0, 0.3, 1000);
+  const Trajectory plain = MustSimulate(base, StepCommand({{0.0, 1.0}}), RetractedAtRest(base), times);
+  Parameters lagged = base;
+  lagged.effects["flow_sensor_lag"] = {{"tau", 0.03}};
+  const Trajectory measured = MustSimulate(lagged, StepCommand({{0.0, 1.0}}), RetractedAtRest(lagged), times);
+  // A meter lag changes what q reads, not the plant.
+  EXPECT_NEAR(measured.x_m.back(), plain.x_m.back(), 1e-6);
+  EXPECT_LT(measured.q1_kg_per_s[10], 0.5 * plain.q1_kg_per_s[10]);
+  Parameters dead = base;
+  dead.effects["valve_deadzone"] = {{"u0", 0.5}};
+  const Trajectory none = MustSimulate(dead, StepCommand({{0.0, 0.4}}), RetractedAtRest(dead), times);
+  EXPECT_EQ(none.p1_Pa.back(), base.supply.atmospheric_pressure_Pa);  // no flow below u0
+}
+
+TEST(SimulateTest, InvalidInputsAreReportedNotThrown) {
+  Parameters p;
+  Trajectory run;
+  p.cylinder.stroke_m = -1;
+  EXPECT_EQ(Simulate(p, CommandSignal{}, InitialState{}, {0.0, 1.0}, {}, &run).status,
+            SimulationStatus::kInvalidInput);
+  p = Parameters{};
+  p.effects["heat_transfer"] = {{"h", 0.1}};
+  const auto refused = Simulate(p, CommandSignal{}, InitialState{}, {0.0, 1.0}, {}, &run);
+  EXPECT_EQ(refused.status, SimulationStatus::kInvalidInput);
+  EXPECT_NE(refused.message.find("heat_transfer"), std::string::npos);
+  EXPECT_EQ(Simulate(Parameters{}, CommandSignal{}, InitialState{}, {1.0, 0.5}, {}, &run).status,
+            SimulationStatus::kInvalidInput);
+  SimulationOptions options;
+  options.relative_tolerance = 0;
+  EXPECT_EQ(Simulate(Parameters{}, CommandSignal{}, InitialState{}, {0.0}, options, &run).status,
+            SimulationStatus::kInvalidInput);
+}
+
+TEST(SimulateTest, StepBudgetEndsARunInsteadOfHanging) {
+  SimulationOptions options;
+  options.max_steps = 10;
+  Trajectory run;
+  const auto summary = Simulate(Parameters{}, StepCommand({{0.0, 1.0}}), RetractedAtRest(Parameters{}),
+                                UniformTimes(0, 1.0, 100), options, &run);
+  EXPECT_EQ(summary.status, SimulationStatus::kSolverFailure);
+  EXPECT_NE(summary.message.find("step budget"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pneumaid
