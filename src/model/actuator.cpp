@@ -55,7 +55,8 @@ void SetLagStatesToEquilibrium(const ActuatorLayout& layout,
   if (layout.conductance_lag) {
     for (int i = 0; i < kValveCount; ++i) y[layout.conductance_begin + i] = gain[i];
   }
-  const auto flow = ValveFlows(c, gain, y[kPressure1], y[kPressure2]);
+  const ChamberPressures<double> chambers = DecodeChambers(c, y);
+  const auto flow = ValveFlows(c, gain, chambers.p1_Pa, chambers.p2_Pa);
   if (layout.flow_lag) {
     y[layout.flow_begin] = flow[0];
     y[layout.flow_begin + 1] = flow[1];

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "cvode_handles.h"
+#include "fast_kernels.h"
 #include "pneumaid/model/effects.h"
 
 namespace pneumaid {
@@ -21,17 +22,23 @@ struct ModelData {
   ActuatorCoefficients<double> coefficients;
   ActuatorCoefficients<JetN> jet_coefficients;
   ValveCommand command;
+  MotionMode motion = MotionMode::kRegularized;
+  double supply_pressure_Pa = 0.0;
+  double breakaway_margin_N = 0.0;
+  // A sliding rod counts as stopped once v has crossed zero by this much:
+  // right after a restart v is only known to within its tolerance.
+  double reversal_velocity_m_per_s = 0.0;
   std::string last_solver_message;
 };
 
 // CVODE right-hand side. Returns 1 (recoverable: CVODE retries with a smaller
-// step) on a non-positive pressure or a non-finite rate; never throws.
+// step) on a non-finite rate; never throws. (Pressures are positive by
+// construction of the chamber state.)
 int RightHandSide(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
   const auto* data = static_cast<const ModelData*>(user_data);
   const double* state = N_VGetArrayPointer(y);
   double* rate = N_VGetArrayPointer(ydot);
-  if (!(state[kPressure1] > 0) || !(state[kPressure2] > 0)) return 1;
-  ActuatorDerivatives(data->layout, data->coefficients, data->command, state, rate,
+  ActuatorDerivatives(data->layout, data->coefficients, data->command, data->motion, state, rate,
                       static_cast<ActuatorOutputs<double>*>(nullptr));
   for (int i = 0; i < data->layout.size; ++i) {
     if (!std::isfinite(rate[i])) return 1;
@@ -48,7 +55,8 @@ int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_d
   JetN jet_state[kMaxStates];
   JetN jet_rate[kMaxStates];
   for (int i = 0; i < n; ++i) jet_state[i] = JetN(state[i], i);
-  ActuatorDerivatives(data->layout, data->jet_coefficients, data->command, jet_state, jet_rate,
+  ActuatorDerivatives(data->layout, data->jet_coefficients, data->command, data->motion, jet_state,
+                      jet_rate,
                       static_cast<ActuatorOutputs<JetN>*>(nullptr));
   for (int row = 0; row < n; ++row) {
     for (int col = 0; col < n; ++col) {
@@ -58,6 +66,76 @@ int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_d
     }
   }
   return 0;
+}
+
+// Within a nanometre of an end stop: a rod resting there is set exactly on
+// it, this margin only absorbs round-off.
+constexpr double kAtStop_m = 1e-9;
+
+bool AtExtendedStop(const ModelData& data, const double* y) {
+  return y[kPosition] >= data.coefficients.end_stop.half_stroke_m - kAtStop_m;
+}
+bool AtRetractedStop(const ModelData& data, const double* y) {
+  return y[kPosition] <= -data.coefficients.end_stop.half_stroke_m + kAtStop_m;
+}
+
+// Stick/slip and end-stop switching surfaces. Stuck: the driving force
+// reaches the breakaway force plus a margin (the switching hysteresis) in a
+// direction the rod can move. Sliding: the velocity returns to zero (g0) or
+// the rod reaches the end of the stroke (g1). Never throws.
+int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
+  const auto* data = static_cast<const ModelData*>(user_data);
+  const double* state = N_VGetArrayPointer(y);
+  const auto& c = data->coefficients;
+  const double half_stroke = c.end_stop.half_stroke_m;
+  switch (data->motion) {
+    case MotionMode::kStuck: {
+      const ChamberPressures<double> p = DecodeChambers(c, state);
+      const double force = DrivingForce(c, state, p);
+      g[0] = AtExtendedStop(*data, state)
+                 ? -1.0
+                 : force - BreakawayForce(c, p, +1.0) - data->breakaway_margin_N;
+      g[1] = AtRetractedStop(*data, state)
+                 ? 1.0
+                 : force + BreakawayForce(c, p, -1.0) + data->breakaway_margin_N;
+      break;
+    }
+    case MotionMode::kSlidingPositive:
+      g[0] = state[kVelocity] + data->reversal_velocity_m_per_s;
+      g[1] = half_stroke - state[kPosition];
+      break;
+    case MotionMode::kSlidingNegative:
+      g[0] = state[kVelocity] - data->reversal_velocity_m_per_s;
+      g[1] = state[kPosition] + half_stroke;
+      break;
+    case MotionMode::kRegularized:
+      g[0] = g[1] = 1.0;
+      break;
+  }
+  return 0;
+}
+
+// The motion mode for a rod at rest at state y: held by static friction
+// unless the driving force exceeds the breakaway force (plus the margin), and
+// held by an end stop it is pushed against.
+MotionMode ModeAtRest(const ModelData& data, const double* y) {
+  const auto& c = data.coefficients;
+  const ChamberPressures<double> p = DecodeChambers(c, y);
+  const double force = DrivingForce(c, y, p);
+  if (!AtExtendedStop(data, y) && force > BreakawayForce(c, p, +1.0) + data.breakaway_margin_N) {
+    return MotionMode::kSlidingPositive;
+  }
+  if (!AtRetractedStop(data, y) &&
+      force < -BreakawayForce(c, p, -1.0) - data.breakaway_margin_N) {
+    return MotionMode::kSlidingNegative;
+  }
+  return MotionMode::kStuck;
+}
+
+MotionMode InitialMode(const ModelData& data, const double* y) {
+  if (y[kVelocity] > 0) return MotionMode::kSlidingPositive;
+  if (y[kVelocity] < 0) return MotionMode::kSlidingNegative;
+  return ModeAtRest(data, y);
 }
 
 // Keeps CVODE's error text for the summary instead of printing it.
@@ -79,7 +157,8 @@ class Integrator {
     CheckFlag(SUNContext_Create(nullptr, &raw_context), "SUNContext_Create");
     context_.reset(raw_context);
     state_.reset(CheckAllocated(N_VNew_Serial(size_, context_.get()), "N_VNew_Serial"));
-    tolerances_.reset(CheckAllocated(N_VNew_Serial(size_, context_.get()), "N_VNew_Serial"));
+    internal::InstallFastVectorKernels(state_.get());
+    tolerances_.reset(CheckAllocated(N_VClone(state_.get()), "N_VClone"));
     for (int i = 0; i < size_; ++i) N_VGetArrayPointer(state_.get())[i] = y0[i];
     FillAbsoluteTolerances(options);
     memory_.reset(CheckAllocated(CVodeCreate(CV_BDF, context_.get()), "CVodeCreate"));
@@ -91,29 +170,65 @@ class Integrator {
               "CVodeSVtolerances");
     matrix_.reset(
         CheckAllocated(SUNDenseMatrix(size_, size_, context_.get()), "SUNDenseMatrix"));
-    solver_.reset(CheckAllocated(SUNLinSol_Dense(state_.get(), matrix_.get(), context_.get()),
-                                 "SUNLinSol_Dense"));
+    internal::InstallFastMatrixKernels(matrix_.get());
+    solver_.reset(CheckAllocated(internal::NewFastDenseSolver(size_, context_.get()),
+                                 "NewFastDenseSolver"));
     CheckFlag(CVodeSetLinearSolver(mem, solver_.get(), matrix_.get()), "CVodeSetLinearSolver");
     CheckFlag(CVodeSetJacFn(mem, Jacobian), "CVodeSetJacFn");
     CheckFlag(CVodeSetMaxNumSteps(mem, 100000), "CVodeSetMaxNumSteps");
+    if (data_->motion != MotionMode::kRegularized) {
+      CheckFlag(CVodeRootInit(mem, 2, SwitchingFunctions), "CVodeRootInit");
+      // A switching surface met at the start of a segment (zero at t0) is
+      // ignored by CVODE until it moves away: no Zeno loop at breakaway.
+      CheckFlag(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
+    }
   }
 
   double* state() { return N_VGetArrayPointer(state_.get()); }
 
-  // Integrates to `target`, never past `stop`. Returns CVODE's flag (< 0 fails).
+  // Integrates to `target`, never past `stop`, switching the motion mode at
+  // every stick/slip event on the way. Returns CVODE's flag (< 0 fails).
   int AdvanceTo(double target, double stop) {
     void* mem = memory_.get();
     int flag = CVodeSetStopTime(mem, stop);
-    if (flag < 0) return flag;
-    double reached = 0;
-    return CVode(mem, target, state_.get(), &reached, CV_NORMAL);
+    while (flag >= 0) {
+      double reached = 0;
+      flag = CVode(mem, target, state_.get(), &reached, CV_NORMAL);
+      if (flag != CV_ROOT_RETURN) return flag;
+      SwitchMotionMode();
+      flag = Restart(reached);
+      if (flag >= 0) flag = CVodeSetStopTime(mem, stop);
+    }
+    return flag;
   }
+
+  long events() const { return events_; }
 
   // Restarts at low order after a jump of the right-hand side at time t.
   int Restart(double t) {
     banked_ = Counters();  // CVodeReInit zeroes CVODE's counters
     ++restarts_;
     return CVodeReInit(memory_.get(), t, state_.get());
+  }
+
+  // At a root of SwitchingFunctions: stuck -> sliding in the direction that
+  // broke away; sliding -> stuck, or reversal, once v reaches zero; sliding
+  // into an end stop -> an inelastic impact, the rod rests at the stop.
+  void SwitchMotionMode() {
+    ++events_;
+    double* y = state();
+    int roots[2] = {0, 0};
+    CVodeGetRootInfo(memory_.get(), roots);
+    if (data_->motion == MotionMode::kStuck) {
+      data_->motion = roots[0] != 0 ? MotionMode::kSlidingPositive : MotionMode::kSlidingNegative;
+      return;
+    }
+    if (roots[1] != 0) {
+      const double half_stroke = data_->coefficients.end_stop.half_stroke_m;
+      y[kPosition] = data_->motion == MotionMode::kSlidingPositive ? half_stroke : -half_stroke;
+    }
+    y[kVelocity] = 0.0;
+    data_->motion = ModeAtRest(*data_, y);
   }
 
   // Work done so far, restarts included.
@@ -132,6 +247,7 @@ class Integrator {
     CVodeGetNumNonlinSolvConvFails(mem, &value);
     total.convergence_failures += value;
     total.restarts = restarts_;
+    total.events = events_;
     return total;
   }
 
@@ -141,8 +257,12 @@ class Integrator {
     const ActuatorLayout& layout = data_->layout;
     atol[kPosition] = options.position_tolerance_m;
     atol[kVelocity] = options.velocity_tolerance_m_per_s;
-    atol[kPressure1] = options.pressure_tolerance_Pa;
-    atol[kPressure2] = options.pressure_tolerance_Pa;
+    // sigma = ln p + ...: an error d sigma is a relative pressure error, so
+    // the pressure tolerance is taken relative to the highest pressure, the
+    // supply (at least as strict as the absolute tolerance in Pa).
+    const double sigma_tolerance = options.pressure_tolerance_Pa / data_->supply_pressure_Pa;
+    atol[kChamber1] = sigma_tolerance;
+    atol[kChamber2] = sigma_tolerance;
     for (int i = 4; i < size_; ++i) atol[i] = options.mass_flow_tolerance_kg_per_s;
     if (layout.valve_lag) {
       for (int i = 0; i < kValveCount; ++i) {
@@ -161,6 +281,7 @@ class Integrator {
   internal::CvodePtr memory_;
   SimulationSummary banked_;
   long restarts_ = 0;
+  long events_ = 0;
 };
 
 // Turns command values into valve commands, keeping each valve's hysteresis
@@ -226,13 +347,14 @@ void AppendSample(const ModelData& data, double t, double command_V, const doubl
                   Trajectory* out) {
   double rate[kMaxStates];
   ActuatorOutputs<double> outputs;
-  ActuatorDerivatives(data.layout, data.coefficients, data.command, y, rate, &outputs);
+  ActuatorDerivatives(data.layout, data.coefficients, data.command, data.motion, y, rate, &outputs);
   out->t_s.push_back(t);
   out->u_V.push_back(command_V);
   out->x_m.push_back(y[kPosition]);
   out->v_m_per_s.push_back(y[kVelocity]);
-  out->p1_Pa.push_back(y[kPressure1]);
-  out->p2_Pa.push_back(y[kPressure2]);
+  const ChamberPressures<double> chambers = DecodeChambers(data.coefficients, y);
+  out->p1_Pa.push_back(chambers.p1_Pa);
+  out->p2_Pa.push_back(chambers.p2_Pa);
   out->q1_kg_per_s.push_back(outputs.q1_kg_per_s);
   out->q2_kg_per_s.push_back(outputs.q2_kg_per_s);
 }
@@ -249,9 +371,15 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   const double t0 = times.front();
   ValveCommandTracker tracker(params.valve.branch, options.hysteresis_threshold_V);
   data.command = tracker.Next(command.initial_V);
-  double y0[kMaxStates] = {initial.position_m, initial.velocity_m_per_s, initial.p1_Pa,
-                           initial.p2_Pa};
+  data.supply_pressure_Pa = params.supply.supply_pressure_Pa;
+  double y0[kMaxStates] = {initial.position_m, initial.velocity_m_per_s};
+  SetChamberPressures(data.coefficients, initial.p1_Pa, initial.p2_Pa, y0);
   SetLagStatesToEquilibrium(data.layout, data.coefficients, data.command, y0);
+  data.breakaway_margin_N = options.breakaway_margin_N;
+  data.reversal_velocity_m_per_s = options.velocity_tolerance_m_per_s;
+  data.motion = options.stick_slip == StickSlipTreatment::kEvents ? InitialMode(data, y0)
+                                                                  : MotionMode::kRegularized;
+  if (data.motion == MotionMode::kStuck) y0[kVelocity] = 0.0;
 
   // Knots at or before t0 have already happened: apply them in order.
   size_t next_knot = 0;
@@ -296,6 +424,7 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
       t = t_out;
     }
     if (integrator.Counters().steps > options.max_steps) return fail("step budget exhausted");
+    if (integrator.events() > options.max_events) return fail("stick/slip event budget exhausted");
     AppendSample(data, t_out, current_V, integrator.state(), out);
   }
   summary = integrator.Counters();
@@ -321,6 +450,8 @@ bool SimulationOptions::IsValid(std::string* error) const {
     return fail("hysteresis_threshold_V must be in (0, 1)");
   }
   if (!(restart_jump_V >= 0)) return fail("restart_jump_V must be >= 0");
+  if (!(breakaway_margin_N >= 0)) return fail("breakaway_margin_N must be >= 0");
+  if (max_events <= 0) return fail("max_events must be > 0");
   return regularization.IsValid(error);
 }
 
@@ -340,7 +471,7 @@ std::string SimulationSummary::BriefReport() const {
   out << ", " << simulated_time_s << " s simulated in " << wall_time_s * 1e3 << " ms; " << steps
       << " steps, " << rhs_evaluations << " rhs, " << jacobian_evaluations << " Jacobians, "
       << error_test_failures << " error-test and " << convergence_failures
-      << " convergence failures, " << restarts << " restarts";
+      << " convergence failures, " << restarts << " restarts, " << events << " stick/slip events";
   return out.str();
 }
 

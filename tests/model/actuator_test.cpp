@@ -52,23 +52,22 @@ TEST(ActuatorTest, AutodiffJacobianMatchesCentralDifferences) {
       std::vector<double> y(layout.size);
       y[kPosition] = -0.02 + 0.04 * unit(rng);
       y[kVelocity] = (unit(rng) - 0.5) * 0.4;  // well outside the stick band
-      y[kPressure1] = 1.2e5 + 3e5 * unit(rng);
-      y[kPressure2] = 1.2e5 + 3e5 * unit(rng);
+      SetChamberPressures(cd, 1.2e5 + 3e5 * unit(rng), 1.2e5 + 3e5 * unit(rng), y.data());
       for (int i = 4; i < layout.size; ++i) y[i] = 3e-5 * unit(rng);
       if (layout.valve_lag) {
         for (int i = 0; i < 4; ++i) y[layout.opening_begin + i] = 0.2 + 0.6 * unit(rng);
       }
       Jet yj[kMaxStates], fj[kMaxStates];
       for (int i = 0; i < layout.size; ++i) yj[i] = Jet(y[i], i);
-      ActuatorDerivatives<Jet>(layout, cj, command, yj, fj, nullptr);
+      ActuatorDerivatives<Jet>(layout, cj, command, MotionMode::kRegularized, yj, fj, nullptr);
       for (int col = 0; col < layout.size; ++col) {
         const double h = 1e-7 * std::max(std::fabs(y[col]), 1e-6);
         auto plus = y, minus = y;
         plus[col] += h;
         minus[col] -= h;
         std::vector<double> fp(layout.size), fm(layout.size);
-        ActuatorDerivatives<double>(layout, cd, command, plus.data(), fp.data(), nullptr);
-        ActuatorDerivatives<double>(layout, cd, command, minus.data(), fm.data(), nullptr);
+        ActuatorDerivatives<double>(layout, cd, command, MotionMode::kRegularized, plus.data(), fp.data(), nullptr);
+        ActuatorDerivatives<double>(layout, cd, command, MotionMode::kRegularized, minus.data(), fm.data(), nullptr);
         for (int row = 0; row < layout.size; ++row) {
           const double fd = (fp[row] - fm[row]) / (2 * h);
           const double scale = std::fabs(fd) + std::fabs(fj[row].v[col]);
@@ -89,8 +88,9 @@ TEST(ActuatorTest, AtRestWithBalancedForcesNothingChanges) {
   // p1 A1 = p2 A2 + p_atm A_h balances the rod exactly; valves closed.
   const double p2 = 3e5;
   const double p1 = (p2 * 1.73e-4 + 1e5 * (2.01e-4 - 1.73e-4)) / 2.01e-4;
-  double y[4] = {0.0, 0.0, p1, p2}, f[4];
-  ActuatorDerivatives<double>(layout, c, ValveCommand{}, y, f, nullptr);
+  double y[4] = {0.0, 0.0}, f[4];
+  SetChamberPressures(c, p1, p2, y);
+  ActuatorDerivatives<double>(layout, c, ValveCommand{}, MotionMode::kRegularized, y, f, nullptr);
   for (double rate : f) EXPECT_NEAR(rate, 0.0, 1e-9);
 }
 
@@ -101,10 +101,9 @@ TEST(ActuatorTest, EquilibriumLagStatesHaveZeroRates) {
   ValveCommand command;
   command.opening = OpeningsForCommand(0.6);
   std::vector<double> y(layout.size, 0.0), f(layout.size);
-  y[kPressure1] = 2e5;
-  y[kPressure2] = 3e5;
+  SetChamberPressures(c, 2e5, 3e5, y.data());
   SetLagStatesToEquilibrium(layout, c, command, y.data());
-  ActuatorDerivatives<double>(layout, c, command, y.data(), f.data(), nullptr);
+  ActuatorDerivatives<double>(layout, c, command, MotionMode::kRegularized, y.data(), f.data(), nullptr);
   for (int i = 4; i < layout.size; ++i) EXPECT_NEAR(f[i], 0.0, 1e-12) << "state " << i;
 }
 

@@ -48,8 +48,9 @@ struct ModelRegularization {
 };
 
 // Fixed state indices; optional states follow from index 4 in the order of
-// the layout's fields.
-enum StateIndex : int { kPosition = 0, kVelocity = 1, kPressure1 = 2, kPressure2 = 3 };
+// the layout's fields. The chamber states are sigma of chamber.h, not p: use
+// ChamberPressures() / SetChamberPressures() to read and write pressures.
+enum StateIndex : int { kPosition = 0, kVelocity = 1, kChamber1 = 2, kChamber2 = 3 };
 
 inline constexpr int kMaxStates = 14;
 
@@ -118,9 +119,11 @@ ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
   const auto& cyl = p.cylinder;
   const double half_stroke = 0.5 * cyl.stroke_m;
   c.chamber_1 = {T(cyl.area_1_m2), T(cyl.dead_volume_1_m3), T(half_stroke), T(1.0),
-                 T(reg.minimum_volume_fraction * cyl.dead_volume_1_m3)};
+                 T(reg.minimum_volume_fraction * cyl.dead_volume_1_m3),
+                 T(cyl.dead_volume_1_m3 + cyl.area_1_m2 * cyl.stroke_m)};
   c.chamber_2 = {T(cyl.area_2_m2), T(cyl.dead_volume_2_m3), T(half_stroke), T(-1.0),
-                 T(reg.minimum_volume_fraction * cyl.dead_volume_2_m3)};
+                 T(reg.minimum_volume_fraction * cyl.dead_volume_2_m3),
+                 T(cyl.dead_volume_2_m3 + cyl.area_2_m2 * cyl.stroke_m)};
   c.area_1_m2 = T(cyl.area_1_m2);
   c.area_2_m2 = T(cyl.area_2_m2);
   c.load_mass_kg = T(cyl.load_mass_kg);
@@ -201,15 +204,97 @@ T GuardedOutflow(const T& flow, const T& pressure_Pa, const T& floor_Pa) {
   return flow * fraction;
 }
 
-// The right-hand side dy/dt = f(y, command). `outputs` may be null.
+// How the rod's friction is treated (see friction.h and docs/model.md).
+enum class MotionMode {
+  kRegularized,       // one smooth law for all v: stick is a stiff viscous band
+  kStuck,             // static friction holds the rod: x and v frozen
+  kSlidingPositive,   // v >= 0, Eq. 12 with the positive coefficients
+  kSlidingNegative,   // v <= 0, Eq. 12 with the negative coefficients
+};
+
+// Chamber pressures and volumes at a state.
+template <typename T>
+struct ChamberPressures {
+  T p1_Pa, p2_Pa, volume_1_m3, volume_2_m3;
+};
+
+template <typename T>
+ChamberPressures<T> DecodeChambers(const ActuatorCoefficients<T>& c, const T* y) {
+  ChamberPressures<T> out;
+  out.volume_1_m3 = ChamberVolume(y[kPosition], c.chamber_1);
+  out.volume_2_m3 = ChamberVolume(y[kPosition], c.chamber_2);
+  out.p1_Pa = PressureFromChamberState(y[kChamber1], out.volume_1_m3, c.heat_capacity_ratio,
+                                       c.atmospheric_pressure_Pa, c.chamber_1);
+  out.p2_Pa = PressureFromChamberState(y[kChamber2], out.volume_2_m3, c.heat_capacity_ratio,
+                                       c.atmospheric_pressure_Pa, c.chamber_2);
+  return out;
+}
+
+// Writes the chamber states of `y` for pressures p1, p2 at position y[kPosition].
+template <typename T>
+void SetChamberPressures(const ActuatorCoefficients<T>& c, const T& p1_Pa, const T& p2_Pa, T* y) {
+  y[kChamber1] = ChamberStateFromPressure(p1_Pa, ChamberVolume(y[kPosition], c.chamber_1),
+                                          c.heat_capacity_ratio, c.atmospheric_pressure_Pa,
+                                          c.chamber_1);
+  y[kChamber2] = ChamberStateFromPressure(p2_Pa, ChamberVolume(y[kPosition], c.chamber_2),
+                                          c.heat_capacity_ratio, c.atmospheric_pressure_Pa,
+                                          c.chamber_2);
+}
+
+// Everything that pushes the rod except friction [N], along +x.
+template <typename T>
+T DrivingForce(const ActuatorCoefficients<T>& c, const T* y, const ChamberPressures<T>& p) {
+  const T drive = PneumaticAndGravityForce(p.p1_Pa, p.p2_Pa, c.atmospheric_pressure_Pa,
+                                           c.area_1_m2, c.area_2_m2, c.weight_N);
+  return drive + EndStopForce(y[kPosition], y[kVelocity], c.end_stop);
+}
+
+// friction_pressure: friction scales by 1 + kp ((p1 + p2)/2 - p_atm).
+template <typename T>
+T FrictionScale(const ActuatorCoefficients<T>& c, const ChamberPressures<T>& p) {
+  return T(1.0) + c.friction_pressure_per_Pa *
+                      (T(0.5) * (p.p1_Pa + p.p2_Pa) - c.atmospheric_pressure_Pa);
+}
+
+// Breakaway force [N] of the rod in the direction of `sign` (+1 or -1).
+template <typename T>
+T BreakawayForce(const ActuatorCoefficients<T>& c, const ChamberPressures<T>& p, double sign) {
+  const auto& side = sign > 0 ? c.friction_positive : c.friction_negative;
+  return FrictionScale(c, p) * side.static_force_N;
+}
+
+// Rod acceleration [m/s^2], Eq. 9 with Eq. 12 under the given motion mode.
+template <typename T>
+T RodAcceleration(const ActuatorCoefficients<T>& c, MotionMode motion, const T* y,
+                  const ChamberPressures<T>& p) {
+  const T& v = y[kVelocity];
+  T friction;
+  switch (motion) {
+    case MotionMode::kStuck:
+      return T(0.0);
+    case MotionMode::kSlidingPositive:
+      friction = StribeckMagnitude(v > T(0.0) ? v : T(0.0), c.friction_positive);
+      break;
+    case MotionMode::kSlidingNegative:
+      friction = -StribeckMagnitude(v < T(0.0) ? T(-v) : T(0.0), c.friction_negative);
+      break;
+    case MotionMode::kRegularized:
+    default:
+      friction = FrictionForce(v, c.friction_positive, c.friction_negative,
+                               c.stick_velocity_m_per_s);
+      break;
+  }
+  return (DrivingForce(c, y, p) - FrictionScale(c, p) * friction) / c.load_mass_kg;
+}
+
+// The right-hand side dy/dt = f(y, command, motion). `outputs` may be null.
 template <typename T>
 void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
-                         const ValveCommand& command, const T* y, T* dydt,
+                         const ValveCommand& command, MotionMode motion, const T* y, T* dydt,
                          ActuatorOutputs<T>* outputs) {
-  const T& x = y[kPosition];
-  const T& v = y[kVelocity];
-  const T& p1 = y[kPressure1];
-  const T& p2 = y[kPressure2];
+  const ChamberPressures<T> chambers = DecodeChambers(c, y);
+  const T& p1 = chambers.p1_Pa;
+  const T& p2 = chambers.p2_Pa;
 
   const auto opening = ValveOpeningsInUse(layout, command, y);
   if (layout.valve_lag) {
@@ -244,21 +329,11 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
   }
 
   const T leak = c.leak_conductance_kg_per_s_Pa * (p1 - p2);  // cross_leakage, 1 -> 2
-  const T volume_1 = ChamberVolume(x, c.chamber_1);
-  const T volume_2 = ChamberVolume(x, c.chamber_2);
-  dydt[kPressure1] = ChamberPressureRate(p1, volume_1, flow[0] - leak, v, c.heat_capacity_ratio,
-                                         c.k_RT, c.chamber_1);
-  dydt[kPressure2] = ChamberPressureRate(p2, volume_2, flow[1] + leak, v, c.heat_capacity_ratio,
-                                         c.k_RT, c.chamber_2);
+  dydt[kChamber1] = ChamberStateRate(p1, chambers.volume_1_m3, flow[0] - leak, c.k_RT);
+  dydt[kChamber2] = ChamberStateRate(p2, chambers.volume_2_m3, flow[1] + leak, c.k_RT);
 
-  const T friction_scale =
-      T(1.0) + c.friction_pressure_per_Pa * (T(0.5) * (p1 + p2) - c.atmospheric_pressure_Pa);
-  const T friction = friction_scale * FrictionForce(v, c.friction_positive, c.friction_negative,
-                                                    c.stick_velocity_m_per_s);
-  const T drive = PneumaticAndGravityForce(p1, p2, c.atmospheric_pressure_Pa, c.area_1_m2,
-                                           c.area_2_m2, c.weight_N);
-  dydt[kPosition] = v;
-  dydt[kVelocity] = (drive - friction + EndStopForce(x, v, c.end_stop)) / c.load_mass_kg;
+  dydt[kPosition] = motion == MotionMode::kStuck ? T(0.0) : y[kVelocity];
+  dydt[kVelocity] = RodAcceleration(c, motion, y, chambers);
 }
 
 // Sets the lag states of `y` to their steady values for `command` at the

@@ -2,7 +2,15 @@
 //
 //   dp/dt = k / V (R T q - p dV/dt)
 // x = 0 at mid-stroke; chamber 1 (cap side) grows with x, chamber 2 shrinks.
+//
+// The simulator integrates each chamber as sigma = ln(p / p_ref) + k ln(V / V_ref)
+// instead of p. Eq. 8 then reads d sigma/dt = k R T q / (p V): with closed
+// valves sigma is constant, so the isentropic invariant p V^k is kept exactly
+// by construction (not just to the integrator's tolerance), and p = p_ref
+// exp(...) can never reach zero.
 #pragma once
+
+#include <cmath>
 
 namespace pneumaid {
 
@@ -13,6 +21,7 @@ struct ChamberGeometry {
   T half_stroke_m;     // L/2
   T direction;         // +1 for chamber 1 (grows with x), -1 for chamber 2
   T minimum_volume_m3; // guard: the volume never falls below this
+  T reference_volume_m3;  // V_ref of the chamber state: its full volume
 };
 
 // V = V0 + A (L/2 +- x), floored at minimum_volume (reached only if an end stop
@@ -32,6 +41,32 @@ T ChamberPressureRate(const T& pressure_Pa, const T& volume_m3, const T& mass_in
   const T volume_rate = g.direction * g.area_m2 * velocity_m_per_s;
   return (k_RT * mass_inflow_kg_per_s - heat_capacity_ratio * pressure_Pa * volume_rate) /
          volume_m3;
+}
+
+// sigma = ln(p / p_ref) + k ln(V / V_ref).
+template <typename T>
+T ChamberStateFromPressure(const T& pressure_Pa, const T& volume_m3, const T& heat_capacity_ratio,
+                           const T& reference_pressure_Pa, const ChamberGeometry<T>& g) {
+  using std::log;
+  return log(pressure_Pa / reference_pressure_Pa) +
+         heat_capacity_ratio * log(volume_m3 / g.reference_volume_m3);
+}
+
+// p = p_ref exp(sigma - k ln(V / V_ref)).
+template <typename T>
+T PressureFromChamberState(const T& state, const T& volume_m3, const T& heat_capacity_ratio,
+                           const T& reference_pressure_Pa, const ChamberGeometry<T>& g) {
+  using std::exp;
+  using std::log;
+  return reference_pressure_Pa *
+         exp(state - heat_capacity_ratio * log(volume_m3 / g.reference_volume_m3));
+}
+
+// d sigma/dt [1/s] for net mass inflow q [kg/s]; Eq. 8 divided by p.
+template <typename T>
+T ChamberStateRate(const T& pressure_Pa, const T& volume_m3, const T& mass_inflow_kg_per_s,
+                   const T& k_RT) {
+  return k_RT * mass_inflow_kg_per_s / (pressure_Pa * volume_m3);
 }
 
 }  // namespace pneumaid

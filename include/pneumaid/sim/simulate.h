@@ -12,6 +12,18 @@
 
 namespace pneumaid {
 
+// How static friction is simulated.
+enum class StickSlipTreatment {
+  // Exact Eq. 12 switching: the rod is held (x, v frozen) until the driving
+  // force exceeds Fs, slides with the Stribeck law of its direction, and sticks
+  // again when v returns to zero with the force below Fs. CVODE root finding
+  // locates each switch; the integrator restarts there.
+  kEvents,
+  // One smooth law (ModelRegularization::stick_velocity_m_per_s): no events,
+  // creep below the stick velocity while held. For smooth sensitivities.
+  kRegularized,
+};
+
 struct SimulationOptions {
   // Relative tolerance of every state.
   double relative_tolerance = 1e-6;
@@ -31,7 +43,14 @@ struct SimulationOptions {
   // the integrator at low order; smaller changes (sampled, noisy commands) are
   // left to the step-size control, which is much cheaper at 1 kHz.
   double restart_jump_V = 0.02;
-  // Numerical treatment of stick, end stops and the orifice near ratio 1.
+  // How sticking is simulated (events by default).
+  StickSlipTreatment stick_slip = StickSlipTreatment::kEvents;
+  // Switching hysteresis [N]: a stuck rod breaks away only once the driving
+  // force exceeds Fs by this much, so a force resting at Fs cannot chatter.
+  double breakaway_margin_N = 1e-6;
+  // Work bound on stick/slip switches; the run fails past it.
+  long max_events = 100'000;
+  // Numerical treatment of stick (regularized mode), end stops and the orifice.
   ModelRegularization regularization;
 
   bool IsValid(std::string* error) const;
@@ -58,6 +77,7 @@ struct SimulationSummary {
   long error_test_failures = 0;
   long convergence_failures = 0;
   long restarts = 0;
+  long events = 0;  // stick/slip switches
   double simulated_time_s = 0.0;
   double wall_time_s = 0.0;
 
