@@ -49,7 +49,8 @@ std::vector<double> ColumnInSI(const CsvTable& table, const std::string& name, Q
                                double atmospheric_pressure_Pa, bool required) {
   const CsvColumn* column = table.Find(name);
   if (column == nullptr) {
-    if (required) throw InputError(table.file, table.header_line, 0, "missing column '" + name + "'");
+    if (required)
+      throw InputError(table.file, table.header_line, 0, "missing column '" + name + "'");
     return {};
   }
   const UnitInfo* unit = column->unit.empty() ? nullptr : FindUnit(column->unit);
@@ -80,7 +81,8 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
   const auto u = ColumnInSI(table, "u", Quantity::kCommand, p_atm, true);
   for (std::size_t i = 1; i < run.t_s.size(); ++i) {
     if (!(run.t_s[i] > run.t_s[i - 1])) {
-      throw InputError(path, table.row_lines[i], 1, "column 't': expected strictly increasing time");
+      throw InputError(path, table.row_lines[i], 1,
+                       "column 't': expected strictly increasing time");
     }
   }
   run.command = SampledCommand(run.t_s, u);

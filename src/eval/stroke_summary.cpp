@@ -14,7 +14,8 @@ StrokeSummary SummarizeStroke(const Trajectory& run, double half_stroke_m, doubl
   const double far_end = -start_side * half_stroke_m;
   for (std::size_t i = 0; i < run.size(); ++i) {
     const double x = run.x_m[i];
-    if (!out.mid_stroke_time_s && x0 != 0 && x * start_side <= 0) out.mid_stroke_time_s = run.t_s[i];
+    if (!out.mid_stroke_time_s && x0 != 0 && x * start_side <= 0)
+      out.mid_stroke_time_s = run.t_s[i];
     if (!out.end_reached_time_s && std::fabs(x - far_end) <= end_margin_m) {
       out.end_reached_time_s = run.t_s[i];
     }
@@ -28,9 +29,15 @@ StrokeSummary SummarizeStroke(const Trajectory& run, double half_stroke_m, doubl
 std::string StrokeSummary::Describe() const {
   std::ostringstream out;
   out << "mid-stroke crossed at ";
-  if (mid_stroke_time_s) out << *mid_stroke_time_s << " s"; else out << "never";
+  if (mid_stroke_time_s)
+    out << *mid_stroke_time_s << " s";
+  else
+    out << "never";
   out << ", far end reached at ";
-  if (end_reached_time_s) out << *end_reached_time_s << " s"; else out << "never";
+  if (end_reached_time_s)
+    out << *end_reached_time_s << " s";
+  else
+    out << "never";
   out << ", peak p1 " << peak_p1_Pa / 1e5 << " bar, peak p2 " << peak_p2_Pa / 1e5
       << " bar (absolute), final x " << final_x_m * 1e3 << " mm";
   return out.str();

@@ -2,11 +2,10 @@
 
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <set>
-#include <sstream>
 #include <string_view>
 
+#include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
 
 namespace pneumaid {
@@ -104,8 +103,8 @@ class CsvParser {
       out.name = std::string(cell);
     } else {
       if (cell.back() != ']') {
-        Fail(table_.header_line, column, "header cell '" + std::string(cell) +
-                                             "': expected 'name' or 'name [unit]'");
+        Fail(table_.header_line, column,
+             "header cell '" + std::string(cell) + "': expected 'name' or 'name [unit]'");
       }
       out.name = std::string(Trim(cell.substr(0, open)));
       out.unit = std::string(Trim(cell.substr(open + 1, cell.size() - open - 2)));
@@ -122,12 +121,13 @@ class CsvParser {
       const std::size_t comma = line.find(',', start);
       const bool last = column + 1 == expected;
       if (comma == std::string_view::npos && !last) {
-        Fail(line_number, 0, "ragged row: " + std::to_string(column + 1) + " fields, expected " +
-                                 std::to_string(expected) + " as in the header");
+        Fail(line_number, 0,
+             "ragged row: " + std::to_string(column + 1) + " fields, expected " +
+                 std::to_string(expected) + " as in the header");
       }
       if (comma != std::string_view::npos && last) {
-        Fail(line_number, 0, "ragged row: more than the " + std::to_string(expected) +
-                                 " fields of the header");
+        Fail(line_number, 0,
+             "ragged row: more than the " + std::to_string(expected) + " fields of the header");
       }
       const std::string_view field = Trim(line.substr(start, comma - start));
       table_.columns[column].values.push_back(ParseNumber(field, line_number, column + 1));
@@ -167,11 +167,7 @@ CsvTable ParseCsv(const std::string& text, const std::string& file) {
 }
 
 CsvTable ReadCsv(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, 0, "cannot open CSV file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseCsv(text.str(), path);
+  return ParseCsv(ReadTextFile(path, "CSV file"), path);
 }
 
 }  // namespace pneumaid

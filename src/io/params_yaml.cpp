@@ -6,12 +6,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
 
-#include "pneumaid/io/atomic_file.h"
+#include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
@@ -19,10 +18,10 @@
 namespace pneumaid {
 namespace {
 
-const std::set<std::string> kTopLevelKeys = {"format",  "unit",     "gas",     "supply",
-                                             "cylinder", "valve",   "pipeline", "friction",
-                                             "effects", "uncertainty", "provenance"};
-const std::set<std::string> kRequiredTopLevelKeys = {"format", "unit",    "gas",     "supply",
+const std::set<std::string> kTopLevelKeys = {"format",   "unit",        "gas",       "supply",
+                                             "cylinder", "valve",       "pipeline",  "friction",
+                                             "effects",  "uncertainty", "provenance"};
+const std::set<std::string> kRequiredTopLevelKeys = {"format",   "unit",  "gas",      "supply",
                                                      "cylinder", "valve", "pipeline", "friction"};
 // Mapping-valued keys below a section (everything else is a scalar or special).
 const std::set<std::string> kSubsections = {"valve.increasing", "valve.decreasing",
@@ -133,21 +132,24 @@ class ParamsReader {
   bool ReadSpecial(const YAML::Node& value, const std::string& path, Parameters* params) {
     if (path == "cylinder.orientation") {
       params->cylinder.orientation = Choice<Orientation>(
-          value, path, {{"vertical", Orientation::kVertical}, {"horizontal", Orientation::kHorizontal}});
+          value, path,
+          {{"vertical", Orientation::kVertical}, {"horizontal", Orientation::kHorizontal}});
     } else if (path == "valve.model") {
       Choice<int>(value, path, {{"kvp_poly4", 0}});
     } else if (path == "friction.model") {
       Choice<int>(value, path, {{"stribeck", 0}});
     } else if (path == "valve.branch") {
-      params->valve.branch = Choice<ValveBranchMode>(value, path,
-                                                     {{"increasing", ValveBranchMode::kIncreasing},
-                                                      {"decreasing", ValveBranchMode::kDecreasing},
-                                                      {"hysteresis", ValveBranchMode::kHysteresis}});
+      params->valve.branch =
+          Choice<ValveBranchMode>(value, path,
+                                  {{"increasing", ValveBranchMode::kIncreasing},
+                                   {"decreasing", ValveBranchMode::kDecreasing},
+                                   {"hysteresis", ValveBranchMode::kHysteresis}});
     } else if (path == "pipeline.model") {
-      params->pipeline.model = Choice<PipelineModel>(
-          value, path, {{"conductance_lag", PipelineModel::kConductanceLag},
-                        {"flow_lag", PipelineModel::kFlowLag},
-                        {"none", PipelineModel::kNone}});
+      params->pipeline.model =
+          Choice<PipelineModel>(value, path,
+                                {{"conductance_lag", PipelineModel::kConductanceLag},
+                                 {"flow_lag", PipelineModel::kFlowLag},
+                                 {"none", PipelineModel::kNone}});
     } else if (path == "pipeline.delta_by_length") {
       ReadDeltaByLength(value, params);
     } else {
@@ -186,7 +188,8 @@ class ParamsReader {
       const EffectInfo* effect = FindEffect(name);
       if (effect == nullptr) {
         std::string known;
-        for (const auto& e : EffectCatalog()) known += (known.empty() ? "" : ", ") + std::string(e.name);
+        for (const auto& e : EffectCatalog())
+          known += (known.empty() ? "" : ", ") + std::string(e.name);
         Fail(entry.first, "unknown effect '" + name + "' (catalog: " + known + ")");
       }
       where_["effects." + name] = entry.second;
@@ -279,7 +282,8 @@ YAML::Node Section(const Parameters& params, const std::string& prefix, bool flo
 std::string FormatDouble(double value) {
   char buffer[32];
   // Shortest round trip, %g-like choice between fixed and scientific.
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general);
+  const auto result =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general);
   return std::string(buffer, result.ptr);
 }
 
@@ -288,11 +292,7 @@ Parameters ParamsFromYaml(const std::string& text, const std::string& source_nam
 }
 
 Parameters LoadParams(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, 0, 0, "cannot open parameter file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParamsFromYaml(text.str(), path);
+  return ParamsFromYaml(ReadTextFile(path, "parameter file"), path);
 }
 
 std::string ParamsToYaml(const Parameters& params) {

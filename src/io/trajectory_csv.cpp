@@ -4,17 +4,21 @@
 #include <utility>
 #include <vector>
 
-#include "pneumaid/io/atomic_file.h"
+#include "pneumaid/io/files.h"
 #include "pneumaid/io/params_yaml.h"
 
 namespace pneumaid {
 
 std::string TrajectoryToCsv(const Trajectory& trajectory, const std::string& comment) {
   const std::vector<std::pair<const char*, const std::vector<double>*>> channels = {
-      {"t", &trajectory.t_s},          {"u", &trajectory.u_V},
-      {"x", &trajectory.x_m},          {"v", &trajectory.v_m_per_s},
-      {"p1", &trajectory.p1_Pa},       {"p2", &trajectory.p2_Pa},
-      {"q1 [kg/s]", &trajectory.q1_kg_per_s}, {"q2 [kg/s]", &trajectory.q2_kg_per_s}};
+      {"t", &trajectory.t_s},
+      {"u", &trajectory.u_V},
+      {"x", &trajectory.x_m},
+      {"v", &trajectory.v_m_per_s},
+      {"p1", &trajectory.p1_Pa},
+      {"p2", &trajectory.p2_Pa},
+      {"q1 [kg/s]", &trajectory.q1_kg_per_s},
+      {"q2 [kg/s]", &trajectory.q2_kg_per_s}};
   std::ostringstream out;
   std::istringstream comment_lines(comment);
   for (std::string line; std::getline(comment_lines, line);) out << "# " << line << "\n";

@@ -54,7 +54,8 @@ const UnitInfo* FindUnit(const std::string& symbol) {
 std::string AcceptedUnits(const std::vector<Quantity>& quantities) {
   std::string out;
   for (const auto& unit : UnitTable()) {
-    if (std::find(quantities.begin(), quantities.end(), unit.quantity) == quantities.end()) continue;
+    if (std::find(quantities.begin(), quantities.end(), unit.quantity) == quantities.end())
+      continue;
     out += (out.empty() ? "" : ", ") + std::string(unit.symbol);
   }
   return out;

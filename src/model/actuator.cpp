@@ -44,8 +44,7 @@ ActuatorLayout ActuatorLayout::For(const Parameters& params) {
   return layout;
 }
 
-void SetLagStatesToEquilibrium(const ActuatorLayout& layout,
-                               const ActuatorCoefficients<double>& c,
+void SetLagStatesToEquilibrium(const ActuatorLayout& layout, const ActuatorCoefficients<double>& c,
                                const ValveCommand& command, double* y) {
   if (layout.valve_lag) {
     for (int i = 0; i < kValveCount; ++i) y[layout.opening_begin + i] = command.opening[i];

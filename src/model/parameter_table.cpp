@@ -17,8 +17,8 @@ constexpr ValueRange kRatioAboveOne{1, false, 3, true};
 constexpr ValueRange kSaturationOpening{0, false, 1, true};
 
 // Expands to the two accessors of one table row.
-#define PNEUMAID_REF(member)                                  \
-  [](Parameters& p) -> double& { return p.member; },          \
+#define PNEUMAID_REF(member)                         \
+  [](Parameters& p) -> double& { return p.member; }, \
       [](const Parameters& p) -> double { return p.member; }
 
 std::vector<ScalarParameterInfo> MakeTable() {
@@ -56,8 +56,8 @@ std::vector<ScalarParameterInfo> MakeTable() {
        PNEUMAID_REF(valve.increasing.d)},
       {"valve.increasing.q_max", "kg/s", "K_vp at saturation, increasing branch", kPositive,
        PNEUMAID_REF(valve.increasing.q_max_kg_per_s)},
-      {"valve.increasing.u_sat", "V", "saturation opening, increasing branch",
-       kSaturationOpening, PNEUMAID_REF(valve.increasing.u_sat_V)},
+      {"valve.increasing.u_sat", "V", "saturation opening, increasing branch", kSaturationOpening,
+       PNEUMAID_REF(valve.increasing.u_sat_V)},
       {"valve.decreasing.a", "-", "u^4 coefficient, decreasing branch", kAnyFinite,
        PNEUMAID_REF(valve.decreasing.a)},
       {"valve.decreasing.b", "-", "u^3 coefficient, decreasing branch", kAnyFinite,
@@ -68,8 +68,8 @@ std::vector<ScalarParameterInfo> MakeTable() {
        PNEUMAID_REF(valve.decreasing.d)},
       {"valve.decreasing.q_max", "kg/s", "K_vp at saturation, decreasing branch", kPositive,
        PNEUMAID_REF(valve.decreasing.q_max_kg_per_s)},
-      {"valve.decreasing.u_sat", "V", "saturation opening, decreasing branch",
-       kSaturationOpening, PNEUMAID_REF(valve.decreasing.u_sat_V)},
+      {"valve.decreasing.u_sat", "V", "saturation opening, decreasing branch", kSaturationOpening,
+       PNEUMAID_REF(valve.decreasing.u_sat_V)},
       {"pipeline.delta", "1/s", "Eq. 5 rate constant at tube_length", kPositive,
        PNEUMAID_REF(pipeline.delta_per_s)},
       {"pipeline.tube_length", "m", "valve-to-cylinder tube length", kNonNegative,
@@ -120,9 +120,15 @@ std::string ValueRange::Describe() const {
   out << "a finite number";
   if (std::isfinite(min) || std::isfinite(max)) {
     out << " in " << (min_inclusive ? "[" : "(");
-    if (std::isfinite(min)) out << min; else out << "-inf";
+    if (std::isfinite(min))
+      out << min;
+    else
+      out << "-inf";
     out << ", ";
-    if (std::isfinite(max)) out << max; else out << "inf";
+    if (std::isfinite(max))
+      out << max;
+    else
+      out << "inf";
     out << (max_inclusive ? "]" : ")");
   }
   return out.str();

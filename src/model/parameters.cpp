@@ -35,8 +35,7 @@ void CheckCrossFieldRules(const Parameters& params, std::vector<ParameterProblem
     }
     if (!(entry.delta_per_s > 0)) problems->push_back({path, "expected delta > 0 1/s"});
   }
-  if (params.effects.count("pipeline_lag") &&
-      params.pipeline.model != PipelineModel::kNone) {
+  if (params.effects.count("pipeline_lag") && params.pipeline.model != PipelineModel::kNone) {
     problems->push_back({"effects.pipeline_lag",
                          "pipeline_lag adds the Eq. 5 lag to a base model without one; "
                          "expected pipeline.model: none"});
@@ -86,18 +85,24 @@ const char* ToString(Orientation value) {
 
 const char* ToString(ValveBranchMode value) {
   switch (value) {
-    case ValveBranchMode::kIncreasing: return "increasing";
-    case ValveBranchMode::kDecreasing: return "decreasing";
-    case ValveBranchMode::kHysteresis: return "hysteresis";
+    case ValveBranchMode::kIncreasing:
+      return "increasing";
+    case ValveBranchMode::kDecreasing:
+      return "decreasing";
+    case ValveBranchMode::kHysteresis:
+      return "hysteresis";
   }
   return "?";
 }
 
 const char* ToString(PipelineModel value) {
   switch (value) {
-    case PipelineModel::kConductanceLag: return "conductance_lag";
-    case PipelineModel::kFlowLag: return "flow_lag";
-    case PipelineModel::kNone: return "none";
+    case PipelineModel::kConductanceLag:
+      return "conductance_lag";
+    case PipelineModel::kFlowLag:
+      return "flow_lag";
+    case PipelineModel::kNone:
+      return "none";
   }
   return "?";
 }

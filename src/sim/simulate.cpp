@@ -56,8 +56,7 @@ int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_d
   JetN jet_rate[kMaxStates];
   for (int i = 0; i < n; ++i) jet_state[i] = JetN(state[i], i);
   ActuatorDerivatives(data->layout, data->jet_coefficients, data->command, data->motion, jet_state,
-                      jet_rate,
-                      static_cast<ActuatorOutputs<JetN>*>(nullptr));
+                      jet_rate, static_cast<ActuatorOutputs<JetN>*>(nullptr));
   for (int row = 0; row < n; ++row) {
     for (int col = 0; col < n; ++col) {
       const double value = jet_rate[row].v[col];
@@ -125,8 +124,7 @@ MotionMode ModeAtRest(const ModelData& data, const double* y) {
   if (!AtExtendedStop(data, y) && force > BreakawayForce(c, p, +1.0) + data.breakaway_margin_N) {
     return MotionMode::kSlidingPositive;
   }
-  if (!AtRetractedStop(data, y) &&
-      force < -BreakawayForce(c, p, -1.0) - data.breakaway_margin_N) {
+  if (!AtRetractedStop(data, y) && force < -BreakawayForce(c, p, -1.0) - data.breakaway_margin_N) {
     return MotionMode::kSlidingNegative;
   }
   return MotionMode::kStuck;
@@ -168,11 +166,10 @@ class Integrator {
     CheckFlag(CVodeSetErrHandlerFn(mem, CaptureSolverMessage, data_), "CVodeSetErrHandlerFn");
     CheckFlag(CVodeSVtolerances(mem, options.relative_tolerance, tolerances_.get()),
               "CVodeSVtolerances");
-    matrix_.reset(
-        CheckAllocated(SUNDenseMatrix(size_, size_, context_.get()), "SUNDenseMatrix"));
+    matrix_.reset(CheckAllocated(SUNDenseMatrix(size_, size_, context_.get()), "SUNDenseMatrix"));
     internal::InstallFastMatrixKernels(matrix_.get());
-    solver_.reset(CheckAllocated(internal::NewFastDenseSolver(size_, context_.get()),
-                                 "NewFastDenseSolver"));
+    solver_.reset(
+        CheckAllocated(internal::NewFastDenseSolver(size_, context_.get()), "NewFastDenseSolver"));
     CheckFlag(CVodeSetLinearSolver(mem, solver_.get(), matrix_.get()), "CVodeSetLinearSolver");
     CheckFlag(CVodeSetJacFn(mem, Jacobian), "CVodeSetJacFn");
     CheckFlag(CVodeSetMaxNumSteps(mem, 100000), "CVodeSetMaxNumSteps");
@@ -325,7 +322,8 @@ std::string CheckInputs(const Parameters& params, const CommandSignal& command,
   if (!options.IsValid(&error)) return "options: " + error;
   if (!command.IsValid(&error)) return error;
   const auto problems = Validate(params);
-  if (!problems.empty()) return "parameters: " + problems.front().path + ": " + problems.front().message;
+  if (!problems.empty())
+    return "parameters: " + problems.front().path + ": " + problems.front().message;
   for (const auto& [name, values] : params.effects) {
     if (!FindEffect(name)->simulated) return "effect " + name + " is not simulated yet";
   }

@@ -19,9 +19,10 @@ void RunStep(benchmark::State& state, const Parameters& params) {
     if (!summary.ok()) state.SkipWithError(summary.message.c_str());
     benchmark::DoNotOptimize(run.x_m.data());
   }
-  state.counters["ms_per_simulated_s"] =
-      benchmark::Counter(1e3 * 1.0 / 1.5, benchmark::Counter::kIsIterationInvariantRate |
-                                              benchmark::Counter::kInvert);
+  // Wall seconds per simulated second, the figure the target is set in
+  // (printed with an SI prefix: 4.7m = 4.7 ms per simulated second).
+  state.counters["wall_s_per_sim_s"] = benchmark::Counter(
+      1.5, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.counters["steps"] = static_cast<double>(summary.steps);
   state.counters["rhs"] = static_cast<double>(summary.rhs_evaluations);
   state.counters["jacobians"] = static_cast<double>(summary.jacobian_evaluations);

@@ -19,7 +19,8 @@ class SimulateCliTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::path(::testing::TempDir()) /
-           ("pneumaid_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("pneumaid_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -27,7 +28,8 @@ class SimulateCliTest : public ::testing::Test {
 
   int Run(const std::string& arguments) {
     const std::string command = std::string(PNEUMAID_CLI) + " " + arguments + " > " +
-                                (dir_ / "stdout.txt").string() + " 2> " + (dir_ / "stderr.txt").string();
+                                (dir_ / "stdout.txt").string() + " 2> " +
+                                (dir_ / "stderr.txt").string();
     const int status = std::system(command.c_str());
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   }
@@ -47,7 +49,9 @@ class SimulateCliTest : public ::testing::Test {
 
 TEST_F(SimulateCliTest, StepWritesAValidationLogInSI) {
   const std::string out = (dir_ / "sim.csv").string();
-  ASSERT_EQ(Run("simulate --params " + kPaper + " --step 1@0 --step -1@0.8 --until 1.5 --rate 200 --out " + out), 0)
+  ASSERT_EQ(Run("simulate --params " + kPaper +
+                " --step 1@0 --step -1@0.8 --until 1.5 --rate 200 --out " + out),
+            0)
       << Stderr();
   const CsvTable table = ReadCsv(out);
   EXPECT_EQ(table.rows(), 301u);
@@ -58,7 +62,8 @@ TEST_F(SimulateCliTest, StepWritesAValidationLogInSI) {
   EXPECT_EQ(table.Find("u")->values[160], -1.0);
   // The file drives a new run through --input, closing the loop.
   const std::string again = (dir_ / "again.csv").string();
-  ASSERT_EQ(Run("simulate --params " + kPaper + " --input " + out + " --rate 200 --out " + again), 0)
+  ASSERT_EQ(Run("simulate --params " + kPaper + " --input " + out + " --rate 200 --out " + again),
+            0)
       << Stderr();
   EXPECT_NEAR(ReadCsv(again).Find("x")->values.back(), table.Find("x")->values.back(), 2e-4);
 }

@@ -39,7 +39,8 @@ TEST(ParamsYamlTest, RoundTripIsExact) {
   p.valve.branch = ValveBranchMode::kHysteresis;
   p.pipeline.model = PipelineModel::kFlowLag;
   const Parameters back = ParamsFromYaml(ParamsToYaml(p), "round-trip");
-  for (const auto& info : ScalarParameterTable()) EXPECT_EQ(info.get(back), info.get(p)) << info.path;
+  for (const auto& info : ScalarParameterTable())
+    EXPECT_EQ(info.get(back), info.get(p)) << info.path;
   ASSERT_EQ(back.pipeline.delta_by_length.size(), 2u);
   EXPECT_EQ(back.pipeline.delta_by_length[1].delta_per_s, 7.7);
   EXPECT_EQ(back.effects, p.effects);
@@ -51,10 +52,10 @@ TEST(ParamsYamlTest, RoundTripIsExact) {
 
 struct BadCase {
   const char* name;
-  const char* find;      // text in paper.yaml to replace
-  const char* replace;   // with this
-  int line;              // where the message must point
-  const char* message;   // a part of the message
+  const char* find;     // text in paper.yaml to replace
+  const char* replace;  // with this
+  int line;             // where the message must point
+  const char* message;  // a part of the message
 };
 
 class ParamsYamlBadInputTest : public ::testing::TestWithParam<BadCase> {};
@@ -78,19 +79,30 @@ TEST_P(ParamsYamlBadInputTest, NamesFileLineAndExpectation) {
 INSTANTIATE_TEST_SUITE_P(
     Cases, ParamsYamlBadInputTest,
     ::testing::Values(
-        BadCase{"unknown_top_key", "effects: {}", "effects: {}\ncolour: blue", 32, "unknown key 'colour'"},
-        BadCase{"unknown_nested_key", "  stroke: 0.05", "  stroke: 0.05\n  strok: 0.05", 12, "cylinder.strok"},
-        BadCase{"missing_key", "  load_mass: 0.15\n", "", 9, "missing required key 'cylinder.load_mass'"},
-        BadCase{"negative_volume", "dead_volume_1: 1.01e-7", "dead_volume_1: -1.01e-7", 12, "cylinder.dead_volume_1"},
-        BadCase{"u_sat_above_one", "q_max: 9.25e-5, u_sat: 0.75", "q_max: 9.25e-5, u_sat: 1.5", 19, "u_sat"},
+        BadCase{"unknown_top_key", "effects: {}", "effects: {}\ncolour: blue", 32,
+                "unknown key 'colour'"},
+        BadCase{"unknown_nested_key", "  stroke: 0.05", "  stroke: 0.05\n  strok: 0.05", 12,
+                "cylinder.strok"},
+        BadCase{"missing_key", "  load_mass: 0.15\n", "", 9,
+                "missing required key 'cylinder.load_mass'"},
+        BadCase{"negative_volume", "dead_volume_1: 1.01e-7", "dead_volume_1: -1.01e-7", 12,
+                "cylinder.dead_volume_1"},
+        BadCase{"u_sat_above_one", "q_max: 9.25e-5, u_sat: 0.75", "q_max: 9.25e-5, u_sat: 1.5", 19,
+                "u_sat"},
         BadCase{"not_a_number", "delta: 8.0", "delta: fast", 24, "expected a finite number"},
         BadCase{"wrong_format", "pneumaid-params/1", "pneumaid-params/2", 4, "format"},
-        BadCase{"bad_enum", "branch: increasing", "branch: sideways", 21, "decreasing | hysteresis | increasing"},
-        BadCase{"unknown_effect", "effects: {}", "effects: {warp: {x: 1}}", 31, "unknown effect 'warp'"},
-        BadCase{"effect_missing_parameter", "effects: {}", "effects: {valve_lag: {}}", 31, "missing parameter"},
-        BadCase{"rod_larger_than_piston", "area_2: 1.73e-4", "area_2: 3.0e-4", 10, "smaller than area_1"},
-        BadCase{"uncertainty_unknown_path", "uncertainty: {}", "uncertainty: {friction.up.Fs: 1}", 32, "names no parameter"},
-        BadCase{"yaml_syntax", "gas: {k: 1.4, R: 287.0, T: 293.0}", "gas: {k: 1.4, R: [287.0, T: 293.0}", 6, "YAML syntax"}),
+        BadCase{"bad_enum", "branch: increasing", "branch: sideways", 21,
+                "decreasing | hysteresis | increasing"},
+        BadCase{"unknown_effect", "effects: {}", "effects: {warp: {x: 1}}", 31,
+                "unknown effect 'warp'"},
+        BadCase{"effect_missing_parameter", "effects: {}", "effects: {valve_lag: {}}", 31,
+                "missing parameter"},
+        BadCase{"rod_larger_than_piston", "area_2: 1.73e-4", "area_2: 3.0e-4", 10,
+                "smaller than area_1"},
+        BadCase{"uncertainty_unknown_path", "uncertainty: {}", "uncertainty: {friction.up.Fs: 1}",
+                32, "names no parameter"},
+        BadCase{"yaml_syntax", "gas: {k: 1.4, R: 287.0, T: 293.0}",
+                "gas: {k: 1.4, R: [287.0, T: 293.0}", 6, "YAML syntax"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
 
 TEST(ParamsYamlTest, SaveRefusesInvalidAndLeavesNoFile) {

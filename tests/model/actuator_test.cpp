@@ -66,8 +66,10 @@ TEST(ActuatorTest, AutodiffJacobianMatchesCentralDifferences) {
         plus[col] += h;
         minus[col] -= h;
         std::vector<double> fp(layout.size), fm(layout.size);
-        ActuatorDerivatives<double>(layout, cd, command, MotionMode::kRegularized, plus.data(), fp.data(), nullptr);
-        ActuatorDerivatives<double>(layout, cd, command, MotionMode::kRegularized, minus.data(), fm.data(), nullptr);
+        ActuatorDerivatives<double>(layout, cd, command, MotionMode::kRegularized, plus.data(),
+                                    fp.data(), nullptr);
+        ActuatorDerivatives<double>(layout, cd, command, MotionMode::kRegularized, minus.data(),
+                                    fm.data(), nullptr);
         for (int row = 0; row < layout.size; ++row) {
           const double fd = (fp[row] - fm[row]) / (2 * h);
           const double scale = std::fabs(fd) + std::fabs(fj[row].v[col]);
@@ -103,7 +105,8 @@ TEST(ActuatorTest, EquilibriumLagStatesHaveZeroRates) {
   std::vector<double> y(layout.size, 0.0), f(layout.size);
   SetChamberPressures(c, 2e5, 3e5, y.data());
   SetLagStatesToEquilibrium(layout, c, command, y.data());
-  ActuatorDerivatives<double>(layout, c, command, MotionMode::kRegularized, y.data(), f.data(), nullptr);
+  ActuatorDerivatives<double>(layout, c, command, MotionMode::kRegularized, y.data(), f.data(),
+                              nullptr);
   for (int i = 4; i < layout.size; ++i) EXPECT_NEAR(f[i], 0.0, 1e-12) << "state " << i;
 }
 

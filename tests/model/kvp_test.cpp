@@ -17,8 +17,10 @@ TEST(KvpTest, Table2JumpAtSaturationIsAsPublished) {
     EXPECT_NEAR(Kvp(u - 1e-12, c) / branch->q_max_kg_per_s, expected, 1e-9);
   }
   // The values quoted in the issue: 1.0063 q_max (increasing), 0.9795 (decreasing).
-  EXPECT_NEAR(KvpPolynomial(0.75, MakeKvpCoefficients<double>(valve.increasing)) / 9.25e-5, 1.0063, 1e-4);
-  EXPECT_NEAR(KvpPolynomial(0.75, MakeKvpCoefficients<double>(valve.decreasing)) / 9.15e-5, 0.9795, 1e-4);
+  EXPECT_NEAR(KvpPolynomial(0.75, MakeKvpCoefficients<double>(valve.increasing)) / 9.25e-5, 1.0063,
+              1e-4);
+  EXPECT_NEAR(KvpPolynomial(0.75, MakeKvpCoefficients<double>(valve.decreasing)) / 9.15e-5, 0.9795,
+              1e-4);
 }
 
 TEST(KvpTest, NeverNegativeAndZeroWhenClosed) {

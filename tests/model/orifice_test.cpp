@@ -6,7 +6,9 @@
 namespace pneumaid {
 namespace {
 
-OrificeCoefficients<double> Paper() { return MakeOrificeCoefficients<double>(1.4, 287.0, 293.0, 1181.0); }
+OrificeCoefficients<double> Paper() {
+  return MakeOrificeCoefficients<double>(1.4, 287.0, 293.0, 1181.0);
+}
 
 TEST(OrificeTest, ChokedAndSubsonicBranchesMeetAtCriticalRatio) {
   const auto c = Paper();
@@ -56,8 +58,8 @@ TEST(OrificeTest, AutodiffMatchesCentralDifferences) {
   const auto cd = Paper();
   const auto cj = MakeOrificeCoefficients<Jet>(1.4, 287.0, 293.0, 1181.0);
   // Choked, subsonic, linear and reversed points.
-  const double points[][3] = {{9e-5, 5e5, 1e5}, {9e-5, 5e5, 3.5e5}, {9e-5, 5e5, 4.99e5},
-                              {5e-5, 2e5, 4e5}};
+  const double points[][3] = {
+      {9e-5, 5e5, 1e5}, {9e-5, 5e5, 3.5e5}, {9e-5, 5e5, 4.99e5}, {5e-5, 2e5, 4e5}};
   for (const auto& p : points) {
     const Jet q = OrificeMassFlow(Jet(p[0], 0), Jet(p[1], 1), Jet(p[2], 2), cj);
     for (int i = 0; i < 3; ++i) {
@@ -66,7 +68,8 @@ TEST(OrificeTest, AutodiffMatchesCentralDifferences) {
       plus[i] += h;
       minus[i] -= h;
       const double fd = (OrificeMassFlow(plus[0], plus[1], plus[2], cd) -
-                         OrificeMassFlow(minus[0], minus[1], minus[2], cd)) / (2 * h);
+                         OrificeMassFlow(minus[0], minus[1], minus[2], cd)) /
+                        (2 * h);
       EXPECT_NEAR(q.v[i], fd, 1e-6 * std::fabs(fd) + 1e-20) << "input " << i;
     }
   }

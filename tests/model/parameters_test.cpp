@@ -48,8 +48,9 @@ TEST(ParametersTest, EffectsAreCheckedAgainstTheCatalog) {
 }
 
 TEST(ParametersTest, CatalogHoldsTheSpecNames) {
-  for (const char* name : {"valve_lag", "flow_sensor_lag", "pipeline_lag", "cross_leakage",
-                           "heat_transfer", "supply_droop", "friction_pressure", "valve_deadzone"}) {
+  for (const char* name :
+       {"valve_lag", "flow_sensor_lag", "pipeline_lag", "cross_leakage", "heat_transfer",
+        "supply_droop", "friction_pressure", "valve_deadzone"}) {
     EXPECT_NE(FindEffect(name), nullptr) << name;
   }
 }

@@ -33,17 +33,18 @@ TEST(SimulateTest, ClosedValvesConserveChamberMassWhileTheRodMoves) {
   p.friction.negative = {0.2, 0.1, 0.5, 0.01};
   InitialState start{-0.01, 0.0, 3.0e5, 1.5e5};
   SimulationOptions options;
-  const Trajectory run = MustSimulate(p, CommandSignal{}, start, UniformTimes(0, 0.5, 1000), options);
+  const Trajectory run =
+      MustSimulate(p, CommandSignal{}, start, UniformTimes(0, 0.5, 1000), options);
   const double k = p.gas.heat_capacity_ratio;
   const double invariant_1 = start.p1_Pa * std::pow(Volume1(p, start.position_m), k);
   const double invariant_2 = start.p2_Pa * std::pow(Volume2(p, start.position_m), k);
   double max_travel = 0, max_drift = 0;
   for (size_t i = 0; i < run.size(); ++i) {
     max_travel = std::max(max_travel, std::fabs(run.x_m[i] - start.position_m));
-    max_drift = std::max(max_drift, std::fabs(run.p1_Pa[i] * std::pow(Volume1(p, run.x_m[i]), k) /
-                                                  invariant_1 - 1));
-    max_drift = std::max(max_drift, std::fabs(run.p2_Pa[i] * std::pow(Volume2(p, run.x_m[i]), k) /
-                                                  invariant_2 - 1));
+    max_drift = std::max(
+        max_drift, std::fabs(run.p1_Pa[i] * std::pow(Volume1(p, run.x_m[i]), k) / invariant_1 - 1));
+    max_drift = std::max(
+        max_drift, std::fabs(run.p2_Pa[i] * std::pow(Volume2(p, run.x_m[i]), k) / invariant_2 - 1));
   }
   EXPECT_GT(max_travel, 0.005);  // the rod really moved
   EXPECT_LE(max_drift, 10 * options.relative_tolerance);
@@ -71,8 +72,8 @@ TEST(SimulateTest, FullStrokeStepEndsAtSupplyAndAtmosphere) {
   for (PipelineModel pipeline : {PipelineModel::kConductanceLag, PipelineModel::kNone}) {
     Parameters p;
     p.pipeline.model = pipeline;
-    const Trajectory run = MustSimulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p),
-                                        UniformTimes(0, 3.0, 100));
+    const Trajectory run =
+        MustSimulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p), UniformTimes(0, 3.0, 100));
     EXPECT_NEAR(run.p1_Pa.back(), 5e5, 100.0) << ToString(pipeline);
     EXPECT_NEAR(run.p2_Pa.back(), 1e5, 100.0) << ToString(pipeline);
     EXPECT_NEAR(run.x_m.back(), 0.025, 2e-5) << ToString(pipeline);
@@ -88,9 +89,8 @@ TEST(SimulateTest, NoPressureReachesZeroEvenWithTheLiteralFlowLag) {
     if (u < 0) start.position_m = 0.025;
     const Trajectory run =
         MustSimulate(p, StepCommand({{0.0, u}, {1.0, -u}}), start, UniformTimes(0, 2.0, 1000));
-    const double lowest =
-        std::min(*std::min_element(run.p1_Pa.begin(), run.p1_Pa.end()),
-                 *std::min_element(run.p2_Pa.begin(), run.p2_Pa.end()));
+    const double lowest = std::min(*std::min_element(run.p1_Pa.begin(), run.p1_Pa.end()),
+                                   *std::min_element(run.p2_Pa.begin(), run.p2_Pa.end()));
     EXPECT_GT(lowest, 0.0) << "u = " << u;
   }
 }
@@ -119,8 +119,8 @@ TEST(SimulateTest, RodHeldBelowStaticFrictionCreepsLessThanATenthMillimetrePerSe
 TEST(SimulateTest, RodBreaksAwayAboveStaticFriction) {
   Parameters p = HorizontalWithoutTube();
   const double p2 = 2e5;
-  const double p1 = (1.3 * p.friction.positive.static_force_N - NetForce(p, 0.0, p2)) /
-                    p.cylinder.area_1_m2;
+  const double p1 =
+      (1.3 * p.friction.positive.static_force_N - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
   const Trajectory run =
       MustSimulate(p, CommandSignal{}, InitialState{0.0, 0.0, p1, p2}, UniformTimes(0, 0.2, 1000));
   EXPECT_GT(run.x_m.back(), 1e-3);
@@ -145,16 +145,19 @@ TEST(SimulateTest, SampledNoisyCommandRunsWithBoundedWork) {
 TEST(SimulateTest, EffectsChangeTheRunTheWayTheyShould) {
   Parameters base = HorizontalWithoutTube();
   const auto times = UniformTimes(0, 0.3, 1000);
-  const Trajectory plain = MustSimulate(base, StepCommand({{0.0, 1.0}}), RetractedAtRest(base), times);
+  const Trajectory plain =
+      MustSimulate(base, StepCommand({{0.0, 1.0}}), RetractedAtRest(base), times);
   Parameters lagged = base;
   lagged.effects["flow_sensor_lag"] = {{"tau", 0.03}};
-  const Trajectory measured = MustSimulate(lagged, StepCommand({{0.0, 1.0}}), RetractedAtRest(lagged), times);
+  const Trajectory measured =
+      MustSimulate(lagged, StepCommand({{0.0, 1.0}}), RetractedAtRest(lagged), times);
   // A meter lag changes what q reads, not the plant.
   EXPECT_NEAR(measured.x_m.back(), plain.x_m.back(), 1e-6);
   EXPECT_LT(measured.q1_kg_per_s[10], 0.5 * plain.q1_kg_per_s[10]);
   Parameters dead = base;
   dead.effects["valve_deadzone"] = {{"u0", 0.5}};
-  const Trajectory none = MustSimulate(dead, StepCommand({{0.0, 0.4}}), RetractedAtRest(dead), times);
+  const Trajectory none =
+      MustSimulate(dead, StepCommand({{0.0, 0.4}}), RetractedAtRest(dead), times);
   EXPECT_EQ(none.p1_Pa.back(), base.supply.atmospheric_pressure_Pa);  // no flow below u0
 }
 
@@ -181,8 +184,9 @@ TEST(SimulateTest, StepBudgetEndsARunInsteadOfHanging) {
   SimulationOptions options;
   options.max_steps = 10;
   Trajectory run;
-  const auto summary = Simulate(Parameters{}, StepCommand({{0.0, 1.0}}), RetractedAtRest(Parameters{}),
-                                UniformTimes(0, 1.0, 100), options, &run);
+  const auto summary =
+      Simulate(Parameters{}, StepCommand({{0.0, 1.0}}), RetractedAtRest(Parameters{}),
+               UniformTimes(0, 1.0, 100), options, &run);
   EXPECT_EQ(summary.status, SimulationStatus::kSolverFailure);
   EXPECT_NE(summary.message.find("step budget"), std::string::npos);
 }

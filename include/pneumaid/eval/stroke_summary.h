@@ -11,7 +11,8 @@ namespace pneumaid {
 
 struct StrokeSummary {
   std::optional<double> mid_stroke_time_s;  // first crossing of x = 0 (either way)
-  std::optional<double> end_reached_time_s; // first time within `end_margin` of an end it was not at
+  std::optional<double>
+      end_reached_time_s;  // first time within `end_margin` of an end it was not at
   double peak_p1_Pa = 0;
   double peak_p2_Pa = 0;
   double final_x_m = 0;

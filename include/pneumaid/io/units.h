@@ -21,7 +21,7 @@ enum class Quantity {
 struct UnitInfo {
   const char* symbol;  // as written: "bar_g", "l/min"
   Quantity quantity;
-  double scale;   // SI = value * scale + offset (+ p_atm for gauge pressures)
+  double scale;  // SI = value * scale + offset (+ p_atm for gauge pressures)
   double offset;
   bool gauge;
 };

@@ -55,10 +55,10 @@ enum StateIndex : int { kPosition = 0, kVelocity = 1, kChamber1 = 2, kChamber2 =
 inline constexpr int kMaxStates = 14;
 
 struct ActuatorLayout {
-  bool valve_lag = false;          // 4 states: lagged valve openings [V]
-  bool conductance_lag = false;    // 4 states: lagged K_vp of each valve [kg/s]
-  bool flow_lag = false;           // 2 states: lagged mass flows into chambers [kg/s]
-  bool flow_sensor_lag = false;    // 2 states: flows as the meters read them [kg/s]
+  bool valve_lag = false;        // 4 states: lagged valve openings [V]
+  bool conductance_lag = false;  // 4 states: lagged K_vp of each valve [kg/s]
+  bool flow_lag = false;         // 2 states: lagged mass flows into chambers [kg/s]
+  bool flow_sensor_lag = false;  // 2 states: flows as the meters read them [kg/s]
   int opening_begin = -1, conductance_begin = -1, flow_begin = -1, sensor_begin = -1;
   int size = 4;
 
@@ -118,18 +118,24 @@ ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
   c.atmospheric_pressure_Pa = T(p.supply.atmospheric_pressure_Pa);
   const auto& cyl = p.cylinder;
   const double half_stroke = 0.5 * cyl.stroke_m;
-  c.chamber_1 = {T(cyl.area_1_m2), T(cyl.dead_volume_1_m3), T(half_stroke), T(1.0),
+  c.chamber_1 = {T(cyl.area_1_m2),
+                 T(cyl.dead_volume_1_m3),
+                 T(half_stroke),
+                 T(1.0),
                  T(reg.minimum_volume_fraction * cyl.dead_volume_1_m3),
                  T(cyl.dead_volume_1_m3 + cyl.area_1_m2 * cyl.stroke_m)};
-  c.chamber_2 = {T(cyl.area_2_m2), T(cyl.dead_volume_2_m3), T(half_stroke), T(-1.0),
+  c.chamber_2 = {T(cyl.area_2_m2),
+                 T(cyl.dead_volume_2_m3),
+                 T(half_stroke),
+                 T(-1.0),
                  T(reg.minimum_volume_fraction * cyl.dead_volume_2_m3),
                  T(cyl.dead_volume_2_m3 + cyl.area_2_m2 * cyl.stroke_m)};
   c.area_1_m2 = T(cyl.area_1_m2);
   c.area_2_m2 = T(cyl.area_2_m2);
   c.load_mass_kg = T(cyl.load_mass_kg);
-  c.weight_N = T(cyl.orientation == Orientation::kVertical
-                     ? cyl.load_mass_kg * kStandardGravity_m_per_s2
-                     : 0.0);
+  c.weight_N =
+      T(cyl.orientation == Orientation::kVertical ? cyl.load_mass_kg * kStandardGravity_m_per_s2
+                                                  : 0.0);
   c.friction_positive = MakeStribeckCoefficients<T>(p.friction.positive);
   c.friction_negative = MakeStribeckCoefficients<T>(p.friction.negative);
   c.stick_velocity_m_per_s = T(reg.stick_velocity_m_per_s);
@@ -138,8 +144,8 @@ ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
                 T(2.0 * reg.end_stop_damping_ratio * std::sqrt(stiffness * cyl.load_mass_kg)),
                 T(reg.end_stop_engagement_depth_m)};
   const bool lag_from_effect = p.pipeline.model == PipelineModel::kNone;
-  c.pipeline_delta_per_s =
-      T(lag_from_effect ? internal::EffectValue(p, "pipeline_lag", "delta") : p.pipeline.delta_per_s);
+  c.pipeline_delta_per_s = T(lag_from_effect ? internal::EffectValue(p, "pipeline_lag", "delta")
+                                             : p.pipeline.delta_per_s);
   c.flow_lag_pressure_floor_Pa = T(reg.flow_lag_pressure_floor_Pa);
   c.valve_lag_tau_s = T(internal::EffectValue(p, "valve_lag", "tau"));
   c.flow_sensor_tau_s = T(internal::EffectValue(p, "flow_sensor_lag", "tau"));
@@ -169,8 +175,7 @@ std::array<T, kValveCount> ValveOpeningsInUse(const ActuatorLayout& layout,
 
 // Commanded K_vp [kg/s] of each valve (before any tube lag).
 template <typename T>
-std::array<T, kValveCount> ValveGains(const ActuatorCoefficients<T>& c,
-                                      const ValveCommand& command,
+std::array<T, kValveCount> ValveGains(const ActuatorCoefficients<T>& c, const ValveCommand& command,
                                       const std::array<T, kValveCount>& opening) {
   std::array<T, kValveCount> gain;
   for (int i = 0; i < kValveCount; ++i) {
@@ -206,10 +211,10 @@ T GuardedOutflow(const T& flow, const T& pressure_Pa, const T& floor_Pa) {
 
 // How the rod's friction is treated (see friction.h and docs/model.md).
 enum class MotionMode {
-  kRegularized,       // one smooth law for all v: stick is a stiff viscous band
-  kStuck,             // static friction holds the rod: x and v frozen
-  kSlidingPositive,   // v >= 0, Eq. 12 with the positive coefficients
-  kSlidingNegative,   // v <= 0, Eq. 12 with the negative coefficients
+  kRegularized,      // one smooth law for all v: stick is a stiff viscous band
+  kStuck,            // static friction holds the rod: x and v frozen
+  kSlidingPositive,  // v >= 0, Eq. 12 with the positive coefficients
+  kSlidingNegative,  // v <= 0, Eq. 12 with the negative coefficients
 };
 
 // Chamber pressures and volumes at a state.
@@ -233,27 +238,27 @@ ChamberPressures<T> DecodeChambers(const ActuatorCoefficients<T>& c, const T* y)
 // Writes the chamber states of `y` for pressures p1, p2 at position y[kPosition].
 template <typename T>
 void SetChamberPressures(const ActuatorCoefficients<T>& c, const T& p1_Pa, const T& p2_Pa, T* y) {
-  y[kChamber1] = ChamberStateFromPressure(p1_Pa, ChamberVolume(y[kPosition], c.chamber_1),
-                                          c.heat_capacity_ratio, c.atmospheric_pressure_Pa,
-                                          c.chamber_1);
-  y[kChamber2] = ChamberStateFromPressure(p2_Pa, ChamberVolume(y[kPosition], c.chamber_2),
-                                          c.heat_capacity_ratio, c.atmospheric_pressure_Pa,
-                                          c.chamber_2);
+  y[kChamber1] =
+      ChamberStateFromPressure(p1_Pa, ChamberVolume(y[kPosition], c.chamber_1),
+                               c.heat_capacity_ratio, c.atmospheric_pressure_Pa, c.chamber_1);
+  y[kChamber2] =
+      ChamberStateFromPressure(p2_Pa, ChamberVolume(y[kPosition], c.chamber_2),
+                               c.heat_capacity_ratio, c.atmospheric_pressure_Pa, c.chamber_2);
 }
 
 // Everything that pushes the rod except friction [N], along +x.
 template <typename T>
 T DrivingForce(const ActuatorCoefficients<T>& c, const T* y, const ChamberPressures<T>& p) {
-  const T drive = PneumaticAndGravityForce(p.p1_Pa, p.p2_Pa, c.atmospheric_pressure_Pa,
-                                           c.area_1_m2, c.area_2_m2, c.weight_N);
+  const T drive = PneumaticAndGravityForce(p.p1_Pa, p.p2_Pa, c.atmospheric_pressure_Pa, c.area_1_m2,
+                                           c.area_2_m2, c.weight_N);
   return drive + EndStopForce(y[kPosition], y[kVelocity], c.end_stop);
 }
 
 // friction_pressure: friction scales by 1 + kp ((p1 + p2)/2 - p_atm).
 template <typename T>
 T FrictionScale(const ActuatorCoefficients<T>& c, const ChamberPressures<T>& p) {
-  return T(1.0) + c.friction_pressure_per_Pa *
-                      (T(0.5) * (p.p1_Pa + p.p2_Pa) - c.atmospheric_pressure_Pa);
+  return T(1.0) +
+         c.friction_pressure_per_Pa * (T(0.5) * (p.p1_Pa + p.p2_Pa) - c.atmospheric_pressure_Pa);
 }
 
 // Breakaway force [N] of the rod in the direction of `sign` (+1 or -1).
@@ -280,8 +285,8 @@ T RodAcceleration(const ActuatorCoefficients<T>& c, MotionMode motion, const T* 
       break;
     case MotionMode::kRegularized:
     default:
-      friction = FrictionForce(v, c.friction_positive, c.friction_negative,
-                               c.stick_velocity_m_per_s);
+      friction =
+          FrictionForce(v, c.friction_positive, c.friction_negative, c.stick_velocity_m_per_s);
       break;
   }
   return (DrivingForce(c, y, p) - FrictionScale(c, p) * friction) / c.load_mass_kg;
@@ -338,8 +343,7 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
 
 // Sets the lag states of `y` to their steady values for `command` at the
 // pressures already in `y`, as if the command had been held for a long time.
-void SetLagStatesToEquilibrium(const ActuatorLayout& layout,
-                               const ActuatorCoefficients<double>& c,
+void SetLagStatesToEquilibrium(const ActuatorLayout& layout, const ActuatorCoefficients<double>& c,
                                const ValveCommand& command, double* y);
 
 }  // namespace pneumaid

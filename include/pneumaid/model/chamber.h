@@ -16,11 +16,11 @@ namespace pneumaid {
 
 template <typename T>
 struct ChamberGeometry {
-  T area_m2;           // piston area facing this chamber
-  T dead_volume_m3;    // volume left at the end of the stroke that empties it
-  T half_stroke_m;     // L/2
-  T direction;         // +1 for chamber 1 (grows with x), -1 for chamber 2
-  T minimum_volume_m3; // guard: the volume never falls below this
+  T area_m2;              // piston area facing this chamber
+  T dead_volume_m3;       // volume left at the end of the stroke that empties it
+  T half_stroke_m;        // L/2
+  T direction;            // +1 for chamber 1 (grows with x), -1 for chamber 2
+  T minimum_volume_m3;    // guard: the volume never falls below this
   T reference_volume_m3;  // V_ref of the chamber state: its full volume
 };
 

@@ -20,9 +20,9 @@ T PneumaticAndGravityForce(const T& p1_Pa, const T& p2_Pa, const T& atmospheric_
 template <typename T>
 struct EndStopCoefficients {
   T half_stroke_m;
-  T stiffness_N_per_m;          // contact spring
-  T damping_N_s_per_m;          // contact damper at full engagement
-  T engagement_depth_m;         // depth over which the damper engages (keeps the force continuous)
+  T stiffness_N_per_m;   // contact spring
+  T damping_N_s_per_m;   // contact damper at full engagement
+  T engagement_depth_m;  // depth over which the damper engages (keeps the force continuous)
 };
 
 // One-sided contact of stiffness k and damping c: the force only pushes the rod
@@ -31,8 +31,8 @@ template <typename T>
 T ContactForce(const T& depth_m, const T& velocity_into_m_per_s, const EndStopCoefficients<T>& c) {
   if (depth_m <= T(0.0)) return T(0.0);
   const T engagement = depth_m < c.engagement_depth_m ? depth_m / c.engagement_depth_m : T(1.0);
-  const T force = c.stiffness_N_per_m * depth_m +
-                  c.damping_N_s_per_m * engagement * velocity_into_m_per_s;
+  const T force =
+      c.stiffness_N_per_m * depth_m + c.damping_N_s_per_m * engagement * velocity_into_m_per_s;
   return force > T(0.0) ? force : T(0.0);
 }
 

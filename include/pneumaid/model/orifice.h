@@ -22,11 +22,11 @@ inline constexpr double kDefaultLinearFlowRatio = 0.995;
 template <typename T>
 struct OrificeCoefficients {
   T C1, C2, critical_ratio;
-  T inverse_k;              // 1/k
-  T exponent;               // (k-1)/k
-  T flow_scale;             // 1 / (N sqrt(T_gas)) [s sqrt(K) ... ] so that q has kg/s
-  T linear_ratio;           // r_lin
-  T linear_slope;           // phi(r_lin) / (1 - r_lin)
+  T inverse_k;     // 1/k
+  T exponent;      // (k-1)/k
+  T flow_scale;    // 1 / (N sqrt(T_gas)) [s sqrt(K) ... ] so that q has kg/s
+  T linear_ratio;  // r_lin
+  T linear_slope;  // phi(r_lin) / (1 - r_lin)
 };
 
 // The dimensionless shape phi(r) of Eq. 4 without the linear region.

@@ -11,9 +11,9 @@
 namespace pneumaid {
 
 struct GasParams {
-  double heat_capacity_ratio = 1.4;        // k [-]
-  double gas_constant_J_per_kgK = 287.0;   // R [J/(kg K)]
-  double temperature_K = 293.0;            // T [K], supply and chamber gas
+  double heat_capacity_ratio = 1.4;       // k [-]
+  double gas_constant_J_per_kgK = 287.0;  // R [J/(kg K)]
+  double temperature_K = 293.0;           // T [K], supply and chamber gas
 };
 
 struct SupplyParams {
@@ -75,10 +75,10 @@ struct PipelineParams {
 
 // Eq. 12 for one direction of motion, all magnitudes.
 struct StribeckParams {
-  double static_force_N = 10.0;               // Fs
-  double dynamic_force_N = 0.5;               // Fd
-  double viscous_N_s_per_m = 5.0;             // b
-  double stribeck_velocity_m_per_s = 0.01;    // vs
+  double static_force_N = 10.0;             // Fs
+  double dynamic_force_N = 0.5;             // Fd
+  double viscous_N_s_per_m = 5.0;           // b
+  double stribeck_velocity_m_per_s = 0.01;  // vs
 };
 
 struct FrictionParams {

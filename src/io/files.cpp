@@ -1,4 +1,4 @@
-#include "pneumaid/io/atomic_file.h"
+#include "pneumaid/io/files.h"
 
 #include <unistd.h>
 
@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 
 #include "pneumaid/io/input_error.h"
 
@@ -30,6 +31,14 @@ void WriteFileAtomically(const std::string& path, const std::string& contents) {
     std::remove(temporary.c_str());
     throw InputError(path, 0, 0, std::string("cannot rename into place: ") + std::strerror(error));
   }
+}
+
+std::string ReadTextFile(const std::string& path, const std::string& what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, 0, "cannot open " + what + ": " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 }  // namespace pneumaid
