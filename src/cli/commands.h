@@ -19,5 +19,7 @@ enum ExitStatus : int {
 using CommandRunner = std::function<int()>;
 
 CommandRunner AddSimulateCommand(CLI::App* app);
+CommandRunner AddSynthCommand(CLI::App* app);
+CommandRunner AddCheckCommand(CLI::App* app);
 
 }  // namespace pneumaid::cli

@@ -14,6 +14,10 @@ int main(int argc, char** argv) {
   std::map<CLI::App*, CommandRunner> runners;
   CLI::App* simulate = app.add_subcommand("simulate", "simulate a parameter set for a command");
   runners[simulate] = AddSimulateCommand(simulate);
+  CLI::App* check = app.add_subcommand("check", "validate unit directories without fitting");
+  runners[check] = AddCheckCommand(check);
+  CLI::App* synth = app.add_subcommand("synth", "write a synthetic unit directory from a truth set");
+  runners[synth] = AddSynthCommand(synth);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -404,7 +404,9 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   for (const double t_out : times) {
     while (next_knot < command.time_s.size() && command.time_s[next_knot] <= t_out) {
       const double knot = command.time_s[next_knot];
-      if (knot > t && integrator.AdvanceTo(knot, knot) < 0) return fail("integration failed");
+      if (knot > t + 1e-12 * std::fmax(1.0, std::fabs(t)) && integrator.AdvanceTo(knot, knot) < 0) {
+        return fail("integration failed");
+      }
       t = knot;
       const double new_V = command.value_V[next_knot++];
       const ValveCommand previous = data.command;
@@ -415,7 +417,9 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
       }
       current_V = new_V;
     }
-    if (t_out > t) {
+    // An output a few ulps after the current time needs no step (and CVODE
+    // refuses one that short).
+    if (t_out > t + 1e-12 * std::fmax(1.0, std::fabs(t))) {
       const double stop =
           next_knot < command.time_s.size() ? std::fmin(command.time_s[next_knot], t_end) : t_end;
       if (integrator.AdvanceTo(t_out, stop) < 0) return fail("integration failed");

@@ -1,0 +1,57 @@
+// Test protocols of the synthetic rig (`pneumaid-protocol/1`, see
+// docs/synthetic-rig.md): which experiments to run, how the instruments
+// behave, and in which units the rig writes its logs.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pneumaid/io/rig_data.h"
+
+namespace pneumaid {
+
+inline constexpr const char* kProtocolFormat = "pneumaid-protocol/1";
+
+// One instrument (a CSV column). All SI (flows: standard volumetric m3/s).
+struct SensorModel {
+  double sigma = 0.0;         // Gaussian noise std
+  double tau_s = 0.0;         // first-order lag
+  double quantization = 0.0;  // ADC step (0 = none)
+  bool declared = true;       // written to the manifest's sensors block
+};
+
+struct Protocol {
+  double sample_rate_Hz = 1000.0;
+  PositionOrigin position_origin = PositionOrigin::kRetracted;
+  std::string length_unit = "mm";
+  std::string pressure_unit = "bar_g";
+  std::string flow_unit = "l/min";
+  std::map<std::string, SensorModel> sensors;  // by column name
+
+  // Valve test: staircase 0 -> 1 -> 0 in steps of valve_step_V held valve_hold_s.
+  bool valve = false;
+  double valve_step_V = 0.05;
+  double valve_hold_s = 0.3;
+
+  // Pipeline tests: a step to pipeline_command_V at pipeline_step_time_s, per tube length.
+  std::vector<double> tube_lengths_m;
+  double pipeline_command_V = 1.0;
+  double pipeline_step_time_s = 0.1;
+  double pipeline_duration_s = 1.5;
+
+  // Stroke tests: per level, extend until stroke_margin_m before the end, then retract.
+  std::vector<double> stroke_levels_V;
+  double stroke_margin_m = 1e-3;
+  double stroke_max_leg_s = 3.0;
+
+  // Validation runs.
+  bool paper_step = false;  // u = +1 then -1, each until 1 mm before the stroke limit
+  bool rich_profile = false;  // steps of several amplitudes and slow ramps
+};
+
+// Parses a protocol (strict keys; InputError with line and column).
+Protocol ParseProtocol(const std::string& text, const std::string& source);
+Protocol LoadProtocol(const std::string& path);
+
+}  // namespace pneumaid

@@ -1,0 +1,106 @@
+// The rig-data format `pneumaid-rig/1` (docs/data-format.md): a unit
+// directory with a manifest (unit.yaml) and one CSV file per experiment, read
+// into typed experiments in SI units (x from mid-stroke, absolute pressures,
+// mass flows). Every violation of the format throws one InputError naming the
+// file, line and column.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pneumaid/model/parameters.h"
+#include "pneumaid/trajectory.h"
+
+namespace pneumaid {
+
+inline constexpr const char* kRigFormat = "pneumaid-rig/1";
+
+enum class ExperimentKind { kValve, kPipeline, kStroke, kValidation };
+enum class PositionOrigin { kMid, kRetracted };
+
+const char* ToString(ExperimentKind kind);
+const char* ToString(PositionOrigin origin);
+
+// Rig constants of the manifest, SI. Defaults are the seed paper's values.
+struct RigConstants {
+  GasParams gas;
+  double supply_pressure_Pa = 5.0e5;
+  double atmospheric_pressure_Pa = 1.0e5;
+  double air_density_kg_per_m3 = 1.178;  // volumetric (standard) flow -> mass flow
+  double bore_m = 0.016;
+  double rod_m = 0.006;
+  double stroke_m = 0.05;
+  double dead_volume_1_m3 = 1.01e-7;
+  double dead_volume_2_m3 = 8.65e-8;
+  double load_mass_kg = 0.15;
+  Orientation orientation = Orientation::kVertical;
+  double tube_length_m = 0.38;
+  PositionOrigin position_origin = PositionOrigin::kMid;
+
+  double area_1_m2() const;  // pi bore^2 / 4
+  double area_2_m2() const;  // area_1 - pi rod^2 / 4
+};
+
+// What the manifest says about one instrument (a CSV column name).
+struct SensorInfo {
+  std::optional<double> tau_s;  // first-order lag
+  std::optional<double> sigma;  // noise std in SI units of the column as read (mass flow for flows)
+};
+
+struct ExperimentEntry {
+  std::string id;
+  ExperimentKind kind = ExperimentKind::kValidation;
+  std::string file;                      // as written, relative to the unit directory
+  std::optional<double> tube_length_m;   // pipeline experiments
+  int manifest_line = 0;
+};
+
+struct Manifest {
+  std::string unit;
+  RigConstants rig;
+  std::map<std::string, SensorInfo> sensors;
+  std::vector<ExperimentEntry> experiments;
+  std::vector<std::string> defaults_used;  // rig keys that took their default
+};
+
+struct Experiment {
+  ExperimentEntry entry;
+  std::string path;    // the file read
+  std::string sha256;  // of its bytes
+  // SI columns by name: t [s], u [V], x [m from mid-stroke], pressures [Pa
+  // absolute], flows [kg/s]. Only the columns of the kind's table.
+  std::map<std::string, std::vector<double>> columns;
+  std::map<std::string, std::string> units_as_written;  // column -> unit in the header ("" = SI)
+  std::vector<std::string> ignored_columns;
+
+  std::size_t samples() const;
+  const std::vector<double>& column(const std::string& name) const;  // empty when absent
+  // t, u, x, p1, p2 (and q1, q2 when logged) as a Trajectory; v stays empty.
+  Trajectory AsTrajectory() const;
+};
+
+struct Unit {
+  std::string directory;
+  Manifest manifest;
+  std::vector<Experiment> experiments;
+};
+
+// Parses a manifest's text; `source` names it in messages.
+Manifest ParseManifest(const std::string& text, const std::string& source);
+
+// Reads unit.yaml and every experiment file of a unit directory.
+Unit ReadUnit(const std::string& directory);
+
+// Converts the columns of one experiment file of `entry` (already parsed as CSV
+// text) to SI; `manifest` supplies atmospheric pressure, air density, stroke
+// and position origin.
+Experiment ParseExperiment(const std::string& text, const std::string& path,
+                           const ExperimentEntry& entry, const Manifest& manifest);
+
+// The unit directories of a fleet directory (its immediate subdirectories that
+// hold a unit.yaml), sorted by name.
+std::vector<std::string> FleetUnits(const std::string& fleet_directory);
+
+}  // namespace pneumaid

@@ -1,0 +1,175 @@
+#include "pneumaid/io/protocol.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <set>
+
+#include "pneumaid/io/files.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/units.h"
+
+namespace pneumaid {
+namespace {
+
+class ProtocolReader {
+ public:
+  explicit ProtocolReader(std::string source) : source_(std::move(source)) {}
+
+  Protocol Read(const std::string& text) {
+    YAML::Node root;
+    try {
+      root = YAML::Load(text);
+    } catch (const YAML::ParserException& error) {
+      throw InputError(source_, error.mark.line + 1, error.mark.column + 1,
+                       "YAML syntax error: " + error.msg);
+    }
+    if (!root.IsMap()) Fail(root, "expected a mapping starting with format: pneumaid-protocol/1");
+    Keys(root, "", {"format", "sample_rate", "position_origin", "units", "sensors", "valve",
+                    "pipeline", "stroke", "validation"});
+    if (!root["format"] || Text(root["format"]) != kProtocolFormat) {
+      Fail(root, std::string("expected format: ") + kProtocolFormat);
+    }
+    Protocol p;
+    if (root["sample_rate"]) p.sample_rate_Hz = Positive(root["sample_rate"], "sample_rate");
+    if (const YAML::Node origin = root["position_origin"]) {
+      const std::string text = Text(origin);
+      if (text != "mid" && text != "retracted") Fail(origin, "expected mid | retracted");
+      p.position_origin = text == "mid" ? PositionOrigin::kMid : PositionOrigin::kRetracted;
+    }
+    ReadUnits(root["units"], &p);
+    ReadSensors(root["sensors"], &p);
+    if (const YAML::Node valve = root["valve"]) {
+      Keys(valve, "valve.", {"step", "hold"});
+      p.valve = true;
+      if (valve["step"]) p.valve_step_V = Positive(valve["step"], "valve.step");
+      if (valve["hold"]) p.valve_hold_s = Positive(valve["hold"], "valve.hold");
+    }
+    if (const YAML::Node pipe = root["pipeline"]) {
+      Keys(pipe, "pipeline.", {"tube_lengths", "command", "step_time", "duration"});
+      p.tube_lengths_m = List(pipe["tube_lengths"], "pipeline.tube_lengths");
+      if (pipe["command"]) p.pipeline_command_V = Positive(pipe["command"], "pipeline.command");
+      if (pipe["step_time"]) p.pipeline_step_time_s = Positive(pipe["step_time"], "pipeline.step_time");
+      if (pipe["duration"]) p.pipeline_duration_s = Positive(pipe["duration"], "pipeline.duration");
+    }
+    if (const YAML::Node stroke = root["stroke"]) {
+      Keys(stroke, "stroke.", {"levels", "margin", "max_leg"});
+      p.stroke_levels_V = List(stroke["levels"], "stroke.levels");
+      if (stroke["margin"]) p.stroke_margin_m = Positive(stroke["margin"], "stroke.margin");
+      if (stroke["max_leg"]) p.stroke_max_leg_s = Positive(stroke["max_leg"], "stroke.max_leg");
+    }
+    if (const YAML::Node validation = root["validation"]) {
+      Keys(validation, "validation.", {"paper_step", "rich_profile"});
+      p.paper_step = validation["paper_step"] && Flag(validation["paper_step"]);
+      p.rich_profile = validation["rich_profile"] && Flag(validation["rich_profile"]);
+    }
+    return p;
+  }
+
+ private:
+  [[noreturn]] void Fail(const YAML::Node& node, const std::string& message) const {
+    const YAML::Mark mark = node.Mark();
+    throw InputError(source_, mark.line >= 0 ? mark.line + 1 : 0,
+                     mark.column >= 0 ? mark.column + 1 : 0, message);
+  }
+
+  std::string Text(const YAML::Node& node) const {
+    if (!node.IsScalar()) Fail(node, "expected a scalar value");
+    return node.Scalar();
+  }
+
+  double Number(const YAML::Node& node, const std::string& path) const {
+    const std::string text = Text(node);
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || !std::isfinite(value)) {
+      Fail(node, path + ": expected a finite number in SI units");
+    }
+    return value;
+  }
+
+  double Positive(const YAML::Node& node, const std::string& path) const {
+    const double value = Number(node, path);
+    if (!(value > 0)) Fail(node, path + ": expected > 0");
+    return value;
+  }
+
+  bool Flag(const YAML::Node& node) const {
+    const std::string text = Text(node);
+    if (text != "true" && text != "false") Fail(node, "expected true | false");
+    return text == "true";
+  }
+
+  std::vector<double> List(const YAML::Node& node, const std::string& path) const {
+    if (!node || !node.IsSequence() || node.size() == 0) {
+      Fail(node ? node : YAML::Node(), path + ": expected a non-empty list of numbers");
+    }
+    std::vector<double> out;
+    for (const auto& item : node) out.push_back(Positive(item, path));
+    return out;
+  }
+
+  void Keys(const YAML::Node& node, const std::string& prefix,
+            const std::set<std::string>& allowed) const {
+    if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
+    for (const auto& entry : node) {
+      const std::string key = entry.first.as<std::string>();
+      if (!allowed.count(key)) Fail(entry.first, "unknown key '" + prefix + key + "'");
+    }
+  }
+
+  void ReadUnits(const YAML::Node& units, Protocol* p) const {
+    if (!units) return;
+    Keys(units, "units.", {"length", "pressure", "flow"});
+    const auto pick = [&](const char* key, std::vector<Quantity> quantities, std::string* out) {
+      if (!units[key]) return;
+      const std::string symbol = Text(units[key]);
+      const UnitInfo* unit = FindUnit(symbol);
+      bool ok = false;
+      for (Quantity q : quantities) ok = ok || (unit && unit->quantity == q);
+      if (!ok) Fail(units[key], std::string("units.") + key + ": expected one of " +
+                                    AcceptedUnits(quantities));
+      *out = symbol;
+    };
+    pick("length", {Quantity::kLength}, &p->length_unit);
+    pick("pressure", {Quantity::kPressure}, &p->pressure_unit);
+    pick("flow", {Quantity::kVolumetricFlow, Quantity::kMassFlow}, &p->flow_unit);
+  }
+
+  void ReadSensors(const YAML::Node& sensors, Protocol* p) const {
+    if (!sensors) return;
+    Keys(sensors, "sensors.", {"t", "u", "x", "p_up", "p_down", "p_in", "p_out", "p1", "p2", "q",
+                               "q_in", "q_out", "q1", "q2"});
+    for (const auto& entry : sensors) {
+      const std::string name = entry.first.as<std::string>();
+      const std::string path = "sensors." + name + ".";
+      Keys(entry.second, path, {"sigma", "tau", "quantization", "declared"});
+      SensorModel model;
+      if (entry.second["sigma"]) model.sigma = Number(entry.second["sigma"], path + "sigma");
+      if (entry.second["tau"]) model.tau_s = Number(entry.second["tau"], path + "tau");
+      if (entry.second["quantization"]) {
+        model.quantization = Number(entry.second["quantization"], path + "quantization");
+      }
+      if (entry.second["declared"]) model.declared = Flag(entry.second["declared"]);
+      if (model.sigma < 0 || model.tau_s < 0 || model.quantization < 0) {
+        Fail(entry.second, path + ": expected sigma, tau, quantization >= 0");
+      }
+      p->sensors[name] = model;
+    }
+  }
+
+  std::string source_;
+};
+
+}  // namespace
+
+Protocol ParseProtocol(const std::string& text, const std::string& source) {
+  return ProtocolReader(source).Read(text);
+}
+
+Protocol LoadProtocol(const std::string& path) {
+  return ParseProtocol(ReadTextFile(path, "protocol file"), path);
+}
+
+}  // namespace pneumaid

@@ -1,0 +1,399 @@
+#include "pneumaid/synth/synthetic_rig.h"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/model/actuator.h"
+#include "pneumaid/model/gas.h"
+#include "pneumaid/model/parameter_table.h"
+#include "pneumaid/sim/simulate.h"
+
+namespace pneumaid {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kAirDensity_kg_per_m3 = 1.178;  // the spec's default, standard conditions
+constexpr double kHysteresisThreshold_V = 0.01;
+
+// One random stream per experiment, derived from the seed and the experiment
+// index, so adding an experiment does not change the noise of the others.
+std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t index) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (index + 1);  // splitmix64
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
+double EffectValue(const Parameters& p, const char* name, const char* key) {
+  const auto effect = p.effects.find(name);
+  return effect == p.effects.end() ? 0.0 : effect->second.at(key);
+}
+
+std::vector<double> SampleTimes(double duration_s, double rate_Hz) {
+  return UniformTimes(0.0, duration_s, rate_Hz);
+}
+
+// First-order lag of a sampled signal held between samples.
+std::vector<double> Lag(const std::vector<double>& signal, double period_s, double tau_s) {
+  if (tau_s <= 0 || signal.empty()) return signal;
+  const double keep = std::exp(-period_s / tau_s);
+  std::vector<double> out(signal.size());
+  out[0] = signal[0];
+  for (std::size_t i = 1; i < signal.size(); ++i) {
+    out[i] = keep * out[i - 1] + (1 - keep) * signal[i - 1];
+  }
+  return out;
+}
+
+class RigBuilder {
+ public:
+  RigBuilder(const Parameters& truth, const Protocol& protocol, std::uint64_t seed)
+      : truth_(truth), protocol_(protocol), seed_(seed) {}
+
+  Manifest MakeManifest(const std::string& unit_id) const {
+    Manifest m;
+    m.unit = unit_id;
+    RigConstants& r = m.rig;
+    r.gas = truth_.gas;
+    r.supply_pressure_Pa = truth_.supply.supply_pressure_Pa;
+    r.atmospheric_pressure_Pa = truth_.supply.atmospheric_pressure_Pa;
+    r.air_density_kg_per_m3 = kAirDensity_kg_per_m3;
+    r.bore_m = std::sqrt(4 * truth_.cylinder.area_1_m2 / kPi);
+    r.rod_m = std::sqrt(4 * (truth_.cylinder.area_1_m2 - truth_.cylinder.area_2_m2) / kPi);
+    r.stroke_m = truth_.cylinder.stroke_m;
+    r.dead_volume_1_m3 = truth_.cylinder.dead_volume_1_m3;
+    r.dead_volume_2_m3 = truth_.cylinder.dead_volume_2_m3;
+    r.load_mass_kg = truth_.cylinder.load_mass_kg;
+    r.orientation = truth_.cylinder.orientation;
+    r.tube_length_m = truth_.pipeline.tube_length_m;
+    r.position_origin = protocol_.position_origin;
+    for (const auto& [name, sensor] : protocol_.sensors) {
+      if (!sensor.declared) continue;
+      SensorInfo info;
+      if (sensor.tau_s > 0) info.tau_s = sensor.tau_s;
+      if (sensor.sigma > 0) info.sigma = sensor.sigma;
+      if (info.tau_s || info.sigma) m.sensors[name] = info;
+    }
+    return m;
+  }
+
+  std::vector<RigLog> MakeLogs(const Manifest& manifest) {
+    std::vector<RigLog> logs;
+    if (protocol_.valve) logs.push_back(ValveTest(manifest, logs.size()));
+    for (double length : protocol_.tube_lengths_m) {
+      logs.push_back(PipelineTest(manifest, length, logs.size()));
+    }
+    for (double level : protocol_.stroke_levels_V) {
+      char id[32];
+      std::snprintf(id, sizeof(id), "stroke-%03d", static_cast<int>(std::lround(level * 100)));
+      logs.push_back(ActuatorRun(manifest, id, ExperimentKind::kStroke,
+                                 StrokeCommand(level), logs.size()));
+    }
+    if (protocol_.paper_step) {
+      logs.push_back(ActuatorRun(manifest, "step-1", ExperimentKind::kValidation,
+                                 StrokeCommand(1.0), logs.size()));
+    }
+    if (protocol_.rich_profile) {
+      logs.push_back(ActuatorRun(manifest, "profile-1", ExperimentKind::kValidation,
+                                 RichProfile(), logs.size()));
+    }
+    return logs;
+  }
+
+ private:
+  double Period() const { return 1.0 / protocol_.sample_rate_Hz; }
+
+  SensorModel Sensor(const std::string& name) const {
+    const auto found = protocol_.sensors.find(name);
+    return found == protocol_.sensors.end() ? SensorModel{} : found->second;
+  }
+
+  // The sensor model for a flow channel, in mass flow, plus any hidden meter lag.
+  std::vector<double> MeasureFlow(const std::string& name, const std::vector<double>& mass_flow,
+                                  double hidden_tau_s, std::uint64_t* rng) const {
+    SensorModel sensor = Sensor(name);
+    sensor.sigma *= kAirDensity_kg_per_m3;  // declared as standard volumetric flow
+    sensor.quantization *= kAirDensity_kg_per_m3;
+    return MeasureSignal(Lag(mass_flow, Period(), hidden_tau_s), Period(), sensor, rng);
+  }
+
+  // A column in the protocol's units for its quantity.
+  void AddColumn(RigLog* log, const std::string& name, const std::string& unit,
+                 const std::vector<double>& si, const Manifest& manifest) const {
+    log->header.push_back(unit.empty() ? name : name + " [" + unit + "]");
+    std::vector<double> written(si.size());
+    for (std::size_t i = 0; i < si.size(); ++i) {
+      written[i] = unit.empty() ? si[i]
+                                : FromSI(unit, si[i], manifest.rig.atmospheric_pressure_Pa,
+                                         kAirDensity_kg_per_m3);
+    }
+    log->columns.push_back(std::move(written));
+  }
+
+  RigLog NewLog(const std::string& id, ExperimentKind kind) const {
+    RigLog log;
+    log.entry.id = id;
+    log.entry.kind = kind;
+    log.entry.file = id + ".csv";
+    log.comment = "synthetic data: pneumaid synth, seed " + std::to_string(seed_) +
+                  " (not a measurement)";
+    return log;
+  }
+
+  // Mass flow [kg/s] through one valve of the truth at opening u, branch as
+  // latched, from p_up to p_down; honours valve_deadzone.
+  double ValveFlow(double opening_V, bool decreasing, double p_up, double p_down) const {
+    const auto c = MakeActuatorCoefficients<double>(truth_, ModelRegularization{});
+    const auto& branch = decreasing ? c.decreasing : c.increasing;
+    const double gain = Kvp(EffectiveOpening(opening_V, c.deadzone_V), branch);
+    return OrificeMassFlow(gain, p_up, p_down, c.orifice);
+  }
+
+  RigLog ValveTest(const Manifest& manifest, std::size_t index) const {
+    std::uint64_t rng = StreamSeed(seed_, index);
+    std::vector<double> levels;
+    const int steps = static_cast<int>(std::lround(1.0 / protocol_.valve_step_V));
+    for (int i = 0; i <= steps; ++i) levels.push_back(std::min(1.0, i * protocol_.valve_step_V));
+    for (int i = steps - 1; i >= 0; --i) levels.push_back(i * protocol_.valve_step_V);
+    const auto t = SampleTimes(levels.size() * protocol_.valve_hold_s, protocol_.sample_rate_Hz);
+    std::vector<double> u(t.size()), opening(t.size());
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      const auto level = std::min<std::size_t>(static_cast<std::size_t>(t[i] / protocol_.valve_hold_s),
+                                               levels.size() - 1);
+      u[i] = levels[level];
+    }
+    opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
+    const double p_up = truth_.supply.supply_pressure_Pa, p_down = truth_.supply.atmospheric_pressure_Pa;
+    BranchLatch latch(kHysteresisThreshold_V);
+    std::vector<double> q(t.size());
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      latch.Update(u[i]);
+      q[i] = ValveFlow(opening[i], latch.decreasing(), p_up, p_down);
+    }
+    RigLog log = NewLog("valve-staircase", ExperimentKind::kValve);
+    AddColumn(&log, "t", "s", t, manifest);
+    AddColumn(&log, "u", "V", u, manifest);
+    AddColumn(&log, "p_up", protocol_.pressure_unit,
+              MeasureSignal(std::vector<double>(t.size(), p_up), Period(), Sensor("p_up"), &rng), manifest);
+    AddColumn(&log, "p_down", protocol_.pressure_unit,
+              MeasureSignal(std::vector<double>(t.size(), p_down), Period(), Sensor("p_down"), &rng),
+              manifest);
+    AddColumn(&log, "q", protocol_.flow_unit,
+              MeasureFlow("q", q, EffectValue(truth_, "flow_sensor_lag", "tau"), &rng), manifest);
+    return log;
+  }
+
+  // delta at a tube length: the truth's measured law when it has one
+  // (linear between its points, flat outside), else pipeline.delta.
+  double DeltaAt(double length_m) const {
+    const auto& table = truth_.pipeline.delta_by_length;
+    if (table.empty()) return truth_.pipeline.delta_per_s;
+    if (length_m <= table.front().tube_length_m) return table.front().delta_per_s;
+    for (std::size_t i = 1; i < table.size(); ++i) {
+      if (length_m <= table[i].tube_length_m) {
+        const double w = (length_m - table[i - 1].tube_length_m) /
+                         (table[i].tube_length_m - table[i - 1].tube_length_m);
+        return (1 - w) * table[i - 1].delta_per_s + w * table[i].delta_per_s;
+      }
+    }
+    return table.back().delta_per_s;
+  }
+
+  RigLog PipelineTest(const Manifest& manifest, double length_m, std::size_t index) const {
+    std::uint64_t rng = StreamSeed(seed_, index);
+    const auto t = SampleTimes(protocol_.pipeline_duration_s, protocol_.sample_rate_Hz);
+    std::vector<double> u(t.size()), q_in(t.size());
+    const double p_up = truth_.supply.supply_pressure_Pa, p_down = truth_.supply.atmospheric_pressure_Pa;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      u[i] = t[i] >= protocol_.pipeline_step_time_s ? protocol_.pipeline_command_V : 0.0;
+    }
+    const auto opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
+    for (std::size_t i = 0; i < t.size(); ++i) q_in[i] = ValveFlow(opening[i], false, p_up, p_down);
+    // Eq. 5 between the tube's ends, exact for the flow held between samples.
+    const std::vector<double> q_out = Lag(q_in, Period(), 1.0 / DeltaAt(length_m));
+    char id[32];
+    std::snprintf(id, sizeof(id), "pipe-%03d", static_cast<int>(std::lround(length_m * 100)));
+    RigLog log = NewLog(id, ExperimentKind::kPipeline);
+    log.entry.tube_length_m = length_m;
+    const double hidden = EffectValue(truth_, "flow_sensor_lag", "tau");
+    AddColumn(&log, "t", "s", t, manifest);
+    AddColumn(&log, "u", "V", u, manifest);
+    AddColumn(&log, "q_in", protocol_.flow_unit, MeasureFlow("q_in", q_in, hidden, &rng), manifest);
+    AddColumn(&log, "q_out", protocol_.flow_unit, MeasureFlow("q_out", q_out, hidden, &rng), manifest);
+    return log;
+  }
+
+  // How an actuator run's command is built: a list of legs, each held until a
+  // stroke end is reached (or for a fixed time), or a fixed command signal.
+  struct ActuatorCommand {
+    std::vector<double> leg_levels_V;  // held until 1 margin before the end it drives to
+    CommandSignal fixed;               // used when leg_levels_V is empty
+    double duration_s = 0.0;
+  };
+
+  ActuatorCommand StrokeCommand(double level) const {
+    ActuatorCommand command;
+    command.leg_levels_V = {level, -level};
+    return command;
+  }
+
+  ActuatorCommand RichProfile() const {
+    ActuatorCommand command;
+    std::vector<std::pair<double, double>> steps = {
+        {0.05, 0.5}, {0.6, -0.3}, {1.2, 0.8}, {1.7, -0.8}, {2.3, 0.0}};
+    for (double t = 2.5; t < 4.0; t += Period()) steps.push_back({t, -0.5 + (t - 2.5) / 1.5 * 1.1});
+    steps.push_back({4.0, -1.0});
+    command.fixed = StepCommand(steps);
+    command.duration_s = 4.6;
+    return command;
+  }
+
+  Trajectory Run(const CommandSignal& command, double duration_s) const {
+    Trajectory run;
+    const SimulationSummary summary =
+        Simulate(truth_, command, RetractedAtRest(truth_),
+                 SampleTimes(duration_s, protocol_.sample_rate_Hz), SimulationOptions{}, &run);
+    if (summary.status == SimulationStatus::kInvalidInput) {
+      throw InputError("--truth", 0, 0, summary.message);
+    }
+    if (!summary.ok()) throw std::runtime_error("synthetic rig: " + summary.message);
+    return run;
+  }
+
+  // Holds each leg until the rod is `margin` before the end it drives to (the
+  // rig's controller acts on the next sample) or max_leg has passed, then the
+  // next leg; 0 V for 0.3 s at the end.
+  Trajectory RunLegs(const std::vector<double>& levels, CommandSignal* command) const {
+    const double half = 0.5 * truth_.cylinder.stroke_m;
+    const double limit = half - protocol_.stroke_margin_m;
+    std::vector<std::pair<double, double>> knots = {{0.05, levels.front()}};
+    for (std::size_t leg = 0; leg < levels.size(); ++leg) {
+      const double start = knots.back().first;
+      const double horizon = start + protocol_.stroke_max_leg_s;
+      const Trajectory run = Run(StepCommand(knots), horizon);
+      double end = horizon;
+      for (std::size_t i = 0; i < run.size(); ++i) {
+        const bool reached = levels[leg] > 0 ? run.x_m[i] >= limit : run.x_m[i] <= -limit;
+        if (run.t_s[i] > start && reached) {
+          end = static_cast<double>(i + 1) / protocol_.sample_rate_Hz;  // a sample time exactly
+          break;
+        }
+      }
+      knots.push_back({end, leg + 1 < levels.size() ? levels[leg + 1] : 0.0});
+    }
+    *command = StepCommand(knots);
+    return Run(*command, knots.back().first + 0.3);
+  }
+
+  RigLog ActuatorRun(const Manifest& manifest, const std::string& id, ExperimentKind kind,
+                     const ActuatorCommand& spec, std::size_t index) const {
+    std::uint64_t rng = StreamSeed(seed_, index);
+    CommandSignal command = spec.fixed;
+    const Trajectory run =
+        spec.leg_levels_V.empty() ? Run(command, spec.duration_s) : RunLegs(spec.leg_levels_V, &command);
+    const double half = 0.5 * truth_.cylinder.stroke_m;
+    const double origin_shift = protocol_.position_origin == PositionOrigin::kRetracted ? half : 0.0;
+    std::vector<double> x = MeasureSignal(run.x_m, Period(), Sensor("x"), &rng);
+    for (double& value : x) value += origin_shift;
+    RigLog log = NewLog(id, kind);
+    AddColumn(&log, "t", "s", run.t_s, manifest);
+    AddColumn(&log, "u", "V", run.u_V, manifest);
+    AddColumn(&log, "x", protocol_.length_unit, x, manifest);
+    AddColumn(&log, "p1", protocol_.pressure_unit,
+              MeasureSignal(run.p1_Pa, Period(), Sensor("p1"), &rng), manifest);
+    AddColumn(&log, "p2", protocol_.pressure_unit,
+              MeasureSignal(run.p2_Pa, Period(), Sensor("p2"), &rng), manifest);
+    // The simulator already applied any hidden flow_sensor_lag to q1, q2.
+    AddColumn(&log, "q1", protocol_.flow_unit, MeasureFlow("q1", run.q1_kg_per_s, 0.0, &rng), manifest);
+    AddColumn(&log, "q2", protocol_.flow_unit, MeasureFlow("q2", run.q2_kg_per_s, 0.0, &rng), manifest);
+    return log;
+  }
+
+  const Parameters& truth_;
+  const Protocol& protocol_;
+  std::uint64_t seed_;
+};
+
+bool PathMatches(const std::string& pattern, const std::string& path) {
+  std::size_t p = 0, q = 0;
+  while (p < pattern.size() && q < path.size()) {
+    const std::size_t p_end = std::min(pattern.find('.', p), pattern.size());
+    const std::size_t q_end = std::min(path.find('.', q), path.size());
+    const std::string segment = pattern.substr(p, p_end - p);
+    if (segment != "*" && segment != path.substr(q, q_end - q)) return false;
+    p = p_end + 1;
+    q = q_end + 1;
+  }
+  return p >= pattern.size() && q >= path.size();
+}
+
+}  // namespace
+
+std::vector<double> MeasureSignal(const std::vector<double>& si, double sample_period_s,
+                                  const SensorModel& sensor, std::uint64_t* rng_state) {
+  std::vector<double> out = Lag(si, sample_period_s, sensor.tau_s);
+  std::mt19937_64 rng(*rng_state);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  for (double& value : out) {
+    if (sensor.sigma > 0) value += sensor.sigma * noise(rng);
+    if (sensor.quantization > 0) value = sensor.quantization * std::round(value / sensor.quantization);
+  }
+  *rng_state = rng();  // the next channel draws from where this one ended
+  return out;
+}
+
+SyntheticUnit Synthesize(const Parameters& truth, const Protocol& protocol, std::uint64_t seed,
+                         const std::string& unit_id) {
+  const auto problems = Validate(truth);
+  if (!problems.empty()) {
+    throw InputError("--truth", 0, 0, problems.front().path + ": " + problems.front().message);
+  }
+  RigBuilder builder(truth, protocol, seed);
+  SyntheticUnit unit;
+  unit.truth = truth;
+  unit.truth.unit = unit_id;
+  unit.manifest = builder.MakeManifest(unit_id);
+  unit.logs = builder.MakeLogs(unit.manifest);
+  for (const RigLog& log : unit.logs) unit.manifest.experiments.push_back(log.entry);
+  return unit;
+}
+
+std::map<std::string, std::string> UnitFiles(const SyntheticUnit& unit) {
+  std::map<std::string, std::string> files;
+  files["unit.yaml"] = "# synthetic unit: pneumaid synth (not a measurement)\n" +
+                       ManifestToYaml(unit.manifest);
+  for (const RigLog& log : unit.logs) files[log.entry.file] = RigLogToCsv(log);
+  files["truth.yaml"] = "# the truth behind this synthetic unit; for tests, never read by fitters\n" +
+                        ParamsToYaml(unit.truth);
+  return files;
+}
+
+Parameters ApplySpread(const Parameters& params, const std::map<std::string, double>& fractions,
+                       std::uint64_t seed) {
+  Parameters out = params;
+  std::mt19937_64 rng(StreamSeed(seed, 1000));
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (const auto& info : ScalarParameterTable()) {
+    for (const auto& [pattern, fraction] : fractions) {
+      if (PathMatches(pattern, info.path)) info.ref(out) *= 1.0 + fraction * uniform(rng);
+    }
+  }
+  return out;
+}
+
+Parameters ApplyScale(const Parameters& params, const std::map<std::string, double>& factors) {
+  Parameters out = params;
+  for (const auto& [path, factor] : factors) {
+    double value = 0;
+    if (!GetParameter(out, path, &value)) {
+      throw InputError("--scale", 0, 0, "'" + path + "' names no parameter of the truth set");
+    }
+    SetParameter(&out, path, value * factor);
+  }
+  return out;
+}
+
+}  // namespace pneumaid
