@@ -162,7 +162,7 @@ class ManifestReader {
   void ReadRig(const YAML::Node& rig, Manifest* manifest) {
     RigConstants& r = manifest->rig;
     if (rig && !rig.IsMap()) Fail(rig, "rig: expected a mapping");
-    const YAML::Node empty;
+    const YAML::Node empty(YAML::NodeType::Undefined);  // "absent", unlike Node() (null)
     const auto child = [&](const YAML::Node& parent, const char* key) {
       return parent && parent.IsMap() ? parent[key] : empty;
     };

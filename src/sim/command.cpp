@@ -49,8 +49,15 @@ CommandSignal StepCommand(const std::vector<std::pair<double, double>>& steps) {
 CommandSignal SampledCommand(const std::vector<double>& t_s, const std::vector<double>& u_V) {
   CommandSignal command;
   command.initial_V = u_V.empty() ? 0.0 : u_V.front();
-  command.time_s = t_s;
-  command.value_V = u_V;
+  // Only the samples where u changes are knots: a held command costs the
+  // integrator nothing, and a logged step is the same signal as the step.
+  for (std::size_t i = 0; i < t_s.size() && i < u_V.size(); ++i) {
+    const double previous = i == 0 ? command.initial_V : u_V[i - 1];
+    if (i > 0 && u_V[i] == previous) continue;
+    if (i == 0) continue;  // equal to initial_V by construction
+    command.time_s.push_back(t_s[i]);
+    command.value_V.push_back(u_V[i]);
+  }
   return command;
 }
 

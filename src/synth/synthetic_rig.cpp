@@ -335,6 +335,7 @@ bool PathMatches(const std::string& pattern, const std::string& path) {
 std::vector<double> MeasureSignal(const std::vector<double>& si, double sample_period_s,
                                   const SensorModel& sensor, std::uint64_t* rng_state) {
   std::vector<double> out = Lag(si, sample_period_s, sensor.tau_s);
+  if (rng_state == nullptr) return out;  // lag only
   std::mt19937_64 rng(*rng_state);
   std::normal_distribution<double> noise(0.0, 1.0);
   for (double& value : out) {

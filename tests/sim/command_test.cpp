@@ -21,9 +21,16 @@ TEST(CommandTest, SampledCommandHoldsItsFirstValueBefore) {
   EXPECT_EQ(c.ValueAt(2.5), 0.4);
 }
 
+TEST(CommandTest, SampledCommandKeepsOnlyChanges) {
+  const CommandSignal c = SampledCommand({0.0, 0.1, 0.2, 0.3}, {0.5, 0.5, 1.0, 1.0});
+  EXPECT_EQ(c.time_s, std::vector<double>{0.2});
+  EXPECT_EQ(c.ValueAt(0.15), 0.5);
+  EXPECT_EQ(c.ValueAt(0.25), 1.0);
+}
+
 TEST(CommandTest, RejectsNonIncreasingKnots) {
   std::string error;
-  EXPECT_FALSE(SampledCommand({1.0, 1.0}, {0.3, 0.4}).IsValid(&error));
+  EXPECT_FALSE((CommandSignal{0.0, {1.0, 1.0}, {0.3, 0.4}}.IsValid(&error)));
   EXPECT_NE(error.find("strictly increasing"), std::string::npos);
 }
 

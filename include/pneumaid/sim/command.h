@@ -23,7 +23,7 @@ struct CommandSignal {
 CommandSignal StepCommand(const std::vector<std::pair<double, double>>& steps);
 
 // A logged command: held from each sample to the next; before the first
-// sample the first value holds.
+// sample the first value holds. Knots only where the value changes.
 CommandSignal SampledCommand(const std::vector<double>& t_s, const std::vector<double>& u_V);
 
 }  // namespace pneumaid

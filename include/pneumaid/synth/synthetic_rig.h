@@ -43,6 +43,7 @@ Parameters ApplyScale(const Parameters& params, const std::map<std::string, doub
 
 // The sensor model on one sampled SI signal: first-order lag (exact for a
 // signal held between samples), Gaussian noise, then ADC quantisation.
+// With a null rng_state only the lag is applied.
 std::vector<double> MeasureSignal(const std::vector<double>& si, double sample_period_s,
                                   const SensorModel& sensor, std::uint64_t* rng_state);
 

@@ -1,0 +1,168 @@
+// The synthetic rig: what it writes reads back as the truth passed through
+// the declared sensor model, within the declared noise.
+#include "pneumaid/synth/synthetic_rig.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numeric>
+
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/sim/simulate.h"
+
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+
+Protocol SmallProtocol(double noise_scale) {
+  Protocol p;
+  p.sensors["x"] = {5e-6 * noise_scale, 0.0, 1e-5, true};
+  p.sensors["p1"] = {300.0 * noise_scale, 0.0, 0.0, true};
+  p.sensors["p2"] = {300.0 * noise_scale, 0.0, 0.0, true};
+  p.sensors["q1"] = {2e-7 * noise_scale, 0.03, 0.0, true};
+  p.sensors["q2"] = {2e-7 * noise_scale, 0.03, 0.0, true};
+  p.sensors["q"] = {2e-7 * noise_scale, 0.03, 0.0, true};
+  p.valve = true;
+  p.valve_step_V = 0.25;
+  p.valve_hold_s = 0.2;
+  p.tube_lengths_m = {0.38};
+  p.paper_step = true;
+  return p;
+}
+
+Unit WriteAndRead(const SyntheticUnit& unit, const std::string& name) {
+  const fs::path dir = fs::path(::testing::TempDir()) / name;
+  fs::remove_all(dir);
+  WriteDirectoryAtomically(dir.string(), UnitFiles(unit));
+  Unit read = ReadUnit(dir.string());
+  fs::remove_all(dir);
+  return read;
+}
+
+const Experiment& Find(const Unit& unit, const std::string& id) {
+  for (const auto& e : unit.experiments) {
+    if (e.entry.id == id) return e;
+  }
+  throw std::runtime_error("no experiment " + id);
+}
+
+// The truth run of a logged command, at the logged times.
+Trajectory TruthRun(const Parameters& truth, const Experiment& e) {
+  Trajectory run;
+  const auto& t = e.column("t");
+  const auto summary = Simulate(truth, SampledCommand(t, e.column("u")), RetractedAtRest(truth), t,
+                                SimulationOptions{}, &run);
+  EXPECT_TRUE(summary.ok()) << summary.BriefReport();
+  return run;
+}
+
+std::vector<double> Lagged(const std::vector<double>& signal, double period, double tau) {
+  return MeasureSignal(signal, period, SensorModel{0.0, tau, 0.0, true}, nullptr);
+}
+
+TEST(SyntheticRigTest, NoiseFreeRoundTripIsTheTruthThroughTheSensorModel) {
+  const Parameters truth;
+  const Unit unit = WriteAndRead(Synthesize(truth, SmallProtocol(0.0), 7, "RT-0"), "synth_rt0");
+  EXPECT_EQ(unit.manifest.rig.position_origin, PositionOrigin::kRetracted);
+  const Experiment& step = Find(unit, "step-1");
+  const Trajectory run = TruthRun(truth, step);
+  const auto q1_lagged = Lagged(run.q1_kg_per_s, 1e-3, 0.03);
+  for (std::size_t i = 0; i < run.size(); ++i) {
+    // x: the 10 um ADC step, then 7 significant digits of mm.
+    EXPECT_NEAR(step.column("x")[i], run.x_m[i], 0.5e-5 + 1e-9) << i;
+    EXPECT_NEAR(step.column("p1")[i], run.p1_Pa[i], 1.0) << i;  // 7 digits of bar_g
+    EXPECT_NEAR(step.column("q1")[i], q1_lagged[i], 1e-9) << i;
+  }
+  // The run reaches the far end and comes back, as the protocol says.
+  EXPECT_GT(*std::max_element(run.x_m.begin(), run.x_m.end()), 0.025 - 1.1e-3);
+  EXPECT_LT(run.x_m.back(), -0.025 + 1.1e-3);
+}
+
+TEST(SyntheticRigTest, NoisyRoundTripResidualsMatchTheDeclaredNoise) {
+  const Parameters truth;
+  const Unit unit = WriteAndRead(Synthesize(truth, SmallProtocol(1.0), 11, "RT-1"), "synth_rt1");
+  const Experiment& step = Find(unit, "step-1");
+  const Trajectory run = TruthRun(truth, step);
+  double sum = 0, sum_sq = 0, worst_x = 0;
+  for (std::size_t i = 0; i < run.size(); ++i) {
+    const double r = step.column("p1")[i] - run.p1_Pa[i];
+    sum += r;
+    sum_sq += r * r;
+    worst_x = std::max(worst_x, std::fabs(step.column("x")[i] - run.x_m[i]));
+  }
+  const double n = static_cast<double>(run.size());
+  const double sigma = std::sqrt(sum_sq / n - (sum / n) * (sum / n));
+  EXPECT_NEAR(sigma, 300.0, 30.0);                 // the declared sigma of p1
+  EXPECT_LT(std::fabs(sum / n), 4 * 300.0 / std::sqrt(n));
+  EXPECT_LT(worst_x, 0.5e-5 + 5 * 5e-6);           // quantisation + 5 sigma
+  EXPECT_DOUBLE_EQ(*unit.manifest.sensors.at("p1").sigma, 300.0);
+  EXPECT_DOUBLE_EQ(*unit.manifest.sensors.at("q1").tau_s, 0.03);
+}
+
+TEST(SyntheticRigTest, ValveTestShowsBothBranchesThroughTheMeterLag) {
+  const Parameters truth;
+  const Unit unit = WriteAndRead(Synthesize(truth, SmallProtocol(0.0), 3, "V"), "synth_valve");
+  const Experiment& valve = Find(unit, "valve-staircase");
+  const auto& u = valve.column("u");
+  const auto& q = valve.column("q");
+  // Plateau ends at u = 0.5 on the way up and on the way down: the branches differ.
+  std::vector<double> at_half;
+  for (std::size_t i = 1; i < u.size(); ++i) {
+    if (u[i - 1] == 0.5 && u[i] != 0.5) at_half.push_back(q[i - 1]);
+  }
+  ASSERT_EQ(at_half.size(), 2u);
+  const double q_max = truth.valve.increasing.q_max_kg_per_s;
+  const double up = 10.93 * 0.0625 - 18.95 * 0.125 + 8.52 * 0.25 + 1.0 * 0.5;
+  const double down = 9.86 * 0.0625 - 19.30 * 0.125 + 10.95 * 0.25 - 0.21 * 0.5;
+  const double choked = 0.0404184 * 5e5 / (1181.0 * std::sqrt(293.0));  // C1 p_s / (N sqrt T)
+  EXPECT_NEAR(at_half[0], q_max * up * choked, 2e-3 * q_max);
+  EXPECT_NEAR(at_half[1], truth.valve.decreasing.q_max_kg_per_s * down * choked, 2e-3 * q_max);
+}
+
+TEST(SyntheticRigTest, DeterministicPerSeed) {
+  const Parameters truth;
+  const auto a = UnitFiles(Synthesize(truth, SmallProtocol(1.0), 5, "D"));
+  const auto b = UnitFiles(Synthesize(truth, SmallProtocol(1.0), 5, "D"));
+  const auto c = UnitFiles(Synthesize(truth, SmallProtocol(1.0), 6, "D"));
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a.at("step-1.csv"), c.at("step-1.csv"));
+}
+
+TEST(SyntheticRigTest, SpreadStaysInsideItsBoundsAndScaleIsExact) {
+  const Parameters base;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const Parameters p = ApplySpread(base, {{"valve.*.q_max", 0.05}, {"friction.*.*", 0.15}}, seed);
+    EXPECT_LE(std::fabs(p.valve.increasing.q_max_kg_per_s / 9.25e-5 - 1), 0.05);
+    EXPECT_LE(std::fabs(p.friction.negative.static_force_N / 10.0 - 1), 0.15);
+    EXPECT_EQ(p.pipeline.delta_per_s, base.pipeline.delta_per_s);
+  }
+  EXPECT_NE(ApplySpread(base, {{"pipeline.delta", 0.1}}, 1).pipeline.delta_per_s, 8.0);
+  EXPECT_EQ(ApplyScale(base, {{"friction.positive.Fs", 3.0}}).friction.positive.static_force_N, 30.0);
+  EXPECT_THROW(ApplyScale(base, {{"friction.sideways.Fs", 3.0}}), InputError);
+}
+
+TEST(SyntheticRigTest, MeasureSignalLagIsExactForHeldInput) {
+  std::vector<double> step(200, 1.0);
+  step[0] = 0.0;
+  const auto out = Lagged(step, 1e-3, 0.03);
+  for (std::size_t i = 1; i < out.size(); ++i) {
+    EXPECT_NEAR(out[i], 1.0 - std::exp(-(static_cast<double>(i) - 1) * 1e-3 / 0.03), 1e-12) << i;
+  }
+}
+
+TEST(SyntheticRigTest, HiddenEffectActsWithoutBeingDeclared) {
+  Parameters truth;
+  truth.effects["flow_sensor_lag"] = {{"tau", 0.05}};
+  const Unit hidden = WriteAndRead(Synthesize(truth, SmallProtocol(0.0), 1, "H"), "synth_hidden");
+  const Unit plain = WriteAndRead(Synthesize(Parameters{}, SmallProtocol(0.0), 1, "H"), "synth_plain");
+  EXPECT_EQ(hidden.manifest.sensors.at("q1").tau_s, plain.manifest.sensors.at("q1").tau_s);
+  const auto& q_hidden = Find(hidden, "pipe-038").column("q_in");
+  const auto& q_plain = Find(plain, "pipe-038").column("q_in");
+  EXPECT_LT(q_hidden[150], 0.9 * q_plain[150]);  // 50 ms after the step: slower
+}
+
+}  // namespace
+}  // namespace pneumaid
