@@ -14,6 +14,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
+#include "yaml_reader.h"
 
 namespace pneumaid {
 namespace {
@@ -28,19 +29,18 @@ const std::set<std::string> kSubsections = {"valve.increasing", "valve.decreasin
                                             "friction.positive", "friction.negative"};
 
 // Reads one document, remembering where each path was written for messages.
-class ParamsReader {
+class ParamsReader : internal::YamlReader {
  public:
-  explicit ParamsReader(std::string source) : source_(std::move(source)) {}
+  explicit ParamsReader(std::string source) : YamlReader(std::move(source)) {}
 
   Parameters Read(const std::string& text) {
-    YAML::Node root;
-    try {
-      root = YAML::Load(text);
-    } catch (const YAML::ParserException& error) {
-      throw InputError(source_, error.mark.line + 1, error.mark.column + 1,
-                       "YAML syntax error: " + error.msg);
-    }
-    if (!root.IsMap()) Fail(root, "expected a params-v1 mapping (format: pneumaid-params/1, ...)");
+    return Guarded([&] { return ReadDocument(text); });
+  }
+
+ private:
+  Parameters ReadDocument(const std::string& text) {
+    const YAML::Node root =
+        LoadMapping(text, "expected a params-v1 mapping (format: pneumaid-params/1, ...)");
     Parameters params;
     ReadTopLevel(root, &params);
     CheckAllScalarsPresent(root);
@@ -48,17 +48,8 @@ class ParamsReader {
     return params;
   }
 
- private:
-  [[noreturn]] void Fail(const YAML::Node& node, const std::string& message) const {
-    const YAML::Mark mark = node.Mark();
-    const int line = mark.line >= 0 ? mark.line + 1 : 0;
-    const int column = mark.column >= 0 ? mark.column + 1 : 0;
-    throw InputError(source_, line, column, message);
-  }
-
   std::string ScalarText(const YAML::Node& node, const std::string& path) const {
-    if (!node.IsScalar()) Fail(node, path + ": expected a scalar value");
-    return node.Scalar();
+    return Scalar(node, path);
   }
 
   double Number(const YAML::Node& node, const std::string& path) const {
@@ -84,7 +75,7 @@ class ParamsReader {
 
   void ReadTopLevel(const YAML::Node& root, Parameters* params) {
     for (const auto& entry : root) {
-      const std::string key = entry.first.as<std::string>();
+      const std::string key = Key(entry.first);
       const YAML::Node& value = entry.second;
       where_[key] = value;
       if (!kTopLevelKeys.count(key)) Fail(entry.first, "unknown key '" + key + "'");
@@ -115,7 +106,7 @@ class ParamsReader {
   void ReadSection(const YAML::Node& node, const std::string& prefix, Parameters* params) {
     if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
     for (const auto& entry : node) {
-      const std::string path = prefix + "." + entry.first.as<std::string>();
+      const std::string path = prefix + "." + Key(entry.first);
       const YAML::Node& value = entry.second;
       where_[path] = value;
       if (const ScalarParameterInfo* info = FindScalarParameter(path)) {
@@ -164,7 +155,7 @@ class ParamsReader {
       if (!item.IsMap()) Fail(item, "pipeline.delta_by_length: expected {tube_length, delta}");
       DeltaAtLength entry;
       for (const auto& field : item) {
-        const std::string key = field.first.as<std::string>();
+        const std::string key = Key(field.first);
         const std::string path = "pipeline.delta_by_length." + key;
         if (key == "tube_length") {
           entry.tube_length_m = Number(field.second, path);
@@ -184,7 +175,7 @@ class ParamsReader {
   void ReadEffects(const YAML::Node& node, Parameters* params) {
     if (!node.IsMap()) Fail(node, "effects: expected a mapping name -> {parameter: value}");
     for (const auto& entry : node) {
-      const std::string name = entry.first.as<std::string>();
+      const std::string name = Key(entry.first);
       const EffectInfo* effect = FindEffect(name);
       if (effect == nullptr) {
         std::string known;
@@ -196,9 +187,9 @@ class ParamsReader {
       if (!entry.second.IsMap()) Fail(entry.second, "effects." + name + ": expected a mapping");
       auto& values = params->effects[name];
       for (const auto& field : entry.second) {
-        const std::string path = "effects." + name + "." + field.first.as<std::string>();
+        const std::string path = "effects." + name + "." + Key(field.first);
         where_[path] = field.second;
-        values[field.first.as<std::string>()] = Number(field.second, path);
+        values[Key(field.first)] = Number(field.second, path);
       }
     }
   }
@@ -206,7 +197,7 @@ class ParamsReader {
   void ReadUncertainty(const YAML::Node& node, Parameters* params) {
     if (!node.IsMap()) Fail(node, "uncertainty: expected a mapping path -> standard error");
     for (const auto& entry : node) {
-      const std::string path = entry.first.as<std::string>();
+      const std::string path = Key(entry.first);
       const double value = Number(entry.second, "uncertainty." + path);
       if (!(value >= 0)) Fail(entry.second, "uncertainty." + path + ": expected >= 0");
       where_["uncertainty." + path] = entry.first;
@@ -248,7 +239,6 @@ class ParamsReader {
     }
   }
 
-  std::string source_;
   std::map<std::string, YAML::Node> where_;
 };
 

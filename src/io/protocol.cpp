@@ -9,23 +9,23 @@
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/units.h"
+#include "yaml_reader.h"
 
 namespace pneumaid {
 namespace {
 
-class ProtocolReader {
+class ProtocolReader : internal::YamlReader {
  public:
-  explicit ProtocolReader(std::string source) : source_(std::move(source)) {}
+  explicit ProtocolReader(std::string source) : YamlReader(std::move(source)) {}
 
   Protocol Read(const std::string& text) {
-    YAML::Node root;
-    try {
-      root = YAML::Load(text);
-    } catch (const YAML::ParserException& error) {
-      throw InputError(source_, error.mark.line + 1, error.mark.column + 1,
-                       "YAML syntax error: " + error.msg);
-    }
-    if (!root.IsMap()) Fail(root, "expected a mapping starting with format: pneumaid-protocol/1");
+    return Guarded([&] { return ReadDocument(text); });
+  }
+
+ private:
+  Protocol ReadDocument(const std::string& text) {
+    const YAML::Node root =
+        LoadMapping(text, "expected a mapping starting with format: pneumaid-protocol/1");
     Keys(root, "", {"format", "sample_rate", "position_origin", "units", "sensors", "valve",
                     "pipeline", "stroke", "validation"});
     if (!root["format"] || Text(root["format"]) != kProtocolFormat) {
@@ -67,17 +67,7 @@ class ProtocolReader {
     return p;
   }
 
- private:
-  [[noreturn]] void Fail(const YAML::Node& node, const std::string& message) const {
-    const YAML::Mark mark = node.Mark();
-    throw InputError(source_, mark.line >= 0 ? mark.line + 1 : 0,
-                     mark.column >= 0 ? mark.column + 1 : 0, message);
-  }
-
-  std::string Text(const YAML::Node& node) const {
-    if (!node.IsScalar()) Fail(node, "expected a scalar value");
-    return node.Scalar();
-  }
+  std::string Text(const YAML::Node& node) const { return Scalar(node, "value"); }
 
   double Number(const YAML::Node& node, const std::string& path) const {
     const std::string text = Text(node);
@@ -114,7 +104,7 @@ class ProtocolReader {
             const std::set<std::string>& allowed) const {
     if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
     for (const auto& entry : node) {
-      const std::string key = entry.first.as<std::string>();
+      const std::string key = Key(entry.first);
       if (!allowed.count(key)) Fail(entry.first, "unknown key '" + prefix + key + "'");
     }
   }
@@ -142,7 +132,7 @@ class ProtocolReader {
     Keys(sensors, "sensors.", {"t", "u", "x", "p_up", "p_down", "p_in", "p_out", "p1", "p2", "q",
                                "q_in", "q_out", "q1", "q2"});
     for (const auto& entry : sensors) {
-      const std::string name = entry.first.as<std::string>();
+      const std::string name = Key(entry.first);
       const std::string path = "sensors." + name + ".";
       Keys(entry.second, path, {"sigma", "tau", "quantization", "declared"});
       SensorModel model;
@@ -158,8 +148,6 @@ class ProtocolReader {
       p->sensors[name] = model;
     }
   }
-
-  std::string source_;
 };
 
 }  // namespace

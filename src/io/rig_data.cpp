@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <future>
 #include <regex>
 #include <set>
 
@@ -14,6 +15,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/sha256.h"
 #include "pneumaid/io/units.h"
+#include "yaml_reader.h"
 
 namespace pneumaid {
 namespace {
@@ -78,22 +80,21 @@ std::string Join(const std::vector<std::string>& items) {
 }
 
 // Reads the manifest, remembering nothing but what it returns.
-class ManifestReader {
+class ManifestReader : internal::YamlReader {
  public:
-  explicit ManifestReader(std::string source) : source_(std::move(source)) {}
+  explicit ManifestReader(std::string source) : YamlReader(std::move(source)) {}
 
   Manifest Read(const std::string& text) {
-    YAML::Node root;
-    try {
-      root = YAML::Load(text);
-    } catch (const YAML::ParserException& error) {
-      throw InputError(source_, error.mark.line + 1, error.mark.column + 1,
-                       "YAML syntax error: " + error.msg);
-    }
-    if (!root.IsMap()) Fail(root, "expected a mapping starting with format: pneumaid-rig/1");
+    return Guarded([&] { return ReadDocument(text); });
+  }
+
+ private:
+  Manifest ReadDocument(const std::string& text) {
+    const YAML::Node root =
+        LoadMapping(text, "expected a mapping starting with format: pneumaid-rig/1");
     const std::set<std::string> known = {"format", "unit", "rig", "sensors", "experiments"};
     for (const auto& entry : root) {
-      const std::string key = entry.first.as<std::string>();
+      const std::string key = Key(entry.first);
       if (!known.count(key)) Fail(entry.first, "unknown key '" + key + "' (expected " +
                                                    "format, unit, rig, sensors, experiments)");
     }
@@ -114,16 +115,8 @@ class ManifestReader {
     return manifest;
   }
 
- private:
-  [[noreturn]] void Fail(const YAML::Node& node, const std::string& message) const {
-    const YAML::Mark mark = node.Mark();
-    throw InputError(source_, mark.line >= 0 ? mark.line + 1 : 0,
-                     mark.column >= 0 ? mark.column + 1 : 0, message);
-  }
-
   std::string Text(const YAML::Node& node, const std::string& path) const {
-    if (!node.IsScalar()) Fail(node, path + ": expected a scalar value");
-    return node.Scalar();
+    return Scalar(node, path);
   }
 
   // A number in SI units, or "<number> <unit>" with a unit of `quantity`.
@@ -244,7 +237,7 @@ class ManifestReader {
     if (!node) return;
     if (!node.IsMap()) Fail(node, path + ": expected a mapping");
     for (const auto& entry : node) {
-      const std::string key = entry.first.as<std::string>();
+      const std::string key = Key(entry.first);
       if (!allowed.count(key)) {
         Fail(entry.first, "unknown key '" + path + "." + key + "' (expected " +
                               Join({allowed.begin(), allowed.end()}) + ")");
@@ -289,7 +282,7 @@ class ManifestReader {
   void ReadSensors(const YAML::Node& sensors, const RigConstants& rig, Manifest* manifest) const {
     if (!sensors.IsMap()) Fail(sensors, "sensors: expected a mapping column -> {tau, sigma}");
     for (const auto& entry : sensors) {
-      const std::string name = entry.first.as<std::string>();
+      const std::string name = Key(entry.first);
       const ColumnInfo* column = FindColumn(name);
       if (column == nullptr) {
         std::vector<std::string> names;
@@ -376,15 +369,14 @@ class ManifestReader {
       Fail(node, "file '" + file + "': resolves outside the unit directory");
     }
   }
-
-  std::string source_;
 };
 
-// Converts one CSV column to SI, checking its unit against what the name holds.
-std::vector<double> ColumnToSI(const CsvTable& table, const CsvColumn& column,
-                               const ColumnInfo& info, const Manifest& manifest) {
+// Converts one CSV column to SI, checking its unit against what the name
+// holds. Takes the column's values (they are converted in place).
+std::vector<double> ColumnToSI(const CsvTable& table, CsvColumn& column, const ColumnInfo& info,
+                               const Manifest& manifest) {
   const RigConstants& rig = manifest.rig;
-  std::vector<double> values = column.values;
+  std::vector<double> values = std::move(column.values);
   if (column.unit.empty()) {
     if (info.quantities.front() == Quantity::kVolumetricFlow) {
       for (double& v : values) v *= rig.air_density_kg_per_m3;  // bare header: m3/s
@@ -490,7 +482,9 @@ Manifest ParseManifest(const std::string& text, const std::string& source) {
 
 Experiment ParseExperiment(const std::string& text, const std::string& path,
                            const ExperimentEntry& entry, const Manifest& manifest) {
-  const CsvTable table = ParseCsv(text, path);
+  // Hash on the other core while this one parses: reading stays I/O-bound.
+  std::future<std::string> sha256 = std::async(std::launch::async, Sha256Hex, std::cref(text));
+  CsvTable table = ParseCsv(text, path);
   const KindColumns kind_columns = ColumnsOf(entry.kind);
   for (const auto& name : kind_columns.required) {
     if (table.Find(name) == nullptr) {
@@ -502,10 +496,10 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
   Experiment out;
   out.entry = entry;
   out.path = path;
-  out.sha256 = Sha256Hex(text);
+
   std::set<std::string> wanted(kind_columns.required.begin(), kind_columns.required.end());
   wanted.insert(kind_columns.optional.begin(), kind_columns.optional.end());
-  for (const CsvColumn& column : table.columns) {
+  for (CsvColumn& column : table.columns) {
     if (!wanted.count(column.name)) {
       out.ignored_columns.push_back(column.name);
       continue;
@@ -517,6 +511,7 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
     out.units_as_written[column.name] = column.unit;
     out.columns[column.name] = std::move(values);
   }
+  out.sha256 = sha256.get();
   return out;
 }
 

@@ -1,11 +1,9 @@
 // End to end: the `pneumaid simulate` binary, its output and its exit codes.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdlib>
-#include <filesystem>
 #include <fstream>
 
+#include "cli_test_util.h"
 #include "pneumaid/io/csv_table.h"
 
 namespace pneumaid {
@@ -15,37 +13,7 @@ namespace fs = std::filesystem;
 
 const std::string kPaper = std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper.yaml";
 
-class SimulateCliTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("pneumaid_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  int Run(const std::string& arguments) {
-    const std::string command = std::string(PNEUMAID_CLI) + " " + arguments + " > " +
-                                (dir_ / "stdout.txt").string() + " 2> " +
-                                (dir_ / "stderr.txt").string();
-    const int status = std::system(command.c_str());
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
-
-  std::string Stderr() const {
-    std::ifstream in(dir_ / "stderr.txt");
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  }
-
-  std::string Write(const std::string& name, const std::string& text) {
-    std::ofstream(dir_ / name) << text;
-    return (dir_ / name).string();
-  }
-
-  fs::path dir_;
-};
+using SimulateCliTest = testing::CliTest;
 
 TEST_F(SimulateCliTest, StepWritesAValidationLogInSI) {
   const std::string out = (dir_ / "sim.csv").string();

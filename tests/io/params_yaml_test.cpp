@@ -101,6 +101,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "smaller than area_1"},
         BadCase{"uncertainty_unknown_path", "uncertainty: {}", "uncertainty: {friction.up.Fs: 1}",
                 32, "names no parameter"},
+        BadCase{"non_scalar_key", "effects: {}", "effects: {[a]: 1}", 31, "expected a plain key"},
         BadCase{"yaml_syntax", "gas: {k: 1.4, R: 287.0, T: 293.0}",
                 "gas: {k: 1.4, R: [287.0, T: 293.0}", 6, "YAML syntax"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });

@@ -175,6 +175,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadUnit{"missing_tube_length", "unit.yaml", ", tube_length: \"38 cm\"", "", "unit.yaml:12:", "missing required key 'tube_length'"},
         BadUnit{"command_out_of_range", "valve.csv", "0.001,0.5,", "0.001,-0.5,", "valve.csv:3:2", "expected a command in [0, 1] V"},
         BadUnit{"unknown_sensor", "unit.yaml", "  q: {tau", "  qq: {tau", "unit.yaml:9:", "unknown column 'qq'"},
+        BadUnit{"non_scalar_key", "unit.yaml", "unit: TEST-1\n", "unit: TEST-1\n? [a, b]\n: 1\n", "unit.yaml:3:", "expected a plain key"},
         BadUnit{"yaml_syntax", "unit.yaml", "orientation: horizontal", "orientation: [horizontal", "unit.yaml:", "YAML syntax error"}),
     [](const ::testing::TestParamInfo<BadUnit>& info) { return std::string(info.param.name); });
 

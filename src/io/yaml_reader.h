@@ -1,0 +1,62 @@
+// What every YAML reader of pneumaid shares: the source name for messages,
+// syntax errors and non-scalar keys turned into InputError at their line and
+// column, and a guard that converts any other yaml-cpp exception the same way
+// (a malformed document must never escape as anything but InputError).
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+
+#include "pneumaid/io/input_error.h"
+
+namespace pneumaid::internal {
+
+class YamlReader {
+ protected:
+  explicit YamlReader(std::string source) : source_(std::move(source)) {}
+
+  // Parses `text`; a document that is not a mapping fails with `expected`.
+  YAML::Node LoadMapping(const std::string& text, const std::string& expected) const {
+    YAML::Node root;
+    try {
+      root = YAML::Load(text);
+    } catch (const YAML::Exception& error) {
+      throw InputError(source_, error.mark.line + 1, error.mark.column + 1,
+                       "YAML syntax error: " + error.msg);
+    }
+    if (!root.IsMap()) Fail(root, expected);
+    return root;
+  }
+
+  [[noreturn]] void Fail(const YAML::Node& node, const std::string& message) const {
+    const YAML::Mark mark = node.Mark();
+    throw InputError(source_, mark.line >= 0 ? mark.line + 1 : 0,
+                     mark.column >= 0 ? mark.column + 1 : 0, message);
+  }
+
+  // A mapping key as text; a key that is itself a list or mapping fails.
+  std::string Key(const YAML::Node& key) const {
+    if (!key.IsScalar()) Fail(key, "expected a plain key");
+    return key.Scalar();
+  }
+
+  std::string Scalar(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar()) Fail(node, path + ": expected a scalar value");
+    return node.Scalar();
+  }
+
+  // Runs `read`, turning any yaml-cpp exception into an InputError.
+  template <typename Read>
+  auto Guarded(const Read& read) const -> decltype(read()) {
+    try {
+      return read();
+    } catch (const YAML::Exception& error) {
+      throw InputError(source_, error.mark.line + 1, error.mark.column + 1, error.msg);
+    }
+  }
+
+  std::string source_;
+};
+
+}  // namespace pneumaid::internal
