@@ -1,5 +1,6 @@
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -8,6 +9,7 @@
 #include "pneumaid/io/csv_table.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_data.h"
 #include "pneumaid/io/trajectory_csv.h"
 #include "pneumaid/io/units.h"
 #include "pneumaid/sim/simulate.h"
@@ -72,28 +74,35 @@ struct LoggedRun {
   InitialState initial;
 };
 
-// The command of a log (and its first state, when the log has x, p1, p2).
+// The command of a log (and its first state, when the log has x, p1, p2). A
+// log of a unit directory is read as its manifest says; any other CSV is
+// taken as pneumaid writes logs (SI, x from mid-stroke, mass flows).
 LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
-  const CsvTable table = ReadCsv(path);
-  const double p_atm = params.supply.atmospheric_pressure_Pa;
-  LoggedRun run;
-  run.t_s = ColumnInSI(table, "t", Quantity::kTime, p_atm, true);
-  const auto u = ColumnInSI(table, "u", Quantity::kCommand, p_atm, true);
-  for (std::size_t i = 1; i < run.t_s.size(); ++i) {
-    if (!(run.t_s[i] > run.t_s[i - 1])) {
-      throw InputError(path, table.row_lines[i], 1,
-                       "column 't': expected strictly increasing time");
+  std::map<std::string, std::vector<double>> columns;
+  if (const auto experiment = ReadLogOfUnit(path)) {
+    columns = experiment->columns;
+  } else {
+    const CsvTable table = ReadCsv(path);
+    const double p_atm = params.supply.atmospheric_pressure_Pa;
+    columns["t"] = ColumnInSI(table, "t", Quantity::kTime, p_atm, true);
+    columns["u"] = ColumnInSI(table, "u", Quantity::kCommand, p_atm, true);
+    columns["x"] = ColumnInSI(table, "x", Quantity::kLength, p_atm, false);
+    columns["p1"] = ColumnInSI(table, "p1", Quantity::kPressure, p_atm, false);
+    columns["p2"] = ColumnInSI(table, "p2", Quantity::kPressure, p_atm, false);
+    for (std::size_t i = 1; i < columns["t"].size(); ++i) {
+      if (!(columns["t"][i] > columns["t"][i - 1])) {
+        throw InputError(path, table.row_lines[i], 1, "column 't': expected strictly increasing time");
+      }
     }
   }
-  run.command = SampledCommand(run.t_s, u);
+  LoggedRun run;
+  run.t_s = columns["t"];
+  run.command = SampledCommand(run.t_s, columns["u"]);
   run.initial = RetractedAtRest(params);
-  const auto x = ColumnInSI(table, "x", Quantity::kLength, p_atm, false);
-  const auto p1 = ColumnInSI(table, "p1", Quantity::kPressure, p_atm, false);
-  const auto p2 = ColumnInSI(table, "p2", Quantity::kPressure, p_atm, false);
-  if (!x.empty() && !p1.empty() && !p2.empty()) {
-    run.initial.position_m = x.front();
-    run.initial.p1_Pa = p1.front();
-    run.initial.p2_Pa = p2.front();
+  if (!columns["x"].empty() && !columns["p1"].empty() && !columns["p2"].empty()) {
+    run.initial.position_m = columns["x"].front();
+    run.initial.p1_Pa = columns["p1"].front();
+    run.initial.p2_Pa = columns["p2"].front();
   }
   return run;
 }

@@ -542,6 +542,19 @@ Unit ReadUnit(const std::string& directory) {
   return unit;
 }
 
+std::optional<Experiment> ReadLogOfUnit(const std::string& csv_path) {
+  const fs::path log = fs::weakly_canonical(csv_path);
+  const fs::path manifest_path = log.parent_path() / "unit.yaml";
+  if (!fs::is_regular_file(manifest_path)) return std::nullopt;
+  const Manifest manifest =
+      ParseManifest(ReadTextFile(manifest_path.string(), "manifest"), manifest_path.string());
+  for (const ExperimentEntry& entry : manifest.experiments) {
+    if (fs::weakly_canonical(log.parent_path() / entry.file) != log) continue;
+    return ParseExperiment(ReadTextFile(csv_path, "CSV file"), csv_path, entry, manifest);
+  }
+  return std::nullopt;
+}
+
 std::vector<std::string> FleetUnits(const std::string& fleet_directory) {
   std::vector<std::string> units;
   if (!fs::is_directory(fleet_directory)) {

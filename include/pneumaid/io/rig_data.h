@@ -99,6 +99,11 @@ Unit ReadUnit(const std::string& directory);
 Experiment ParseExperiment(const std::string& text, const std::string& path,
                            const ExperimentEntry& entry, const Manifest& manifest);
 
+// When `csv_path` is one of the logs listed in the unit.yaml beside it, that
+// log read as its unit's manifest says (origin, units, gauge pressures);
+// otherwise nothing. Throws InputError for a malformed manifest or log.
+std::optional<Experiment> ReadLogOfUnit(const std::string& csv_path);
+
 // The unit directories of a fleet directory (its immediate subdirectories that
 // hold a unit.yaml), sorted by name.
 std::vector<std::string> FleetUnits(const std::string& fleet_directory);
