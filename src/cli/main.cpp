@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
   runners[simulate] = AddSimulateCommand(simulate);
   CLI::App* check = app.add_subcommand("check", "validate unit directories without fitting");
   runners[check] = AddCheckCommand(check);
-  CLI::App* synth = app.add_subcommand("synth", "write a synthetic unit directory from a truth set");
+  CLI::App* synth =
+      app.add_subcommand("synth", "write a synthetic unit directory from a truth set");
   runners[synth] = AddSynthCommand(synth);
   try {
     app.parse(argc, argv);

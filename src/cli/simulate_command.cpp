@@ -91,7 +91,8 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
     columns["p2"] = ColumnInSI(table, "p2", Quantity::kPressure, p_atm, false);
     for (std::size_t i = 1; i < columns["t"].size(); ++i) {
       if (!(columns["t"][i] > columns["t"][i - 1])) {
-        throw InputError(path, table.row_lines[i], 1, "column 't': expected strictly increasing time");
+        throw InputError(path, table.row_lines[i], 1,
+                         "column 't': expected strictly increasing time");
       }
     }
   }

@@ -166,8 +166,6 @@ CsvTable ParseCsv(const std::string& text, const std::string& file) {
   return CsvParser(file).Parse(text);
 }
 
-CsvTable ReadCsv(const std::string& path) {
-  return ParseCsv(ReadTextFile(path, "CSV file"), path);
-}
+CsvTable ReadCsv(const std::string& path) { return ParseCsv(ReadTextFile(path, "CSV file"), path); }
 
 }  // namespace pneumaid

@@ -26,8 +26,9 @@ class ProtocolReader : internal::YamlReader {
   Protocol ReadDocument(const std::string& text) {
     const YAML::Node root =
         LoadMapping(text, "expected a mapping starting with format: pneumaid-protocol/1");
-    Keys(root, "", {"format", "sample_rate", "position_origin", "units", "sensors", "valve",
-                    "pipeline", "stroke", "validation"});
+    Keys(root, "",
+         {"format", "sample_rate", "position_origin", "units", "sensors", "valve", "pipeline",
+          "stroke", "validation"});
     if (!root["format"] || Text(root["format"]) != kProtocolFormat) {
       Fail(root, std::string("expected format: ") + kProtocolFormat);
     }
@@ -50,7 +51,8 @@ class ProtocolReader : internal::YamlReader {
       Keys(pipe, "pipeline.", {"tube_lengths", "command", "step_time", "duration"});
       p.tube_lengths_m = List(pipe["tube_lengths"], "pipeline.tube_lengths");
       if (pipe["command"]) p.pipeline_command_V = Positive(pipe["command"], "pipeline.command");
-      if (pipe["step_time"]) p.pipeline_step_time_s = Positive(pipe["step_time"], "pipeline.step_time");
+      if (pipe["step_time"])
+        p.pipeline_step_time_s = Positive(pipe["step_time"], "pipeline.step_time");
       if (pipe["duration"]) p.pipeline_duration_s = Positive(pipe["duration"], "pipeline.duration");
     }
     if (const YAML::Node stroke = root["stroke"]) {
@@ -118,8 +120,9 @@ class ProtocolReader : internal::YamlReader {
       const UnitInfo* unit = FindUnit(symbol);
       bool ok = false;
       for (Quantity q : quantities) ok = ok || (unit && unit->quantity == q);
-      if (!ok) Fail(units[key], std::string("units.") + key + ": expected one of " +
-                                    AcceptedUnits(quantities));
+      if (!ok)
+        Fail(units[key],
+             std::string("units.") + key + ": expected one of " + AcceptedUnits(quantities));
       *out = symbol;
     };
     pick("length", {Quantity::kLength}, &p->length_unit);
@@ -129,8 +132,9 @@ class ProtocolReader : internal::YamlReader {
 
   void ReadSensors(const YAML::Node& sensors, Protocol* p) const {
     if (!sensors) return;
-    Keys(sensors, "sensors.", {"t", "u", "x", "p_up", "p_down", "p_in", "p_out", "p1", "p2", "q",
-                               "q_in", "q_out", "q1", "q2"});
+    Keys(sensors, "sensors.",
+         {"t", "u", "x", "p_up", "p_down", "p_in", "p_out", "p1", "p2", "q", "q_in", "q_out", "q1",
+          "q2"});
     for (const auto& entry : sensors) {
       const std::string name = Key(entry.first);
       const std::string path = "sensors." + name + ".";

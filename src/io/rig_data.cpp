@@ -65,10 +65,13 @@ struct KindColumns {
 
 KindColumns ColumnsOf(ExperimentKind kind) {
   switch (kind) {
-    case ExperimentKind::kValve: return {{"t", "u", "p_up", "p_down", "q"}, {}};
-    case ExperimentKind::kPipeline: return {{"t", "u", "q_in", "q_out"}, {"p_in", "p_out"}};
+    case ExperimentKind::kValve:
+      return {{"t", "u", "p_up", "p_down", "q"}, {}};
+    case ExperimentKind::kPipeline:
+      return {{"t", "u", "q_in", "q_out"}, {"p_in", "p_out"}};
     case ExperimentKind::kStroke:
-    case ExperimentKind::kValidation: return {{"t", "u", "x", "p1", "p2"}, {"q1", "q2"}};
+    case ExperimentKind::kValidation:
+      return {{"t", "u", "x", "p1", "p2"}, {"q1", "q2"}};
   }
   return {};
 }
@@ -95,8 +98,9 @@ class ManifestReader : internal::YamlReader {
     const std::set<std::string> known = {"format", "unit", "rig", "sensors", "experiments"};
     for (const auto& entry : root) {
       const std::string key = Key(entry.first);
-      if (!known.count(key)) Fail(entry.first, "unknown key '" + key + "' (expected " +
-                                                   "format, unit, rig, sensors, experiments)");
+      if (!known.count(key))
+        Fail(entry.first,
+             "unknown key '" + key + "' (expected " + "format, unit, rig, sensors, experiments)");
     }
     for (const char* key : {"format", "unit", "experiments"}) {
       if (!root[key]) Fail(root, std::string("missing required key '") + key + "'");
@@ -123,8 +127,8 @@ class ManifestReader : internal::YamlReader {
   // Gauge pressures get `atmospheric_Pa` added; `scale_only` converts a
   // difference (noise levels): no offset, no gauge.
   double ScalarInSI(const YAML::Node& node, const std::string& path,
-                   const std::vector<Quantity>& quantities, double atmospheric_Pa,
-                   bool scale_only = false) const {
+                    const std::vector<Quantity>& quantities, double atmospheric_Pa,
+                    bool scale_only = false) const {
     const std::string text = Text(node, path);
     char* end = nullptr;
     const double number = std::strtod(text.c_str(), &end);
@@ -165,7 +169,8 @@ class ManifestReader : internal::YamlReader {
     const YAML::Node gas = child(rig, "gas");
     const YAML::Node cylinder = child(rig, "cylinder");
     CheckKeys(gas, "rig.gas", {"k", "R", "T"});
-    CheckKeys(cylinder, "rig.cylinder", {"bore", "rod", "stroke", "dead_volume_1", "dead_volume_2"});
+    CheckKeys(cylinder, "rig.cylinder",
+              {"bore", "rod", "stroke", "dead_volume_1", "dead_volume_2"});
 
     // Atmospheric pressure first: gauge values elsewhere need it.
     ReadScalar(child(rig, "atmospheric_pressure"), "rig.atmospheric_pressure",
@@ -184,14 +189,14 @@ class ManifestReader : internal::YamlReader {
     ReadScalar(child(cylinder, "rod"), "rig.cylinder.rod", {Quantity::kLength}, &r.rod_m, manifest);
     ReadScalar(child(cylinder, "stroke"), "rig.cylinder.stroke", {Quantity::kLength}, &r.stroke_m,
                manifest);
-    ReadScalar(child(cylinder, "dead_volume_1"), "rig.cylinder.dead_volume_1",
-               {Quantity::kVolume}, &r.dead_volume_1_m3, manifest);
-    ReadScalar(child(cylinder, "dead_volume_2"), "rig.cylinder.dead_volume_2",
-               {Quantity::kVolume}, &r.dead_volume_2_m3, manifest);
+    ReadScalar(child(cylinder, "dead_volume_1"), "rig.cylinder.dead_volume_1", {Quantity::kVolume},
+               &r.dead_volume_1_m3, manifest);
+    ReadScalar(child(cylinder, "dead_volume_2"), "rig.cylinder.dead_volume_2", {Quantity::kVolume},
+               &r.dead_volume_2_m3, manifest);
     ReadScalar(child(rig, "load_mass"), "rig.load_mass", {Quantity::kMass}, &r.load_mass_kg,
                manifest);
-    ReadScalar(child(rig, "tube_length"), "rig.tube_length", {Quantity::kLength},
-               &r.tube_length_m, manifest);
+    ReadScalar(child(rig, "tube_length"), "rig.tube_length", {Quantity::kLength}, &r.tube_length_m,
+               manifest);
     ReadChoice(child(rig, "orientation"), "rig.orientation",
                {{"vertical", Orientation::kVertical}, {"horizontal", Orientation::kHorizontal}},
                &r.orientation, manifest);
@@ -254,7 +259,8 @@ class ManifestReader : internal::YamlReader {
     }
     if (absolute_only) {
       const std::string text = Text(node, path);
-      if (text.find("_g") != std::string::npos) Fail(node, path + ": expected an absolute pressure");
+      if (text.find("_g") != std::string::npos)
+        Fail(node, path + ": expected an absolute pressure");
     }
     *value = ScalarInSI(node, path, quantities, atmospheric_Pa);
   }
@@ -287,8 +293,8 @@ class ManifestReader : internal::YamlReader {
       if (column == nullptr) {
         std::vector<std::string> names;
         for (const auto& known : KnownColumns()) names.push_back(known.name);
-        Fail(entry.first, "sensors: unknown column '" + name + "' (expected one of " +
-                              Join(names) + ")");
+        Fail(entry.first,
+             "sensors: unknown column '" + name + "' (expected one of " + Join(names) + ")");
       }
       const std::string path = "sensors." + name;
       CheckKeys(entry.second, path, {"tau", "sigma"});
@@ -391,7 +397,8 @@ std::vector<double> ColumnToSI(const CsvTable& table, CsvColumn& column, const C
                      "column '" + column.name + "': unit '" + column.unit +
                          "' not accepted; expected one of " + AcceptedUnits(info.quantities));
   }
-  const double density = unit->quantity == Quantity::kVolumetricFlow ? rig.air_density_kg_per_m3 : 1.0;
+  const double density =
+      unit->quantity == Quantity::kVolumetricFlow ? rig.air_density_kg_per_m3 : 1.0;
   for (double& v : values) v = ToSI(*unit, v, rig.atmospheric_pressure_Pa) * density;
   return values;
 }
@@ -441,10 +448,14 @@ void PlacePositions(const CsvTable& table, const CsvColumn& column, const Manife
 
 const char* ToString(ExperimentKind kind) {
   switch (kind) {
-    case ExperimentKind::kValve: return "valve";
-    case ExperimentKind::kPipeline: return "pipeline";
-    case ExperimentKind::kStroke: return "stroke";
-    case ExperimentKind::kValidation: return "validation";
+    case ExperimentKind::kValve:
+      return "valve";
+    case ExperimentKind::kPipeline:
+      return "pipeline";
+    case ExperimentKind::kStroke:
+      return "stroke";
+    case ExperimentKind::kValidation:
+      return "validation";
   }
   return "?";
 }
@@ -489,8 +500,8 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
   for (const auto& name : kind_columns.required) {
     if (table.Find(name) == nullptr) {
       throw InputError(path, table.header_line, 0,
-                       "missing column '" + name + "': a " + ToString(entry.kind) +
-                           " log needs " + Join(kind_columns.required));
+                       "missing column '" + name + "': a " + ToString(entry.kind) + " log needs " +
+                           Join(kind_columns.required));
     }
   }
   Experiment out;
@@ -536,8 +547,8 @@ Unit ReadUnit(const std::string& directory) {
       throw InputError(manifest_path, entry.manifest_line, 0,
                        "experiment '" + entry.id + "': file '" + entry.file + "' not found");
     }
-    unit.experiments.push_back(
-        ParseExperiment(ReadTextFile(file.string(), "CSV file"), file.string(), entry, unit.manifest));
+    unit.experiments.push_back(ParseExperiment(ReadTextFile(file.string(), "CSV file"),
+                                               file.string(), entry, unit.manifest));
   }
   return unit;
 }

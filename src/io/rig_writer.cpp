@@ -71,7 +71,8 @@ std::string ManifestToYaml(const Manifest& manifest) {
   }
   out << "experiments:\n";
   for (const ExperimentEntry& entry : manifest.experiments) {
-    out << "  - {id: " << entry.id << ", kind: " << ToString(entry.kind) << ", file: " << entry.file;
+    out << "  - {id: " << entry.id << ", kind: " << ToString(entry.kind)
+        << ", file: " << entry.file;
     if (entry.tube_length_m) out << ", tube_length: " << WithUnit(*entry.tube_length_m, "cm");
     out << "}\n";
   }
@@ -110,7 +111,8 @@ void WriteDirectoryAtomically(const std::string& directory,
     throw InputError(directory, 0, 0, "cannot create output directory: " + error.message());
   }
   try {
-    for (const auto& [name, contents] : files) WriteFileAtomically((temporary / name).string(), contents);
+    for (const auto& [name, contents] : files)
+      WriteFileAtomically((temporary / name).string(), contents);
     if (fs::exists(target)) fs::remove(target);  // empty, checked above
     fs::rename(temporary, target);
   } catch (...) {

@@ -68,7 +68,8 @@ std::string Sha256Hex(const std::string& bytes) {
   const std::size_t tail_size = rest + 1 + 8 <= 64 ? 64 : 128;
   const uint64_t bits = static_cast<uint64_t>(bytes.size()) * 8;
   for (int i = 0; i < 8; ++i) tail[tail_size - 1 - i] = static_cast<unsigned char>(bits >> (8 * i));
-  for (std::size_t offset = 0; offset < tail_size; offset += 64) CompressBlock(tail + offset, &state);
+  for (std::size_t offset = 0; offset < tail_size; offset += 64)
+    CompressBlock(tail + offset, &state);
   char hex[65];
   for (int i = 0; i < 8; ++i) std::snprintf(hex + 8 * i, 9, "%08x", state[i]);
   return std::string(hex, 64);

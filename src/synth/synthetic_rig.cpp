@@ -89,16 +89,16 @@ class RigBuilder {
     for (double level : protocol_.stroke_levels_V) {
       char id[32];
       std::snprintf(id, sizeof(id), "stroke-%03d", static_cast<int>(std::lround(level * 100)));
-      logs.push_back(ActuatorRun(manifest, id, ExperimentKind::kStroke,
-                                 StrokeCommand(level), logs.size()));
+      logs.push_back(
+          ActuatorRun(manifest, id, ExperimentKind::kStroke, StrokeCommand(level), logs.size()));
     }
     if (protocol_.paper_step) {
       logs.push_back(ActuatorRun(manifest, "step-1", ExperimentKind::kValidation,
                                  StrokeCommand(1.0), logs.size()));
     }
     if (protocol_.rich_profile) {
-      logs.push_back(ActuatorRun(manifest, "profile-1", ExperimentKind::kValidation,
-                                 RichProfile(), logs.size()));
+      logs.push_back(ActuatorRun(manifest, "profile-1", ExperimentKind::kValidation, RichProfile(),
+                                 logs.size()));
     }
     return logs;
   }
@@ -138,8 +138,8 @@ class RigBuilder {
     log.entry.id = id;
     log.entry.kind = kind;
     log.entry.file = id + ".csv";
-    log.comment = "synthetic data: pneumaid synth, seed " + std::to_string(seed_) +
-                  " (not a measurement)";
+    log.comment =
+        "synthetic data: pneumaid synth, seed " + std::to_string(seed_) + " (not a measurement)";
     return log;
   }
 
@@ -161,12 +161,13 @@ class RigBuilder {
     const auto t = SampleTimes(levels.size() * protocol_.valve_hold_s, protocol_.sample_rate_Hz);
     std::vector<double> u(t.size()), opening(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) {
-      const auto level = std::min<std::size_t>(static_cast<std::size_t>(t[i] / protocol_.valve_hold_s),
-                                               levels.size() - 1);
+      const auto level = std::min<std::size_t>(
+          static_cast<std::size_t>(t[i] / protocol_.valve_hold_s), levels.size() - 1);
       u[i] = levels[level];
     }
     opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
-    const double p_up = truth_.supply.supply_pressure_Pa, p_down = truth_.supply.atmospheric_pressure_Pa;
+    const double p_up = truth_.supply.supply_pressure_Pa,
+                 p_down = truth_.supply.atmospheric_pressure_Pa;
     BranchLatch latch(kHysteresisThreshold_V);
     std::vector<double> q(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) {
@@ -177,10 +178,12 @@ class RigBuilder {
     AddColumn(&log, "t", "s", t, manifest);
     AddColumn(&log, "u", "V", u, manifest);
     AddColumn(&log, "p_up", protocol_.pressure_unit,
-              MeasureSignal(std::vector<double>(t.size(), p_up), Period(), Sensor("p_up"), &rng), manifest);
-    AddColumn(&log, "p_down", protocol_.pressure_unit,
-              MeasureSignal(std::vector<double>(t.size(), p_down), Period(), Sensor("p_down"), &rng),
+              MeasureSignal(std::vector<double>(t.size(), p_up), Period(), Sensor("p_up"), &rng),
               manifest);
+    AddColumn(
+        &log, "p_down", protocol_.pressure_unit,
+        MeasureSignal(std::vector<double>(t.size(), p_down), Period(), Sensor("p_down"), &rng),
+        manifest);
     AddColumn(&log, "q", protocol_.flow_unit,
               MeasureFlow("q", q, EffectValue(truth_, "flow_sensor_lag", "tau"), &rng), manifest);
     return log;
@@ -206,7 +209,8 @@ class RigBuilder {
     std::uint64_t rng = StreamSeed(seed_, index);
     const auto t = SampleTimes(protocol_.pipeline_duration_s, protocol_.sample_rate_Hz);
     std::vector<double> u(t.size()), q_in(t.size());
-    const double p_up = truth_.supply.supply_pressure_Pa, p_down = truth_.supply.atmospheric_pressure_Pa;
+    const double p_up = truth_.supply.supply_pressure_Pa,
+                 p_down = truth_.supply.atmospheric_pressure_Pa;
     for (std::size_t i = 0; i < t.size(); ++i) {
       u[i] = t[i] >= protocol_.pipeline_step_time_s ? protocol_.pipeline_command_V : 0.0;
     }
@@ -222,7 +226,8 @@ class RigBuilder {
     AddColumn(&log, "t", "s", t, manifest);
     AddColumn(&log, "u", "V", u, manifest);
     AddColumn(&log, "q_in", protocol_.flow_unit, MeasureFlow("q_in", q_in, hidden, &rng), manifest);
-    AddColumn(&log, "q_out", protocol_.flow_unit, MeasureFlow("q_out", q_out, hidden, &rng), manifest);
+    AddColumn(&log, "q_out", protocol_.flow_unit, MeasureFlow("q_out", q_out, hidden, &rng),
+              manifest);
     return log;
   }
 
@@ -292,10 +297,11 @@ class RigBuilder {
                      const ActuatorCommand& spec, std::size_t index) const {
     std::uint64_t rng = StreamSeed(seed_, index);
     CommandSignal command = spec.fixed;
-    const Trajectory run =
-        spec.leg_levels_V.empty() ? Run(command, spec.duration_s) : RunLegs(spec.leg_levels_V, &command);
+    const Trajectory run = spec.leg_levels_V.empty() ? Run(command, spec.duration_s)
+                                                     : RunLegs(spec.leg_levels_V, &command);
     const double half = 0.5 * truth_.cylinder.stroke_m;
-    const double origin_shift = protocol_.position_origin == PositionOrigin::kRetracted ? half : 0.0;
+    const double origin_shift =
+        protocol_.position_origin == PositionOrigin::kRetracted ? half : 0.0;
     std::vector<double> x = MeasureSignal(run.x_m, Period(), Sensor("x"), &rng);
     for (double& value : x) value += origin_shift;
     RigLog log = NewLog(id, kind);
@@ -307,8 +313,10 @@ class RigBuilder {
     AddColumn(&log, "p2", protocol_.pressure_unit,
               MeasureSignal(run.p2_Pa, Period(), Sensor("p2"), &rng), manifest);
     // The simulator already applied any hidden flow_sensor_lag to q1, q2.
-    AddColumn(&log, "q1", protocol_.flow_unit, MeasureFlow("q1", run.q1_kg_per_s, 0.0, &rng), manifest);
-    AddColumn(&log, "q2", protocol_.flow_unit, MeasureFlow("q2", run.q2_kg_per_s, 0.0, &rng), manifest);
+    AddColumn(&log, "q1", protocol_.flow_unit, MeasureFlow("q1", run.q1_kg_per_s, 0.0, &rng),
+              manifest);
+    AddColumn(&log, "q2", protocol_.flow_unit, MeasureFlow("q2", run.q2_kg_per_s, 0.0, &rng),
+              manifest);
     return log;
   }
 
@@ -340,7 +348,8 @@ std::vector<double> MeasureSignal(const std::vector<double>& si, double sample_p
   std::normal_distribution<double> noise(0.0, 1.0);
   for (double& value : out) {
     if (sensor.sigma > 0) value += sensor.sigma * noise(rng);
-    if (sensor.quantization > 0) value = sensor.quantization * std::round(value / sensor.quantization);
+    if (sensor.quantization > 0)
+      value = sensor.quantization * std::round(value / sensor.quantization);
   }
   *rng_state = rng();  // the next channel draws from where this one ended
   return out;
@@ -364,11 +373,12 @@ SyntheticUnit Synthesize(const Parameters& truth, const Protocol& protocol, std:
 
 std::map<std::string, std::string> UnitFiles(const SyntheticUnit& unit) {
   std::map<std::string, std::string> files;
-  files["unit.yaml"] = "# synthetic unit: pneumaid synth (not a measurement)\n" +
-                       ManifestToYaml(unit.manifest);
+  files["unit.yaml"] =
+      "# synthetic unit: pneumaid synth (not a measurement)\n" + ManifestToYaml(unit.manifest);
   for (const RigLog& log : unit.logs) files[log.entry.file] = RigLogToCsv(log);
-  files["truth.yaml"] = "# the truth behind this synthetic unit; for tests, never read by fitters\n" +
-                        ParamsToYaml(unit.truth);
+  files["truth.yaml"] =
+      "# the truth behind this synthetic unit; for tests, never read by fitters\n" +
+      ParamsToYaml(unit.truth);
   return files;
 }
 

@@ -17,7 +17,8 @@ namespace {
 std::string MakeStrokeLog(int rows) {
   std::mt19937 rng(1);
   std::normal_distribution<double> noise(0.0, 1.0);
-  std::string text = "# benchmark log\nt [s],u [V],x [mm],p1 [bar_g],p2 [bar_g],q1 [l/min],q2 [l/min]\n";
+  std::string text =
+      "# benchmark log\nt [s],u [V],x [mm],p1 [bar_g],p2 [bar_g],q1 [l/min],q2 [l/min]\n";
   char line[160];
   for (int i = 0; i < rows; ++i) {
     const double t = i * 1e-3;
@@ -30,7 +31,8 @@ std::string MakeStrokeLog(int rows) {
 }
 
 void BM_ReadStrokeCsv(benchmark::State& state) {
-  const std::string path = (std::filesystem::temp_directory_path() / "pneumaid_read_bench.csv").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "pneumaid_read_bench.csv").string();
   const std::string text = MakeStrokeLog(static_cast<int>(state.range(0)));
   std::ofstream(path, std::ios::binary) << text;
   Manifest manifest;
@@ -42,7 +44,8 @@ void BM_ReadStrokeCsv(benchmark::State& state) {
     const Experiment experiment = ParseExperiment(ReadTextFile(path, "CSV"), path, entry, manifest);
     benchmark::DoNotOptimize(experiment.columns.size());
   }
-  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * static_cast<int64_t>(text.size()));
+  state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) *
+                          static_cast<int64_t>(text.size()));
   state.counters["rows"] = static_cast<double>(state.range(0));
   std::filesystem::remove(path);
 }

@@ -38,9 +38,10 @@ TEST_F(SynthCliTest, RefusesToOverwriteAndBadInputWritesNothing) {
   EXPECT_EQ(Run(Args(other) + " --scale friction.sideways.Fs=3"), 2);
   EXPECT_NE(Stderr().find("names no parameter"), std::string::npos) << Stderr();
   EXPECT_EQ(Run(Args(other) + " --spread nonsense"), 2);
-  const std::string bad_protocol = Write("bad.yaml", "format: pneumaid-protocol/1\nvalve: {stp: 1}\n");
-  EXPECT_EQ(Run("synth --truth " + testing::Source("configs/paper.yaml") + " --protocol " + bad_protocol +
-                " --out " + other),
+  const std::string bad_protocol =
+      Write("bad.yaml", "format: pneumaid-protocol/1\nvalve: {stp: 1}\n");
+  EXPECT_EQ(Run("synth --truth " + testing::Source("configs/paper.yaml") + " --protocol " +
+                bad_protocol + " --out " + other),
             2);
   EXPECT_NE(Stderr().find("bad.yaml:2:9: unknown key 'valve.stp'"), std::string::npos) << Stderr();
   std::filesystem::remove(dir_ / "bad.yaml");

@@ -30,33 +30,39 @@ experiments:
   - {id: step-1, kind: validation, file: step.csv}
 )";
 
-const char* kValve = "t [s],u [V],p_up [bar_g],p_down [bar_g],q [l/min]\n"
-                     "0,0,4,0,0\n0.001,0.5,4,0,3\n0.002,1,4,0,4.7\n";
+const char* kValve =
+    "t [s],u [V],p_up [bar_g],p_down [bar_g],q [l/min]\n"
+    "0,0,4,0,0\n0.001,0.5,4,0,3\n0.002,1,4,0,4.7\n";
 const char* kPipe = "t [ms],u,q_in [l/min],q_out [g/s]\n0,0,0,0\n1,1,4.7,0.05\n2,1,4.7,0.09\n";
-const char* kStep = "t [s],u [V],x [mm],p1 [bar],p2 [kPa],q1 [kg/s],q2 [kg/s],temp [degC]\n"
-                    "0,1,0,1,100,0,0,20\n0.001,1,0.5,1.5,100,1e-5,-1e-6,20\n"
-                    "0.002,1,50,2,110,2e-5,-2e-6,21\n";
+const char* kStep =
+    "t [s],u [V],x [mm],p1 [bar],p2 [kPa],q1 [kg/s],q2 [kg/s],temp [degC]\n"
+    "0,1,0,1,100,0,0,20\n0.001,1,0.5,1.5,100,1e-5,-1e-6,20\n"
+    "0.002,1,50,2,110,2e-5,-2e-6,21\n";
 
 class RigDataTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::path(::testing::TempDir()) /
-           ("pneumaid_rig_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("pneumaid_rig_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_ / "unit");
-    files_ = {{"unit.yaml", kManifest}, {"valve.csv", kValve}, {"pipe.csv", kPipe}, {"step.csv", kStep}};
+    files_ = {
+        {"unit.yaml", kManifest}, {"valve.csv", kValve}, {"pipe.csv", kPipe}, {"step.csv", kStep}};
   }
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string UnitDir() const { return (dir_ / "unit").string(); }
 
   void WriteAll() {
-    for (const auto& [name, text] : files_) std::ofstream(dir_ / "unit" / name, std::ios::binary) << text;
+    for (const auto& [name, text] : files_)
+      std::ofstream(dir_ / "unit" / name, std::ios::binary) << text;
   }
 
   std::set<std::string> Listing() const {
     std::set<std::string> names;
-    for (const auto& entry : fs::recursive_directory_iterator(dir_)) names.insert(entry.path().string());
+    for (const auto& entry : fs::recursive_directory_iterator(dir_))
+      names.insert(entry.path().string());
     return names;
   }
 
@@ -75,22 +81,24 @@ TEST_F(RigDataTest, ReadsAValidUnitIntoSI) {
   EXPECT_DOUBLE_EQ(rig.supply_pressure_Pa, 5e5);
   // Defaults are reported, by path.
   const auto& defaults = unit.manifest.defaults_used;
-  EXPECT_NE(std::find(defaults.begin(), defaults.end(), "rig.atmospheric_pressure"), defaults.end());
-  EXPECT_NE(std::find(defaults.begin(), defaults.end(), "rig.cylinder.dead_volume_1"), defaults.end());
+  EXPECT_NE(std::find(defaults.begin(), defaults.end(), "rig.atmospheric_pressure"),
+            defaults.end());
+  EXPECT_NE(std::find(defaults.begin(), defaults.end(), "rig.cylinder.dead_volume_1"),
+            defaults.end());
   EXPECT_EQ(std::find(defaults.begin(), defaults.end(), "rig.cylinder.bore"), defaults.end());
   // Sensors: flow sigma given as volumetric m3/s, stored as mass flow.
   EXPECT_NEAR(*unit.manifest.sensors.at("q").sigma, 2.0e-7 * 1.178, 1e-15);
 
   const Experiment& valve = unit.experiments[0];
-  EXPECT_DOUBLE_EQ(valve.column("p_up")[0], 4e5 + 1e5);             // gauge + atmosphere
-  EXPECT_NEAR(valve.column("q")[2], 4.7e-3 / 60 * 1.178, 1e-15);    // l/min -> kg/s
+  EXPECT_DOUBLE_EQ(valve.column("p_up")[0], 4e5 + 1e5);           // gauge + atmosphere
+  EXPECT_NEAR(valve.column("q")[2], 4.7e-3 / 60 * 1.178, 1e-15);  // l/min -> kg/s
   EXPECT_EQ(valve.sha256.size(), 64u);
   const Experiment& pipe = unit.experiments[1];
-  EXPECT_DOUBLE_EQ(pipe.column("t")[2], 0.002);                     // ms
-  EXPECT_DOUBLE_EQ(pipe.column("q_out")[1], 5e-5);                  // g/s: mass flow as it stands
+  EXPECT_DOUBLE_EQ(pipe.column("t")[2], 0.002);     // ms
+  EXPECT_DOUBLE_EQ(pipe.column("q_out")[1], 5e-5);  // g/s: mass flow as it stands
   EXPECT_DOUBLE_EQ(*pipe.entry.tube_length_m, 0.38);
   const Experiment& step = unit.experiments[2];
-  EXPECT_DOUBLE_EQ(step.column("x")[0], -0.025);                    // retracted origin -> mid
+  EXPECT_DOUBLE_EQ(step.column("x")[0], -0.025);  // retracted origin -> mid
   EXPECT_DOUBLE_EQ(step.column("x")[2], 0.025);
   EXPECT_DOUBLE_EQ(step.column("p1")[1], 1.5e5);
   EXPECT_DOUBLE_EQ(step.column("p2")[2], 1.1e5);
@@ -115,8 +123,8 @@ TEST_F(RigDataTest, AcceptsBomCrlfCommentsAndBlankLines) {
 
 struct BadUnit {
   const char* name;
-  const char* file;     // which file to change
-  const char* find;     // text to replace ("" = replace the whole file)
+  const char* file;  // which file to change
+  const char* find;  // text to replace ("" = replace the whole file)
   const char* replace;
   const char* where;    // expected "file:line" prefix of the message (file relative to the unit)
   const char* message;  // a part of the message
@@ -149,34 +157,61 @@ TEST_P(RigDataBadInputTest, OneMessageNamingFileLineAndExpectation) {
 
 INSTANTIATE_TEST_SUITE_P(
     ErrorClasses, RigDataBadInputTest,
-    ::testing::Values(
-        BadUnit{"missing_key", "unit.yaml", "unit: TEST-1\n", "", "unit.yaml:1", "missing required key 'unit'"},
-        BadUnit{"unknown_key", "unit.yaml", "{bore:", "{bor:", "unit.yaml:5:", "unknown key 'rig.cylinder.bor'"},
-        BadUnit{"wrong_format", "unit.yaml", "pneumaid-rig/1", "pneumaid-rig/2", "unit.yaml:1:", "expected format: pneumaid-rig/1"},
-        BadUnit{"missing_file", "unit.yaml", "file: pipe.csv", "file: pipe2.csv", "unit.yaml:12", "'pipe2.csv' not found"},
-        BadUnit{"missing_column", "valve.csv", "p_down [bar_g]", "p_dn [bar_g]", "valve.csv:1", "missing column 'p_down'"},
-        BadUnit{"ragged_row", "valve.csv", "0.001,0.5,4,0,3", "0.001,0.5,4,0", "valve.csv:3", "ragged row"},
-        BadUnit{"non_numeric", "valve.csv", "0.001,0.5,4,0,3", "0.001,0.5,four,0,3", "valve.csv:3:3", "expected a finite number"},
-        BadUnit{"non_finite", "valve.csv", "0.001,0.5,4,0,3", "0.001,0.5,inf,0,3", "valve.csv:3:3", "expected a finite number"},
-        BadUnit{"non_increasing_time", "valve.csv", "0.002,1,4", "0.001,1,4", "valve.csv:4:1", "strictly increasing"},
-        BadUnit{"unknown_unit_header", "valve.csv", "q [l/min]", "q [gallons]", "valve.csv:1:5", "unit 'gallons' not accepted"},
-        BadUnit{"unknown_unit_manifest", "unit.yaml", "\"50 mm\"", "\"50 inch\"", "unit.yaml:5:", "unit 'inch' not accepted"},
-        BadUnit{"empty_file", "pipe.csv", "", "", "pipe.csv", "empty file"},
-        BadUnit{"header_without_rows", "pipe.csv", "", "t,u,q_in,q_out\n", "pipe.csv:1", "header with no data rows"},
-        BadUnit{"wrong_kind", "unit.yaml", "kind: valve", "kind: valves", "unit.yaml:11:", "expected valve | pipeline | stroke | validation"},
-        BadUnit{"position_outside_stroke", "step.csv", "0.002,1,50,", "0.002,1,52,", "step.csv:4:3", "outside the stroke"},
-        BadUnit{"position_wrong_origin", "unit.yaml", "position_origin: retracted", "position_origin: mid", "step.csv:4:3", "outside the stroke"},
-        BadUnit{"duplicate_id", "unit.yaml", "id: pipe-38", "id: valve-1", "unit.yaml:12:", "duplicate experiment id 'valve-1'"},
-        BadUnit{"absolute_file", "unit.yaml", "file: step.csv", "file: /etc/passwd", "unit.yaml:13:", "relative to the unit directory"},
-        BadUnit{"file_escapes_unit", "unit.yaml", "file: step.csv", "file: ../unit/../../step.csv", "unit.yaml:13:", "outside the unit directory"},
-        BadUnit{"non_positive_length", "unit.yaml", "stroke: \"50 mm\"", "stroke: \"-50 mm\"", "unit.yaml:5:", "non-physical"},
-        BadUnit{"rod_not_smaller_than_bore", "unit.yaml", "rod: \"6 mm\"", "rod: \"16 mm\"", "unit.yaml:5:", "rod smaller than the bore"},
-        BadUnit{"non_positive_pressure", "unit.yaml", "supply_pressure: \"5 bar\"", "supply_pressure: 0", "unit.yaml:4:", "non-physical"},
-        BadUnit{"missing_tube_length", "unit.yaml", ", tube_length: \"38 cm\"", "", "unit.yaml:12:", "missing required key 'tube_length'"},
-        BadUnit{"command_out_of_range", "valve.csv", "0.001,0.5,", "0.001,-0.5,", "valve.csv:3:2", "expected a command in [0, 1] V"},
-        BadUnit{"unknown_sensor", "unit.yaml", "  q: {tau", "  qq: {tau", "unit.yaml:9:", "unknown column 'qq'"},
-        BadUnit{"non_scalar_key", "unit.yaml", "unit: TEST-1\n", "unit: TEST-1\n? [a, b]\n: 1\n", "unit.yaml:3:", "expected a plain key"},
-        BadUnit{"yaml_syntax", "unit.yaml", "orientation: horizontal", "orientation: [horizontal", "unit.yaml:", "YAML syntax error"}),
+    ::testing::Values(BadUnit{"missing_key", "unit.yaml", "unit: TEST-1\n", "", "unit.yaml:1",
+                              "missing required key 'unit'"},
+                      BadUnit{"unknown_key", "unit.yaml",
+                              "{bore:", "{bor:", "unit.yaml:5:", "unknown key 'rig.cylinder.bor'"},
+                      BadUnit{"wrong_format", "unit.yaml", "pneumaid-rig/1", "pneumaid-rig/2",
+                              "unit.yaml:1:", "expected format: pneumaid-rig/1"},
+                      BadUnit{"missing_file", "unit.yaml", "file: pipe.csv", "file: pipe2.csv",
+                              "unit.yaml:12", "'pipe2.csv' not found"},
+                      BadUnit{"missing_column", "valve.csv", "p_down [bar_g]", "p_dn [bar_g]",
+                              "valve.csv:1", "missing column 'p_down'"},
+                      BadUnit{"ragged_row", "valve.csv", "0.001,0.5,4,0,3", "0.001,0.5,4,0",
+                              "valve.csv:3", "ragged row"},
+                      BadUnit{"non_numeric", "valve.csv", "0.001,0.5,4,0,3", "0.001,0.5,four,0,3",
+                              "valve.csv:3:3", "expected a finite number"},
+                      BadUnit{"non_finite", "valve.csv", "0.001,0.5,4,0,3", "0.001,0.5,inf,0,3",
+                              "valve.csv:3:3", "expected a finite number"},
+                      BadUnit{"non_increasing_time", "valve.csv", "0.002,1,4", "0.001,1,4",
+                              "valve.csv:4:1", "strictly increasing"},
+                      BadUnit{"unknown_unit_header", "valve.csv", "q [l/min]", "q [gallons]",
+                              "valve.csv:1:5", "unit 'gallons' not accepted"},
+                      BadUnit{"unknown_unit_manifest", "unit.yaml", "\"50 mm\"", "\"50 inch\"",
+                              "unit.yaml:5:", "unit 'inch' not accepted"},
+                      BadUnit{"empty_file", "pipe.csv", "", "", "pipe.csv", "empty file"},
+                      BadUnit{"header_without_rows", "pipe.csv", "", "t,u,q_in,q_out\n",
+                              "pipe.csv:1", "header with no data rows"},
+                      BadUnit{"wrong_kind", "unit.yaml", "kind: valve", "kind: valves",
+                              "unit.yaml:11:", "expected valve | pipeline | stroke | validation"},
+                      BadUnit{"position_outside_stroke", "step.csv", "0.002,1,50,", "0.002,1,52,",
+                              "step.csv:4:3", "outside the stroke"},
+                      BadUnit{"position_wrong_origin", "unit.yaml", "position_origin: retracted",
+                              "position_origin: mid", "step.csv:4:3", "outside the stroke"},
+                      BadUnit{"duplicate_id", "unit.yaml", "id: pipe-38", "id: valve-1",
+                              "unit.yaml:12:", "duplicate experiment id 'valve-1'"},
+                      BadUnit{"absolute_file", "unit.yaml", "file: step.csv", "file: /etc/passwd",
+                              "unit.yaml:13:", "relative to the unit directory"},
+                      BadUnit{"file_escapes_unit", "unit.yaml", "file: step.csv",
+                              "file: ../unit/../../step.csv",
+                              "unit.yaml:13:", "outside the unit directory"},
+                      BadUnit{"non_positive_length", "unit.yaml", "stroke: \"50 mm\"",
+                              "stroke: \"-50 mm\"", "unit.yaml:5:", "non-physical"},
+                      BadUnit{"rod_not_smaller_than_bore", "unit.yaml", "rod: \"6 mm\"",
+                              "rod: \"16 mm\"", "unit.yaml:5:", "rod smaller than the bore"},
+                      BadUnit{"non_positive_pressure", "unit.yaml", "supply_pressure: \"5 bar\"",
+                              "supply_pressure: 0", "unit.yaml:4:", "non-physical"},
+                      BadUnit{"missing_tube_length", "unit.yaml", ", tube_length: \"38 cm\"", "",
+                              "unit.yaml:12:", "missing required key 'tube_length'"},
+                      BadUnit{"command_out_of_range", "valve.csv", "0.001,0.5,", "0.001,-0.5,",
+                              "valve.csv:3:2", "expected a command in [0, 1] V"},
+                      BadUnit{"unknown_sensor", "unit.yaml", "  q: {tau", "  qq: {tau",
+                              "unit.yaml:9:", "unknown column 'qq'"},
+                      BadUnit{"non_scalar_key", "unit.yaml", "unit: TEST-1\n",
+                              "unit: TEST-1\n? [a, b]\n: 1\n",
+                              "unit.yaml:3:", "expected a plain key"},
+                      BadUnit{"yaml_syntax", "unit.yaml", "orientation: horizontal",
+                              "orientation: [horizontal", "unit.yaml:", "YAML syntax error"}),
     [](const ::testing::TestParamInfo<BadUnit>& info) { return std::string(info.param.name); });
 
 TEST(RigDataManifestTest, ParsesUnitStringsAndGaugeSupply) {

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "pneumaid/eval/stroke_summary.h"
 #include "pneumaid/model/gas.h"
 #include "sim_test_util.h"
 
@@ -106,13 +107,18 @@ TEST(SimulateTest, RodHeldBelowStaticFrictionCreepsLessThanATenthMillimetrePerSe
   const double fs = p.friction.positive.static_force_N;
   const double p2 = 2e5;
   const double hold_s = 2.0;
-  for (double fraction : {0.0, 0.5, 0.9, 0.99, -0.9}) {
-    // p1 that makes the net force `fraction` Fs; valves closed, so it holds.
-    const double p1 = (fraction * fs - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
-    const InitialState start{0.0, 0.0, p1, p2};
-    const Trajectory run = MustSimulate(p, CommandSignal{}, start, UniformTimes(0, hold_s, 100));
-    EXPECT_NEAR(NetForce(p, run.p1_Pa.back(), run.p2_Pa.back()), fraction * fs, 0.01 * fs);
-    EXPECT_LT(std::fabs(run.x_m.back()), 1e-4 * hold_s) << "net force " << fraction << " Fs";
+  SimulationOptions regularized;
+  regularized.stick_slip = StickSlipTreatment::kRegularized;
+  for (const SimulationOptions& options : {SimulationOptions{}, regularized}) {
+    for (double fraction : {0.0, 0.5, 0.9, 0.99, -0.9}) {
+      // p1 that makes the net force `fraction` Fs; valves closed, so it holds.
+      const double p1 = (fraction * fs - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
+      const InitialState start{0.0, 0.0, p1, p2};
+      const Trajectory run =
+          MustSimulate(p, CommandSignal{}, start, UniformTimes(0, hold_s, 100), options);
+      EXPECT_NEAR(NetForce(p, run.p1_Pa.back(), run.p2_Pa.back()), fraction * fs, 0.01 * fs);
+      EXPECT_LT(std::fabs(run.x_m.back()), 1e-4 * hold_s) << "net force " << fraction << " Fs";
+    }
   }
 }
 
@@ -121,9 +127,34 @@ TEST(SimulateTest, RodBreaksAwayAboveStaticFriction) {
   const double p2 = 2e5;
   const double p1 =
       (1.3 * p.friction.positive.static_force_N - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
-  const Trajectory run =
-      MustSimulate(p, CommandSignal{}, InitialState{0.0, 0.0, p1, p2}, UniformTimes(0, 0.2, 1000));
-  EXPECT_GT(run.x_m.back(), 1e-3);
+  SimulationOptions regularized;
+  regularized.stick_slip = StickSlipTreatment::kRegularized;
+  for (const SimulationOptions& options : {SimulationOptions{}, regularized}) {
+    const Trajectory run = MustSimulate(p, CommandSignal{}, InitialState{0.0, 0.0, p1, p2},
+                                        UniformTimes(0, 0.2, 1000), options);
+    EXPECT_GT(run.x_m.back(), 1e-3);
+  }
+}
+
+TEST(SimulateTest, BothStickSlipTreatmentsAgreeOnThePaperStep) {
+  const Parameters p;
+  SimulationOptions regularized;
+  regularized.stick_slip = StickSlipTreatment::kRegularized;
+  const auto times = UniformTimes(0, 1.0, 1000);
+  const Trajectory events = MustSimulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p), times);
+  const Trajectory smooth =
+      MustSimulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p), times, regularized);
+  // Stick-slip is sensitive to where each slide starts (the smooth band creeps
+  // below 10 um/s, the contact spring yields 10 um), so the runs are compared
+  // by their landmarks, not point by point.
+  const StrokeSummary a = SummarizeStroke(events, 0.025), b = SummarizeStroke(smooth, 0.025);
+  ASSERT_TRUE(a.mid_stroke_time_s && b.mid_stroke_time_s && a.end_reached_time_s &&
+              b.end_reached_time_s);
+  std::cout << "events: " << a.Describe() << "\nregularized: " << b.Describe() << "\n";
+  EXPECT_NEAR(*a.mid_stroke_time_s, *b.mid_stroke_time_s, 0.02);
+  EXPECT_NEAR(*a.end_reached_time_s, *b.end_reached_time_s, 0.02);
+  EXPECT_NEAR(events.p1_Pa.back(), smooth.p1_Pa.back(), 100.0);
+  EXPECT_NEAR(events.x_m.back(), smooth.x_m.back(), 2e-5);
 }
 
 TEST(SimulateTest, SampledNoisyCommandRunsWithBoundedWork) {

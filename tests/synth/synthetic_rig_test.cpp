@@ -95,9 +95,9 @@ TEST(SyntheticRigTest, NoisyRoundTripResidualsMatchTheDeclaredNoise) {
   }
   const double n = static_cast<double>(run.size());
   const double sigma = std::sqrt(sum_sq / n - (sum / n) * (sum / n));
-  EXPECT_NEAR(sigma, 300.0, 30.0);                 // the declared sigma of p1
+  EXPECT_NEAR(sigma, 300.0, 30.0);  // the declared sigma of p1
   EXPECT_LT(std::fabs(sum / n), 4 * 300.0 / std::sqrt(n));
-  EXPECT_LT(worst_x, 0.5e-5 + 5 * 5e-6);           // quantisation + 5 sigma
+  EXPECT_LT(worst_x, 0.5e-5 + 5 * 5e-6);  // quantisation + 5 sigma
   EXPECT_DOUBLE_EQ(*unit.manifest.sensors.at("p1").sigma, 300.0);
   EXPECT_DOUBLE_EQ(*unit.manifest.sensors.at("q1").tau_s, 0.03);
 }
@@ -140,7 +140,8 @@ TEST(SyntheticRigTest, SpreadStaysInsideItsBoundsAndScaleIsExact) {
     EXPECT_EQ(p.pipeline.delta_per_s, base.pipeline.delta_per_s);
   }
   EXPECT_NE(ApplySpread(base, {{"pipeline.delta", 0.1}}, 1).pipeline.delta_per_s, 8.0);
-  EXPECT_EQ(ApplyScale(base, {{"friction.positive.Fs", 3.0}}).friction.positive.static_force_N, 30.0);
+  EXPECT_EQ(ApplyScale(base, {{"friction.positive.Fs", 3.0}}).friction.positive.static_force_N,
+            30.0);
   EXPECT_THROW(ApplyScale(base, {{"friction.sideways.Fs", 3.0}}), InputError);
 }
 
@@ -157,7 +158,8 @@ TEST(SyntheticRigTest, HiddenEffectActsWithoutBeingDeclared) {
   Parameters truth;
   truth.effects["flow_sensor_lag"] = {{"tau", 0.05}};
   const Unit hidden = WriteAndRead(Synthesize(truth, SmallProtocol(0.0), 1, "H"), "synth_hidden");
-  const Unit plain = WriteAndRead(Synthesize(Parameters{}, SmallProtocol(0.0), 1, "H"), "synth_plain");
+  const Unit plain =
+      WriteAndRead(Synthesize(Parameters{}, SmallProtocol(0.0), 1, "H"), "synth_plain");
   EXPECT_EQ(hidden.manifest.sensors.at("q1").tau_s, plain.manifest.sensors.at("q1").tau_s);
   const auto& q_hidden = Find(hidden, "pipe-038").column("q_in");
   const auto& q_plain = Find(plain, "pipe-038").column("q_in");

@@ -46,7 +46,7 @@ struct Protocol {
   double stroke_max_leg_s = 3.0;
 
   // Validation runs.
-  bool paper_step = false;  // u = +1 then -1, each until 1 mm before the stroke limit
+  bool paper_step = false;    // u = +1 then -1, each until 1 mm before the stroke limit
   bool rich_profile = false;  // steps of several amplitudes and slow ramps
 };
 

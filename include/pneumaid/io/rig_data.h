@@ -52,8 +52,8 @@ struct SensorInfo {
 struct ExperimentEntry {
   std::string id;
   ExperimentKind kind = ExperimentKind::kValidation;
-  std::string file;                      // as written, relative to the unit directory
-  std::optional<double> tube_length_m;   // pipeline experiments
+  std::string file;                     // as written, relative to the unit directory
+  std::optional<double> tube_length_m;  // pipeline experiments
   int manifest_line = 0;
 };
 
