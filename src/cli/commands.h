@@ -21,5 +21,6 @@ using CommandRunner = std::function<int()>;
 CommandRunner AddSimulateCommand(CLI::App* app);
 CommandRunner AddSynthCommand(CLI::App* app);
 CommandRunner AddCheckCommand(CLI::App* app);
+CommandRunner AddValidateCommand(CLI::App* app);
 
 }  // namespace pneumaid::cli

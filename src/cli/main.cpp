@@ -16,6 +16,9 @@ int main(int argc, char** argv) {
   runners[simulate] = AddSimulateCommand(simulate);
   CLI::App* check = app.add_subcommand("check", "validate unit directories without fitting");
   runners[check] = AddCheckCommand(check);
+  CLI::App* validate =
+      app.add_subcommand("validate", "simulate a unit's validation runs and compare");
+  runners[validate] = AddValidateCommand(validate);
   CLI::App* synth =
       app.add_subcommand("synth", "write a synthetic unit directory from a truth set");
   runners[synth] = AddSynthCommand(synth);

@@ -1,0 +1,74 @@
+// Validation: simulate a parameter set on a unit's validation logs (their
+// measured command and first sample) and measure, per channel, how far the
+// simulation is from the measurement.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pneumaid/eval/metrics.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/parameters.h"
+#include "pneumaid/sim/simulate.h"
+
+namespace pneumaid {
+
+struct ValidationOptions {
+  // How each run is simulated.
+  SimulationOptions simulation;
+  // Quality thresholds; a run that misses one fails validation (exit 4).
+  // Channel -> lowest acceptable NRMSE fit [%].
+  std::map<std::string, double> min_fit_percent = {{"x", 95.0}};
+  // Channel -> highest acceptable RMSE [SI units: Pa for pressures].
+  std::map<std::string, double> max_rmse = {{"p1", 1.0e4}, {"p2", 1.0e4}};
+  // Experiment ids to validate; empty: every experiment of kind validation.
+  std::vector<std::string> experiment_ids;
+
+  bool IsValid(std::string* error) const;
+};
+
+struct ExperimentValidation {
+  std::string id;
+  Trajectory measured;
+  Trajectory simulated;  // flows as the declared meters would read them
+  std::map<std::string, ChannelMetrics> channels;
+  SimulationSummary simulation;
+  std::vector<std::string> missed;  // thresholds missed, as sentences
+};
+
+struct ValidationReport {
+  std::string unit;
+  std::vector<ExperimentValidation> experiments;
+
+  bool numerical_failure() const;  // a simulation failed
+  bool thresholds_met() const;
+  std::string BriefReport() const;  // a table of the metrics in display units
+};
+
+// The parameter set under a log's conditions ("which constants win"): supply
+// and atmospheric pressure, gas temperature, orientation and load mass from the
+// manifest; geometry from the parameter set. Geometry the manifest states
+// (bore, rod, stroke, dead volumes) that disagrees by more than 1 % is an
+// InputError naming the manifest.
+Parameters WithRigConditions(const Parameters& params, const Unit& unit);
+
+// Throws InputError for an unknown experiment id or a unit without validation
+// runs; numerical failures are reported in the result.
+ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
+                              const ValidationOptions& options);
+
+}  // namespace pneumaid
+
+namespace pneumaid {
+
+// The machine-readable report (`pneumaid-report/1`, docs/params-format.md):
+// per experiment and channel rmse, max_abs, nrmse_fit_percent (null where
+// undefined), SI units.
+std::string ReportToJson(const ValidationReport& report);
+
+// Measured and simulated channels side by side, SI, one row per sample:
+// t,u,x,x_sim,p1,p1_sim,... (what a plot or a spreadsheet needs).
+std::string ComparisonToCsv(const ExperimentValidation& experiment);
+
+}  // namespace pneumaid

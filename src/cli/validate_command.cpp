@@ -1,0 +1,88 @@
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "pneumaid/io/files.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/validate/validate.h"
+
+namespace pneumaid::cli {
+namespace {
+
+struct ValidateArgs {
+  std::string params_path;
+  std::string unit_dir;
+  std::string json_path;
+  std::string csv_dir;
+  std::vector<std::string> min_fit;   // "x=95"
+  std::vector<std::string> max_rmse;  // "p1=1e4"
+  std::vector<std::string> experiments;
+};
+
+std::map<std::string, double> Thresholds(const std::vector<std::string>& items,
+                                         const std::string& option) {
+  std::map<std::string, double> out;
+  for (const auto& item : items) {
+    const auto eq = item.find('=');
+    char* end = nullptr;
+    const double value = eq == std::string::npos ? 0 : std::strtod(item.c_str() + eq + 1, &end);
+    const std::string channel = item.substr(0, eq);
+    if (eq == std::string::npos || end == item.c_str() + eq + 1 || *end != '\0' ||
+        (channel != "x" && channel != "p1" && channel != "p2" && channel != "q1" &&
+         channel != "q2")) {
+      throw InputError(
+          option, 0, 0,
+          "'" + item + "': expected CHANNEL=NUMBER with CHANNEL one of x, p1, p2, q1, q2");
+    }
+    out[channel] = value;
+  }
+  return out;
+}
+
+int RunValidate(const ValidateArgs& args) {
+  const Parameters params = LoadParams(args.params_path);
+  const Unit unit = ReadUnit(args.unit_dir);
+  ValidationOptions options;
+  if (!args.min_fit.empty()) options.min_fit_percent = Thresholds(args.min_fit, "--min-fit");
+  if (!args.max_rmse.empty()) options.max_rmse = Thresholds(args.max_rmse, "--max-rmse");
+  options.experiment_ids = args.experiments;
+  const ValidationReport report = ValidateUnit(params, unit, options);
+  std::cout << report.BriefReport();
+  // Everything is computed before anything is written; each file is atomic.
+  if (!args.json_path.empty()) WriteFileAtomically(args.json_path, ReportToJson(report));
+  if (!args.csv_dir.empty()) {
+    std::filesystem::create_directories(args.csv_dir);
+    for (const auto& e : report.experiments) {
+      if (!e.simulation.ok()) continue;
+      WriteFileAtomically(args.csv_dir + "/" + e.id + "-validation.csv", ComparisonToCsv(e));
+    }
+  }
+  if (report.numerical_failure()) return kNumericalFailure;
+  return report.thresholds_met() ? kSuccess : kQualityMissed;
+}
+
+}  // namespace
+
+CommandRunner AddValidateCommand(CLI::App* app) {
+  auto args = std::make_shared<ValidateArgs>();
+  app->add_option("--params", args->params_path, "parameter set (params-v1)")->required();
+  app->add_option("unit", args->unit_dir, "unit directory")->required();
+  app->add_option("--json", args->json_path, "write the report (pneumaid-report/1) here");
+  app->add_option("--csv-out", args->csv_dir,
+                  "write measured-vs-simulated CSVs into this directory");
+  app->add_option("--min-fit", args->min_fit,
+                  "CHANNEL=PERCENT: lowest NRMSE fit accepted (default x=95; repeatable)");
+  app->add_option(
+      "--max-rmse", args->max_rmse,
+      "CHANNEL=VALUE: highest RMSE accepted, SI (default p1=1e4 p2=1e4 Pa; repeatable)");
+  app->add_option("--experiment", args->experiments,
+                  "validate these experiment ids (default: every validation run; repeatable)");
+  return [args]() { return RunValidate(*args); };
+}
+
+}  // namespace pneumaid::cli

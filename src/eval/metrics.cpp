@@ -1,0 +1,64 @@
+#include "pneumaid/eval/metrics.h"
+
+#include <cmath>
+#include <numeric>
+
+namespace pneumaid {
+
+ChannelMetrics CompareChannel(const std::vector<double>& measured,
+                              const std::vector<double>& simulated,
+                              std::optional<double> noise_sigma) {
+  ChannelMetrics out;
+  const std::size_t n = std::min(measured.size(), simulated.size());
+  if (n == 0) return out;
+  const double mean = std::accumulate(measured.begin(), measured.begin() + n, 0.0) / n;
+  double error_sq = 0, spread_sq = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double error = measured[i] - simulated[i];
+    error_sq += error * error;
+    spread_sq += (measured[i] - mean) * (measured[i] - mean);
+    out.max_abs = std::max(out.max_abs, std::fabs(error));
+  }
+  out.rmse = std::sqrt(error_sq / n);
+  const double spread = std::sqrt(spread_sq);
+  const double noise_floor = noise_sigma ? *noise_sigma * std::sqrt(static_cast<double>(n)) : 0.0;
+  if (spread > noise_floor && spread > 0) {
+    out.nrmse_fit_percent = 100.0 * (1.0 - std::sqrt(error_sq) / spread);
+  }
+  return out;
+}
+
+std::map<std::string, ChannelMetrics> CompareRuns(
+    const Trajectory& measured, const Trajectory& simulated,
+    const std::map<std::string, double>& noise_sigma) {
+  const std::pair<const char*, std::vector<double> Trajectory::*> channels[] = {
+      {"x", &Trajectory::x_m},
+      {"p1", &Trajectory::p1_Pa},
+      {"p2", &Trajectory::p2_Pa},
+      {"q1", &Trajectory::q1_kg_per_s},
+      {"q2", &Trajectory::q2_kg_per_s}};
+  std::map<std::string, ChannelMetrics> out;
+  for (const auto& [name, member] : channels) {
+    const auto& y = measured.*member;
+    const auto& y_sim = simulated.*member;
+    if (y.empty() || y_sim.size() != y.size()) continue;
+    const auto sigma = noise_sigma.find(name);
+    out[name] = CompareChannel(
+        y, y_sim, sigma == noise_sigma.end() ? std::nullopt : std::optional<double>(sigma->second));
+  }
+  return out;
+}
+
+std::vector<double> FirstOrderLag(const std::vector<double>& t_s, const std::vector<double>& signal,
+                                  double tau_s) {
+  if (tau_s <= 0 || signal.empty()) return signal;
+  std::vector<double> out(signal.size());
+  out[0] = signal[0];
+  for (std::size_t i = 1; i < signal.size(); ++i) {
+    const double keep = std::exp(-(t_s[i] - t_s[i - 1]) / tau_s);
+    out[i] = keep * out[i - 1] + (1 - keep) * signal[i - 1];
+  }
+  return out;
+}
+
+}  // namespace pneumaid

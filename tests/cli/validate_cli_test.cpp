@@ -1,0 +1,55 @@
+// `pneumaid validate` end to end: exit codes 0, 4 and 2, files written or not.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "cli_test_util.h"
+
+namespace pneumaid {
+namespace {
+
+using ValidateCliTest = testing::CliTest;
+
+TEST_F(ValidateCliTest, PassesOnTheTruthAndWritesReports) {
+  const std::string json = (dir_ / "report.json").string();
+  const std::string csv_dir = (dir_ / "csv").string();
+  ASSERT_EQ(
+      Run("validate --params " + testing::Source("datasets/paper-rig/truth.yaml") + " " +
+          testing::Source("datasets/paper-rig") + " --json " + json + " --csv-out " + csv_dir),
+      0)
+      << Stderr() << Stdout();
+  EXPECT_NE(Stdout().find("all thresholds met"), std::string::npos);
+  EXPECT_NE(Read(json).find("\"thresholds_met\": true"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "csv" / "step-1-validation.csv"));
+}
+
+TEST_F(ValidateCliTest, MissedThresholdExitsFourAndStillReports) {
+  const std::string json = (dir_ / "report.json").string();
+  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
+                testing::Source("datasets/paper-rig") + " --min-fit x=99.99 --json " + json),
+            4);
+  EXPECT_NE(Stdout().find("MISSED: x fit"), std::string::npos) << Stdout();
+  EXPECT_NE(Read(json).find("\"thresholds_met\": false"), std::string::npos);
+}
+
+TEST_F(ValidateCliTest, BadInputExitsTwoAndWritesNothing) {
+  const std::string json = (dir_ / "report.json").string();
+  std::string params = Read(testing::Source("configs/paper.yaml"));
+  params.replace(params.find("stroke: 0.05"), 12, "stroke: 0.08");
+  const std::string other_geometry = Write("long.yaml", params);
+  const auto before = Listing(dir_);
+  EXPECT_EQ(Run("validate --params " + other_geometry + " " +
+                testing::Source("datasets/paper-rig") + " --json " + json),
+            2);
+  EXPECT_NE(Stderr().find("geometry disagrees"), std::string::npos) << Stderr();
+  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
+                testing::Source("datasets/fleet/PVQ13-0014") + " --json " + json),
+            2);
+  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
+                testing::Source("datasets/paper-rig") + " --min-fit z=3 --json " + json),
+            2);
+  EXPECT_EQ(Listing(dir_), before);
+}
+
+}  // namespace
+}  // namespace pneumaid
