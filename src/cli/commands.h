@@ -22,5 +22,6 @@ CommandRunner AddSimulateCommand(CLI::App* app);
 CommandRunner AddSynthCommand(CLI::App* app);
 CommandRunner AddCheckCommand(CLI::App* app);
 CommandRunner AddValidateCommand(CLI::App* app);
+CommandRunner AddIdentifyCommand(CLI::App* app);
 
 }  // namespace pneumaid::cli

@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   runners[simulate] = AddSimulateCommand(simulate);
   CLI::App* check = app.add_subcommand("check", "validate unit directories without fitting");
   runners[check] = AddCheckCommand(check);
+  CLI::App* identify = app.add_subcommand("identify", "fit a parameter set to a unit's logs");
+  runners[identify] = AddIdentifyCommand(identify);
   CLI::App* validate =
       app.add_subcommand("validate", "simulate a unit's validation runs and compare");
   runners[validate] = AddValidateCommand(validate);

@@ -17,18 +17,18 @@ namespace {
 namespace fs = std::filesystem;
 
 // "<value in unit> <unit>" with the shortest round-trip decimal.
-std::string WithUnit(double si_value, const char* unit) {
+std::string WithUnit(double value_in_si, const char* unit) {
   const UnitInfo* info = FindUnit(unit);
-  return "\"" + FormatDouble((si_value - info->offset) / info->scale) + " " + unit + "\"";
+  return "\"" + FormatDouble((value_in_si - info->offset) / info->scale) + " " + unit + "\"";
 }
 
 }  // namespace
 
-double FromSI(const std::string& unit, double si_value, double atmospheric_pressure_Pa,
+double FromSI(const std::string& unit, double value_in_si, double atmospheric_pressure_Pa,
               double air_density_kg_per_m3) {
   const UnitInfo* info = FindUnit(unit);
   if (info == nullptr) throw InputError(unit, 0, 0, "unknown unit");
-  double value = si_value;
+  double value = value_in_si;
   if (info->quantity == Quantity::kVolumetricFlow) value /= air_density_kg_per_m3;
   if (info->gauge) value -= atmospheric_pressure_Pa;
   return (value - info->offset) / info->scale;

@@ -33,7 +33,7 @@ void WriteDirectoryAtomically(const std::string& directory,
 
 // SI value -> the value written in `unit` (the inverse of ToSI; flows in a
 // volumetric unit are divided by the air density first).
-double FromSI(const std::string& unit, double si_value, double atmospheric_pressure_Pa,
+double FromSI(const std::string& unit, double value_in_si, double atmospheric_pressure_Pa,
               double air_density_kg_per_m3);
 
 }  // namespace pneumaid

@@ -1,0 +1,45 @@
+// `identify`: a unit's logs -> a parameter set. Each component is a fit of
+// its own; what cannot be fitted (a missing experiment kind, a fit not yet
+// available) comes from the prior, and the report says which is which.
+#pragma once
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "pneumaid/ident/valve_fit.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/parameters.h"
+
+namespace pneumaid {
+
+enum class Component { kValve, kPipeline, kFriction };
+
+const char* ToString(Component component);
+
+struct IdentifyOptions {
+  // Components to fit (default: all). Components whose fit is not available
+  // yet (pipeline, friction) may not be requested explicitly.
+  std::set<Component> components = {Component::kValve, Component::kPipeline, Component::kFriction};
+  bool components_explicit = false;  // --only was given
+  ValveFitOptions valve;
+  std::string tool_version = "unknown";  // for provenance
+  std::string date;                      // ISO 8601, for provenance
+
+  bool IsValid(std::string* error) const;
+};
+
+struct IdentifyReport {
+  ValveFitResult valve;
+  std::vector<std::string> fitted;  // parameter paths
+  std::vector<std::string> priors;  // parameter paths taken from the prior, with why
+  std::string BriefReport() const;
+};
+
+// The unit's conditions and geometry (manifest), fitted components, priors
+// for the rest, uncertainty and provenance. Throws InputError when a requested
+// component cannot be identified at all.
+Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
+                    IdentifyReport* report);
+
+}  // namespace pneumaid

@@ -1,0 +1,73 @@
+// Identification of the valve gain K_vp(u) (seed paper Eq. 3) from valve
+// logs: the steady plateaus of a staircase, each turned into a measured K_vp
+// through Eq. 4 at the measured pressures, then one Ceres least-squares
+// problem per branch (increasing / decreasing, split by the direction of the
+// step that reached the plateau), with covariance.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/parameters.h"
+
+namespace pneumaid {
+
+struct ValveFitOptions {
+  // A plateau is averaged after max(settle_time_constants x the flow meter's
+  // declared lag, settle_fraction x its duration): the meter's lag is waited
+  // out, not mistaken for valve dynamics.
+  double settle_time_constants = 7.0;
+  double settle_fraction = 0.5;
+  // Plateaus with fewer samples left are not used.
+  int min_plateau_samples = 10;
+  // Half-width of the reported K_vp band in standard deviations.
+  double band_sigmas = 2.0;
+  // Ceres Levenberg-Marquardt iterations.
+  int max_iterations = 200;
+
+  bool IsValid(std::string* error) const;
+};
+
+// One steady plateau of a valve log.
+struct ValvePlateau {
+  std::string experiment;
+  double u_V = 0;
+  bool decreasing = false;  // reached by a step down
+  double kvp_kg_per_s = 0;  // measured K_vp
+  double kvp_sigma = 0;     // its standard error
+  int samples = 0;
+};
+
+// K_vp of one branch on a grid of u, with its band.
+struct KvpBand {
+  std::vector<double> u_V, kvp, lower, upper;
+};
+
+struct BranchFit {
+  bool fitted = false;  // false: too few plateaus, the prior is kept
+  std::string note;     // why not, or warnings
+  KvpBranchParams params;
+  std::map<std::string, double> standard_errors;  // "a" .. "q_max"
+  std::map<std::string, double> correlations;     // "a,b" -> r, |r| > 0.95 flagged
+  int plateaus = 0;
+  double initial_cost = 0, final_cost = 0;
+  int iterations = 0;
+  KvpBand band;
+};
+
+struct ValveFitResult {
+  BranchFit increasing, decreasing;
+  std::vector<ValvePlateau> plateaus;
+  std::string BriefReport() const;
+};
+
+// The plateaus of every valve experiment of `unit`. `normalization` is N of Eq. 4.
+std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
+                                               const ValveFitOptions& options);
+
+// Fits both branches; a branch without enough plateaus keeps `prior`'s values.
+ValveFitResult FitValve(const Unit& unit, const ValveParams& prior, const ValveFitOptions& options);
+
+}  // namespace pneumaid

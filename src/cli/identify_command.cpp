@@ -1,0 +1,77 @@
+#include <ctime>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "commands.h"
+#include "pneumaid/ident/identify.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_data.h"
+
+namespace pneumaid::cli {
+namespace {
+
+struct IdentifyArgs {
+  std::string unit_dir;
+  std::string only;  // "valve,pipeline"
+  std::string prior_path = PNEUMAID_DEFAULT_PRIOR;
+  std::string out_path;
+};
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  char text[32];
+  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
+  return text;
+}
+
+std::set<Component> ParseComponents(const std::string& list) {
+  std::set<Component> out;
+  std::stringstream items(list);
+  for (std::string item; std::getline(items, item, ',');) {
+    if (item == "valve") {
+      out.insert(Component::kValve);
+    } else if (item == "pipeline") {
+      out.insert(Component::kPipeline);
+    } else if (item == "friction") {
+      out.insert(Component::kFriction);
+    } else {
+      throw InputError("--only", 0, 0, "'" + item + "': expected valve, pipeline or friction");
+    }
+  }
+  return out;
+}
+
+int RunIdentify(const IdentifyArgs& args) {
+  const Parameters prior = LoadParams(args.prior_path);
+  const Unit unit = ReadUnit(args.unit_dir);
+  IdentifyOptions options;
+  if (!args.only.empty()) {
+    options.components = ParseComponents(args.only);
+    options.components_explicit = true;
+  }
+  options.tool_version = PNEUMAID_VERSION;
+  options.date = UtcNow();
+  IdentifyReport report;
+  const Parameters identified = Identify(unit, prior, options, &report);
+  std::cout << report.BriefReport();
+  SaveParams(identified, args.out_path);
+  std::cout << "wrote " << args.out_path << "\n";
+  return kSuccess;
+}
+
+}  // namespace
+
+CommandRunner AddIdentifyCommand(CLI::App* app) {
+  auto args = std::make_shared<IdentifyArgs>();
+  app->add_option("unit", args->unit_dir, "unit directory")->required();
+  app->add_option("--only", args->only,
+                  "components to fit: valve (pipeline and friction: to come)");
+  app->add_option("--prior", args->prior_path, "parameter set for what is not fitted")
+      ->capture_default_str();
+  app->add_option("--out", args->out_path, "identified parameter set (params-v1)")->required();
+  return [args]() { return RunIdentify(*args); };
+}
+
+}  // namespace pneumaid::cli

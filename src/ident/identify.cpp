@@ -1,0 +1,157 @@
+#include "pneumaid/ident/identify.h"
+
+#include <sstream>
+
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/model/parameter_table.h"
+
+namespace pneumaid {
+namespace {
+
+// The unit's own constants: conditions and geometry as its manifest states them.
+void TakeRigConstants(const Unit& unit, Parameters* params) {
+  const RigConstants& rig = unit.manifest.rig;
+  params->unit = unit.manifest.unit;
+  params->gas = rig.gas;
+  params->supply.supply_pressure_Pa = rig.supply_pressure_Pa;
+  params->supply.atmospheric_pressure_Pa = rig.atmospheric_pressure_Pa;
+  params->cylinder.area_1_m2 = rig.area_1_m2();
+  params->cylinder.area_2_m2 = rig.area_2_m2();
+  params->cylinder.stroke_m = rig.stroke_m;
+  params->cylinder.dead_volume_1_m3 = rig.dead_volume_1_m3;
+  params->cylinder.dead_volume_2_m3 = rig.dead_volume_2_m3;
+  params->cylinder.load_mass_kg = rig.load_mass_kg;
+  params->cylinder.orientation = rig.orientation;
+  params->pipeline.tube_length_m = rig.tube_length_m;
+}
+
+void ApplyBranch(const BranchFit& fit, const std::string& prefix, Parameters* params,
+                 IdentifyReport* report) {
+  for (const char* name : {"q_max", "a", "b", "c", "d"}) {
+    const std::string path = prefix + "." + name;
+    if (fit.fitted) {
+      report->fitted.push_back(path);
+      params->uncertainty[path] = fit.standard_errors.at(name);
+    } else {
+      report->priors.push_back(path + " (" + fit.note + ")");
+    }
+  }
+  report->priors.push_back(prefix + ".u_sat (fixed)");
+}
+
+bool HasKind(const Unit& unit, ExperimentKind kind) {
+  for (const auto& e : unit.experiments) {
+    if (e.entry.kind == kind) return true;
+  }
+  return false;
+}
+
+void AddPriorsUnder(const std::string& prefix, const std::string& why, IdentifyReport* report) {
+  for (const auto& info : ScalarParameterTable()) {
+    const std::string path = info.path;
+    if (path.compare(0, prefix.size(), prefix) == 0)
+      report->priors.push_back(path + " (" + why + ")");
+  }
+}
+
+std::string QuoteYaml(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string Provenance(const Unit& unit, const IdentifyOptions& options,
+                       const IdentifyReport& report) {
+  std::ostringstream out;
+  out << "{tool: " << QuoteYaml("pneumaid " + options.tool_version)
+      << ", date: " << QuoteYaml(options.date) << ", unit_directory: " << QuoteYaml(unit.directory)
+      << ", inputs: [";
+  for (std::size_t i = 0; i < unit.experiments.size(); ++i) {
+    const auto& e = unit.experiments[i];
+    out << (i ? ", " : "") << "{file: " << QuoteYaml(e.entry.file) << ", sha256: " << e.sha256
+        << "}";
+  }
+  out << "]";
+  for (const auto& [name, fit] : {std::make_pair("valve_increasing", &report.valve.increasing),
+                                  std::make_pair("valve_decreasing", &report.valve.decreasing)}) {
+    if (!fit->fitted) continue;
+    out << ", " << name << ": {final_cost: " << FormatDouble(fit->final_cost)
+        << ", iterations: " << fit->iterations << ", plateaus: " << fit->plateaus << "}";
+  }
+  out << "}";
+  return out.str();
+}
+
+}  // namespace
+
+const char* ToString(Component component) {
+  switch (component) {
+    case Component::kValve:
+      return "valve";
+    case Component::kPipeline:
+      return "pipeline";
+    case Component::kFriction:
+      return "friction";
+  }
+  return "?";
+}
+
+bool IdentifyOptions::IsValid(std::string* error) const { return valve.IsValid(error); }
+
+std::string IdentifyReport::BriefReport() const {
+  std::ostringstream out;
+  out << valve.BriefReport();
+  out << "Fitted: " << fitted.size() << " parameters";
+  for (const auto& path : fitted) out << "\n  " << path;
+  out << "\nFrom the prior: " << priors.size() << " parameters";
+  for (const auto& path : priors) out << "\n  " << path;
+  out << "\n";
+  return out.str();
+}
+
+Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
+                    IdentifyReport* report) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("identify options", 0, 0, error);
+  for (Component c : {Component::kPipeline, Component::kFriction}) {
+    if (options.components_explicit && options.components.count(c)) {
+      throw InputError("--only", 0, 0,
+                       std::string("the ") + ToString(c) +
+                           " fit is not available yet; use --only valve (the rest comes from "
+                           "--prior)");
+    }
+  }
+  Parameters params = prior;
+  params.uncertainty.clear();
+  TakeRigConstants(unit, &params);
+  *report = IdentifyReport{};
+  const bool valve_wanted = options.components.count(Component::kValve) > 0;
+  if (valve_wanted && HasKind(unit, ExperimentKind::kValve)) {
+    report->valve = FitValve(unit, prior.valve, options.valve);
+    params.valve.increasing = report->valve.increasing.params;
+    params.valve.decreasing = report->valve.decreasing.params;
+    ApplyBranch(report->valve.increasing, "valve.increasing", &params, report);
+    ApplyBranch(report->valve.decreasing, "valve.decreasing", &params, report);
+  } else if (valve_wanted && options.components_explicit) {
+    throw InputError(unit.directory + "/unit.yaml", 0, 0,
+                     "--only valve: the unit has no valve experiment to fit");
+  } else {
+    AddPriorsUnder("valve.", "no valve experiment", report);
+  }
+  AddPriorsUnder("pipeline.", "pipeline fit not available yet", report);
+  AddPriorsUnder("friction.", "friction fit not available yet", report);
+  params.provenance_yaml = Provenance(unit, options, *report);
+  const auto problems = Validate(params);
+  if (!problems.empty()) {
+    throw InputError(unit.directory, 0, 0,
+                     "the identified set is not physical: " + problems.front().path + ": " +
+                         problems.front().message);
+  }
+  return params;
+}
+
+}  // namespace pneumaid

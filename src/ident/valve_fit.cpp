@@ -1,0 +1,263 @@
+#include "pneumaid/ident/valve_fit.h"
+
+#include <ceres/ceres.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <set>
+#include <sstream>
+
+#include "pneumaid/model/kvp.h"
+#include "pneumaid/model/orifice.h"
+
+namespace pneumaid {
+namespace {
+
+constexpr int kBranchParameters = 5;  // q_max, a, b, c, d
+const char* const kParameterNames[kBranchParameters] = {"q_max", "a", "b", "c", "d"};
+
+// (K_vp(u; theta) - measured) / sigma for one plateau; theta = q_max, a, b, c, d.
+struct PlateauResidual {
+  double u_V, kvp, sigma, u_sat_V;
+
+  template <typename T>
+  bool operator()(const T* theta, T* residual) const {
+    const KvpCoefficients<T> c{theta[1], theta[2], theta[3], theta[4], theta[0], T(u_sat_V)};
+    residual[0] = (Kvp(T(u_V), c) - T(kvp)) / T(sigma);
+    return true;
+  }
+};
+
+std::array<double, kBranchParameters> Pack(const KvpBranchParams& p) {
+  return {p.q_max_kg_per_s, p.a, p.b, p.c, p.d};
+}
+
+KvpBranchParams Unpack(const double* theta, double u_sat_V) {
+  return {theta[1], theta[2], theta[3], theta[4], theta[0], u_sat_V};
+}
+
+// Enough plateaus to determine q_max (at or above u_sat) and the polynomial
+// (four distinct openings below it)? Empty when so, else why not.
+std::string Unidentifiable(const std::vector<const ValvePlateau*>& plateaus, double u_sat_V) {
+  std::set<double> below;
+  int saturated = 0;
+  for (const auto* p : plateaus) {
+    if (p->u_V >= u_sat_V) {
+      ++saturated;
+    } else {
+      below.insert(p->u_V);
+    }
+  }
+  if (saturated == 0) return "no plateau at or above u_sat: q_max is not identifiable";
+  if (below.size() < 4) return "fewer than 4 distinct openings below u_sat: a..d not identifiable";
+  return {};
+}
+
+KvpBand MakeBand(const double* theta, const double* covariance, double u_sat_V, double sigmas) {
+  using Jet = ceres::Jet<double, kBranchParameters>;
+  Jet jet_theta[kBranchParameters];
+  for (int i = 0; i < kBranchParameters; ++i) jet_theta[i] = Jet(theta[i], i);
+  const KvpCoefficients<Jet> c{jet_theta[1], jet_theta[2], jet_theta[3],
+                               jet_theta[4], jet_theta[0], Jet(u_sat_V)};
+  KvpBand band;
+  for (int k = 0; k <= 100; ++k) {
+    const double u = k / 100.0;
+    const Jet value = Kvp(Jet(u), c);
+    double variance = 0;
+    for (int i = 0; i < kBranchParameters; ++i) {
+      for (int j = 0; j < kBranchParameters; ++j) {
+        variance += value.v[i] * covariance[i * kBranchParameters + j] * value.v[j];
+      }
+    }
+    const double half_width = sigmas * std::sqrt(std::max(variance, 0.0));
+    band.u_V.push_back(u);
+    band.kvp.push_back(value.a);
+    band.lower.push_back(value.a - half_width);
+    band.upper.push_back(value.a + half_width);
+  }
+  return band;
+}
+
+BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpBranchParams& prior,
+                    const ValveFitOptions& options) {
+  BranchFit fit;
+  fit.params = prior;
+  fit.plateaus = static_cast<int>(plateaus.size());
+  fit.note = Unidentifiable(plateaus, prior.u_sat_V);
+  if (!fit.note.empty()) {
+    fit.note += "; the prior is kept";
+    return fit;
+  }
+  std::array<double, kBranchParameters> theta = Pack(prior);
+  ceres::Problem problem;
+  for (const ValvePlateau* p : plateaus) {
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<PlateauResidual, 1, kBranchParameters>(
+            new PlateauResidual{p->u_V, p->kvp_kg_per_s, p->kvp_sigma, prior.u_sat_V}),
+        nullptr, theta.data());
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_QR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = 1e-12;
+  solver_options.parameter_tolerance = 1e-12;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &problem, &summary);
+  fit.initial_cost = summary.initial_cost;
+  fit.final_cost = summary.final_cost;
+  fit.iterations = static_cast<int>(summary.iterations.size());
+  if (!summary.IsSolutionUsable()) {
+    fit.note = "Ceres did not converge (" + summary.message + "); the prior is kept";
+    return fit;
+  }
+  ceres::Covariance::Options covariance_options;
+  ceres::Covariance covariance(covariance_options);
+  std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()}};
+  double c[kBranchParameters * kBranchParameters];
+  if (!covariance.Compute(blocks, &problem) ||
+      !covariance.GetCovarianceBlock(theta.data(), theta.data(), c)) {
+    fit.note =
+        "the parameters are not identifiable from these plateaus (singular covariance); "
+        "the prior is kept";
+    return fit;
+  }
+  fit.fitted = true;
+  fit.params = Unpack(theta.data(), prior.u_sat_V);
+  for (int i = 0; i < kBranchParameters; ++i) {
+    fit.standard_errors[kParameterNames[i]] = std::sqrt(c[i * kBranchParameters + i]);
+    for (int j = i + 1; j < kBranchParameters; ++j) {
+      const double r = c[i * kBranchParameters + j] /
+                       std::sqrt(c[i * kBranchParameters + i] * c[j * kBranchParameters + j]);
+      fit.correlations[std::string(kParameterNames[i]) + "," + kParameterNames[j]] = r;
+    }
+  }
+  fit.band = MakeBand(theta.data(), c, prior.u_sat_V, options.band_sigmas);
+  return fit;
+}
+
+// Indices [begin, end) of the runs of equal command in `u`.
+std::vector<std::pair<std::size_t, std::size_t>> ConstantSegments(const std::vector<double>& u) {
+  std::vector<std::pair<std::size_t, std::size_t>> segments;
+  std::size_t begin = 0;
+  for (std::size_t i = 1; i <= u.size(); ++i) {
+    if (i == u.size() || u[i] != u[begin]) {
+      segments.push_back({begin, i});
+      begin = i;
+    }
+  }
+  return segments;
+}
+
+double Mean(const std::vector<double>& v, std::size_t begin, std::size_t end) {
+  return std::accumulate(v.begin() + begin, v.begin() + end, 0.0) /
+         static_cast<double>(end - begin);
+}
+
+}  // namespace
+
+bool ValveFitOptions::IsValid(std::string* error) const {
+  const auto fail = [error](const char* what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (!(settle_time_constants >= 0)) return fail("settle_time_constants must be >= 0");
+  if (!(settle_fraction >= 0 && settle_fraction < 1))
+    return fail("settle_fraction must be in [0, 1)");
+  if (min_plateau_samples < 2) return fail("min_plateau_samples must be >= 2");
+  if (!(band_sigmas > 0)) return fail("band_sigmas must be > 0");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  return true;
+}
+
+std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
+                                               const ValveFitOptions& options) {
+  const RigConstants& rig = unit.manifest.rig;
+  const auto orifice =
+      MakeOrificeCoefficients<double>(rig.gas.heat_capacity_ratio, rig.gas.gas_constant_J_per_kgK,
+                                      rig.gas.temperature_K, normalization);
+  const auto sensor = unit.manifest.sensors.find("q");
+  const double tau =
+      sensor != unit.manifest.sensors.end() && sensor->second.tau_s ? *sensor->second.tau_s : 0.0;
+  std::vector<ValvePlateau> plateaus;
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind != ExperimentKind::kValve) continue;
+    const auto &t = e.column("t"), &u = e.column("u"), &q = e.column("q");
+    const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
+    double previous_u = 0.0;
+    for (const auto& [begin, end] : ConstantSegments(u)) {
+      const double level = u[begin];
+      const bool decreasing = level < previous_u;
+      previous_u = level;
+      if (level <= 0) continue;  // a closed valve says nothing about K_vp
+      const double duration = t[end - 1] - t[begin];
+      const double settle =
+          std::max(options.settle_time_constants * tau, options.settle_fraction * duration);
+      std::size_t first = begin;
+      while (first < end && t[first] < t[begin] + settle) ++first;
+      if (static_cast<int>(end - first) < options.min_plateau_samples) continue;
+      const double n = static_cast<double>(end - first);
+      const double q_mean = Mean(q, first, end);
+      double spread = 0;
+      for (std::size_t i = first; i < end; ++i) spread += (q[i] - q_mean) * (q[i] - q_mean);
+      const double q_sigma = sensor != unit.manifest.sensors.end() && sensor->second.sigma
+                                 ? *sensor->second.sigma
+                                 : std::sqrt(spread / (n - 1));
+      const double up = Mean(p_up, first, end), down = Mean(p_down, first, end);
+      // Eq. 4 per unit of K_vp at the plateau's pressures.
+      const double per_kvp = orifice.flow_scale * up * FlowShape(down / up, orifice);
+      ValvePlateau plateau;
+      plateau.experiment = e.entry.id;
+      plateau.u_V = level;
+      plateau.decreasing = decreasing;
+      plateau.kvp_kg_per_s = q_mean / per_kvp;
+      plateau.kvp_sigma = std::max(q_sigma / std::sqrt(n), 1e-15) / per_kvp;
+      plateau.samples = static_cast<int>(n);
+      plateaus.push_back(plateau);
+    }
+  }
+  return plateaus;
+}
+
+ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
+                        const ValveFitOptions& options) {
+  ValveFitResult result;
+  result.plateaus = ExtractValvePlateaus(unit, prior.normalization, options);
+  std::vector<const ValvePlateau*> up, down;
+  for (const auto& p : result.plateaus) (p.decreasing ? down : up).push_back(&p);
+  result.increasing = FitBranch(up, prior.increasing, options);
+  result.decreasing = FitBranch(down, prior.decreasing, options);
+  return result;
+}
+
+std::string ValveFitResult::BriefReport() const {
+  std::ostringstream out;
+  out << "Valve K_vp fit: " << plateaus.size() << " plateaus\n";
+  for (const auto& [name, fit] :
+       {std::make_pair("increasing", &increasing), std::make_pair("decreasing", &decreasing)}) {
+    out << "  " << name << ": ";
+    if (!fit->fitted) {
+      out << "not fitted (" << fit->note << ")\n";
+      continue;
+    }
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "%d plateaus, cost %.4g -> %.4g in %d iterations; q_max %.5g +- %.2g kg/s, "
+                  "a %.4g +- %.2g, b %.4g +- %.2g, c %.4g +- %.2g, d %.4g +- %.2g\n",
+                  fit->plateaus, fit->initial_cost, fit->final_cost, fit->iterations,
+                  fit->params.q_max_kg_per_s, fit->standard_errors.at("q_max"), fit->params.a,
+                  fit->standard_errors.at("a"), fit->params.b, fit->standard_errors.at("b"),
+                  fit->params.c, fit->standard_errors.at("c"), fit->params.d,
+                  fit->standard_errors.at("d"));
+    out << line;
+    for (const auto& [pair, r] : fit->correlations) {
+      if (std::fabs(r) > 0.95) {
+        out << "    poorly separable: " << pair << " correlation " << r
+            << " (the K_vp band below is the meaningful uncertainty)\n";
+      }
+    }
+  }
+  return out.str();
+}
+
+}  // namespace pneumaid

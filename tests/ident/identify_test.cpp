@@ -1,0 +1,59 @@
+// identify on a synthetic unit: what is fitted, what comes from the prior,
+// uncertainty and provenance.
+#include "pneumaid/ident/identify.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+
+namespace pneumaid {
+namespace {
+
+const std::string kUnit = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig";
+
+bool Lists(const std::vector<std::string>& items, const std::string& prefix) {
+  return std::any_of(items.begin(), items.end(),
+                     [&](const std::string& item) { return item.rfind(prefix, 0) == 0; });
+}
+
+TEST(IdentifyTest, FitsTheValveAndSaysWhatCameFromThePrior) {
+  const Unit unit = ReadUnit(kUnit);
+  Parameters prior;
+  prior.valve.increasing.q_max_kg_per_s *= 1.3;  // a poor prior: the fit must move it
+  IdentifyReport report;
+  const Parameters p = Identify(unit, prior, IdentifyOptions{}, &report);
+  EXPECT_NEAR(p.valve.increasing.q_max_kg_per_s, 9.25e-5, 0.01 * 9.25e-5);
+  EXPECT_TRUE(Lists(report.fitted, "valve.increasing.q_max"));
+  EXPECT_TRUE(Lists(report.priors, "friction.positive.Fs"));
+  EXPECT_TRUE(Lists(report.priors, "pipeline.delta"));
+  EXPECT_GT(p.uncertainty.at("valve.decreasing.d"), 0.0);
+  EXPECT_EQ(p.uncertainty.count("friction.positive.Fs"), 0u);  // no confident number from nothing
+  EXPECT_EQ(p.unit, "paper-rig");
+  EXPECT_NE(p.provenance_yaml.find(unit.experiments.front().sha256), std::string::npos);
+  // The result is a valid params-v1 document that reads back.
+  const Parameters back = ParamsFromYaml(ParamsToYaml(p), "identified");
+  EXPECT_EQ(back.valve.decreasing.a, p.valve.decreasing.a);
+}
+
+TEST(IdentifyTest, ComponentsWithoutAFitOrDataAreRefusedWhenAskedFor) {
+  const Unit unit = ReadUnit(kUnit);
+  IdentifyReport report;
+  IdentifyOptions options;
+  options.components = {Component::kFriction};
+  options.components_explicit = true;
+  EXPECT_THROW(Identify(unit, Parameters{}, options, &report), InputError);
+  Unit no_valve = unit;
+  no_valve.experiments.erase(no_valve.experiments.begin());  // the valve staircase
+  options.components = {Component::kValve};
+  EXPECT_THROW(Identify(no_valve, Parameters{}, options, &report), InputError);
+  options.components_explicit = false;  // by default: the prior, reported as such
+  const Parameters p = Identify(no_valve, Parameters{}, options, &report);
+  EXPECT_TRUE(Lists(report.priors, "valve.increasing.a (no valve experiment)"));
+  EXPECT_EQ(p.valve.increasing.a, Parameters{}.valve.increasing.a);
+}
+
+}  // namespace
+}  // namespace pneumaid

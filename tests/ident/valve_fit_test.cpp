@@ -1,0 +1,119 @@
+// Recovery of K_vp from synthetic valve logs with a known truth, and honest
+// uncertainty over seeds.
+#include "pneumaid/ident/valve_fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/kvp.h"
+#include "pneumaid/synth/synthetic_rig.h"
+
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A valve-only synthetic unit written and read back, as a user's would be.
+Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed) {
+  Protocol protocol;
+  protocol.valve = true;
+  protocol.valve_step_V = 0.05;
+  protocol.valve_hold_s = 0.3;
+  protocol.sensors["q"] = {2e-7, 0.03, 0.0, true};
+  protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
+  protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
+  const fs::path dir = fs::path(::testing::TempDir()) / ("valve_fit_" + std::to_string(seed));
+  fs::remove_all(dir);
+  WriteDirectoryAtomically(dir.string(), UnitFiles(Synthesize(truth, protocol, seed, "V")));
+  Unit unit = ReadUnit(dir.string());
+  fs::remove_all(dir);
+  return unit;
+}
+
+// A prior 20 % off the truth in every coefficient.
+ValveParams Perturbed(const ValveParams& truth) {
+  ValveParams prior = truth;
+  for (auto* b : {&prior.increasing, &prior.decreasing}) {
+    b->a *= 1.2;
+    b->b *= 0.8;
+    b->c *= 1.2;
+    b->d *= 0.8;
+    b->q_max_kg_per_s *= 1.2;
+  }
+  return prior;
+}
+
+TEST(ValveFitTest, RecoversKvpWithinOnePercentOfQmaxOnTheBundledUnit) {
+  const std::string dir = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig";
+  const Parameters truth = LoadParams(dir + "/truth.yaml");
+  const ValveFitResult fit = FitValve(ReadUnit(dir), Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+    ASSERT_TRUE(fitted->fitted) << fitted->note;
+    const auto c_fit = MakeKvpCoefficients<double>(fitted->params);
+    const auto c_true = MakeKvpCoefficients<double>(*real);
+    double worst = 0;
+    for (int k = 0; k <= 1000; ++k) {
+      const double u = k / 1000.0;
+      worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real->q_max_kg_per_s);
+    }
+    EXPECT_LT(worst, 0.01);  // issue 4: within 1 % of q_max at every u in [0, 1]
+  }
+  EXPECT_EQ(fit.plateaus.size(), 39u);  // 20 up (0.05 .. 1) + 19 down (0.95 .. 0.05); u = 0 skipped
+}
+
+TEST(ValveFitTest, StandardErrorsAndBandAreHonestOverSeeds) {
+  const Parameters truth;
+  int inside = 0, total = 0, band_inside = 0, band_total = 0;
+  std::vector<double> z;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const ValveFitResult fit =
+        FitValve(SyntheticValveUnit(truth, seed), truth.valve, ValveFitOptions{});
+    for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                       std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+      ASSERT_TRUE(fitted->fitted) << fitted->note;
+      const double values[] = {fitted->params.q_max_kg_per_s, fitted->params.a, fitted->params.b,
+                               fitted->params.c, fitted->params.d};
+      const double truths[] = {real->q_max_kg_per_s, real->a, real->b, real->c, real->d};
+      const char* names[] = {"q_max", "a", "b", "c", "d"};
+      for (int i = 0; i < 5; ++i) {
+        const double score = (values[i] - truths[i]) / fitted->standard_errors.at(names[i]);
+        z.push_back(score);
+        inside += std::fabs(score) <= 3.0;
+        ++total;
+      }
+      const auto c_true = MakeKvpCoefficients<double>(*real);
+      for (std::size_t k = 0; k < fitted->band.u_V.size(); ++k) {
+        const double truth_k = Kvp(fitted->band.u_V[k], c_true);
+        band_inside += truth_k >= fitted->band.lower[k] && truth_k <= fitted->band.upper[k];
+        ++band_total;
+      }
+    }
+  }
+  double sum_sq = 0;
+  for (double s : z) sum_sq += s * s;
+  const double spread = std::sqrt(sum_sq / z.size());
+  std::cout << "within 3 SE: " << inside << "/" << total << ", z spread " << spread
+            << ", band coverage " << band_inside << "/" << band_total << "\n";
+  EXPECT_GE(inside, 0.9 * total);
+  EXPECT_GE(spread, 0.5);
+  EXPECT_LE(spread, 2.0);
+  EXPECT_GE(band_inside, 0.9 * band_total);
+}
+
+TEST(ValveFitTest, TooFewPlateausKeepThePriorAndSaySo) {
+  Unit unit;
+  unit.manifest.unit = "empty";
+  const ValveFitResult fit = FitValve(unit, ValveParams{}, ValveFitOptions{});
+  EXPECT_FALSE(fit.increasing.fitted);
+  EXPECT_NE(fit.increasing.note.find("not identifiable"), std::string::npos);
+  EXPECT_EQ(fit.increasing.params.a, ValveParams{}.increasing.a);
+}
+
+}  // namespace
+}  // namespace pneumaid
