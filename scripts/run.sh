@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The main job on the bundled data: check the bundled unit datasets/paper-rig
-# (synthetic), identify it (today: the valve's K_vp from its valve log; the
-# pipeline and friction fits are still to come and are taken from the prior,
-# configs/paper.yaml, as the report says), then validate the identified set on
+# (synthetic), identify it (today: the valve's K_vp and the tube lag delta; the
+# friction fit is still to come and is taken from the prior, configs/paper.yaml,
+# as the report says), then validate the identified set on
 # the unit's validation runs. Results go to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."

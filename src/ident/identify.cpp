@@ -82,8 +82,45 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
     out << ", " << name << ": {final_cost: " << FormatDouble(fit->final_cost)
         << ", iterations: " << fit->iterations << ", plateaus: " << fit->plateaus << "}";
   }
+  if (report.pipeline.fitted) {
+    out << ", pipeline: {delta_at_rig: " << FormatDouble(report.pipeline.delta_at_rig_per_s)
+        << ", tubes: " << report.pipeline.tubes.size() << "}";
+  }
   out << "}";
   return out.str();
+}
+
+void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
+                      Parameters* params, IdentifyReport* report) {
+  if (!options.components.count(Component::kPipeline)) {
+    AddPriorsUnder("pipeline.", "not requested", report);
+    return;
+  }
+  if (!HasKind(unit, ExperimentKind::kPipeline)) {
+    if (options.components_explicit) {
+      throw InputError(unit.directory + "/unit.yaml", 0, 0,
+                       "--only pipeline: the unit has no pipeline experiment to fit");
+    }
+    AddPriorsUnder("pipeline.", "no pipeline experiment", report);
+    return;
+  }
+  PipelineFitOptions pipeline_options = options.pipeline;
+  pipeline_options.initial_delta_per_s = prior.pipeline.delta_per_s;
+  report->pipeline = FitPipeline(unit, pipeline_options);
+  const PipelineFitResult& fit = report->pipeline;
+  if (!fit.fitted) {
+    AddPriorsUnder("pipeline.", fit.note, report);
+    return;
+  }
+  params->pipeline.delta_by_length.clear();
+  for (const auto& tube : fit.tubes) {
+    if (tube.fitted)
+      params->pipeline.delta_by_length.push_back({tube.tube_length_m, tube.delta_per_s});
+  }
+  params->pipeline.delta_per_s = fit.delta_at_rig_per_s;
+  params->uncertainty["pipeline.delta"] = fit.delta_at_rig_standard_error;
+  report->fitted.push_back("pipeline.delta");
+  report->fitted.push_back("pipeline.delta_by_length");
 }
 
 }  // namespace
@@ -100,11 +137,13 @@ const char* ToString(Component component) {
   return "?";
 }
 
-bool IdentifyOptions::IsValid(std::string* error) const { return valve.IsValid(error); }
+bool IdentifyOptions::IsValid(std::string* error) const {
+  return valve.IsValid(error) && pipeline.IsValid(error);
+}
 
 std::string IdentifyReport::BriefReport() const {
   std::ostringstream out;
-  out << valve.BriefReport();
+  out << valve.BriefReport() << pipeline.BriefReport();
   out << "Fitted: " << fitted.size() << " parameters";
   for (const auto& path : fitted) out << "\n  " << path;
   out << "\nFrom the prior: " << priors.size() << " parameters";
@@ -117,13 +156,10 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
                     IdentifyReport* report) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("identify options", 0, 0, error);
-  for (Component c : {Component::kPipeline, Component::kFriction}) {
-    if (options.components_explicit && options.components.count(c)) {
-      throw InputError("--only", 0, 0,
-                       std::string("the ") + ToString(c) +
-                           " fit is not available yet; use --only valve (the rest comes from "
-                           "--prior)");
-    }
+  if (options.components_explicit && options.components.count(Component::kFriction)) {
+    throw InputError("--only", 0, 0,
+                     "the friction fit is not available yet; use --only valve,pipeline (the rest "
+                     "comes from --prior)");
   }
   Parameters params = prior;
   params.uncertainty.clear();
@@ -142,7 +178,7 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   } else {
     AddPriorsUnder("valve.", "no valve experiment", report);
   }
-  AddPriorsUnder("pipeline.", "pipeline fit not available yet", report);
+  IdentifyPipeline(unit, prior, options, &params, report);
   AddPriorsUnder("friction.", "friction fit not available yet", report);
   params.provenance_yaml = Provenance(unit, options, *report);
   const auto problems = Validate(params);

@@ -28,7 +28,10 @@ TEST(IdentifyTest, FitsTheValveAndSaysWhatCameFromThePrior) {
   EXPECT_NEAR(p.valve.increasing.q_max_kg_per_s, 9.25e-5, 0.01 * 9.25e-5);
   EXPECT_TRUE(Lists(report.fitted, "valve.increasing.q_max"));
   EXPECT_TRUE(Lists(report.priors, "friction.positive.Fs"));
-  EXPECT_TRUE(Lists(report.priors, "pipeline.delta"));
+  EXPECT_TRUE(Lists(report.fitted, "pipeline.delta"));
+  EXPECT_NEAR(p.pipeline.delta_per_s, 8.0, 0.05 * 8.0);
+  EXPECT_EQ(p.pipeline.delta_by_length.size(), 4u);
+  EXPECT_GT(p.uncertainty.at("pipeline.delta"), 0.0);
   EXPECT_GT(p.uncertainty.at("valve.decreasing.d"), 0.0);
   EXPECT_EQ(p.uncertainty.count("friction.positive.Fs"), 0u);  // no confident number from nothing
   EXPECT_EQ(p.unit, "paper-rig");

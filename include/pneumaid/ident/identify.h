@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "pneumaid/ident/pipeline_fit.h"
 #include "pneumaid/ident/valve_fit.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/parameters.h"
@@ -18,11 +19,12 @@ enum class Component { kValve, kPipeline, kFriction };
 const char* ToString(Component component);
 
 struct IdentifyOptions {
-  // Components to fit (default: all). Components whose fit is not available
-  // yet (pipeline, friction) may not be requested explicitly.
+  // Components to fit (default: all). The friction fit is not available yet
+  // and may not be requested explicitly.
   std::set<Component> components = {Component::kValve, Component::kPipeline, Component::kFriction};
   bool components_explicit = false;  // --only was given
   ValveFitOptions valve;
+  PipelineFitOptions pipeline;           // initial_delta_per_s is taken from the prior
   std::string tool_version = "unknown";  // for provenance
   std::string date;                      // ISO 8601, for provenance
 
@@ -31,6 +33,7 @@ struct IdentifyOptions {
 
 struct IdentifyReport {
   ValveFitResult valve;
+  PipelineFitResult pipeline;
   std::vector<std::string> fitted;  // parameter paths
   std::vector<std::string> priors;  // parameter paths taken from the prior, with why
   std::string BriefReport() const;
