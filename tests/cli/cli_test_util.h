@@ -21,9 +21,10 @@ inline std::string Source(const std::string& relative) {
 class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
+    // Suite and test name: ctest runs tests of different suites in parallel.
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     dir_ = std::filesystem::path(::testing::TempDir()) /
-           ("pneumaid_cli_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("pneumaid_cli_" + std::string(info->test_suite_name()) + "_" + info->name());
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
