@@ -22,4 +22,15 @@ struct Trajectory {
   std::size_t size() const { return t_s.size(); }
 };
 
+// The channels a measured and a simulated run are compared on.
+struct TrajectoryChannel {
+  const char* name;
+  std::vector<double> Trajectory::*values;
+};
+inline constexpr TrajectoryChannel kComparedChannels[] = {{"x", &Trajectory::x_m},
+                                                          {"p1", &Trajectory::p1_Pa},
+                                                          {"p2", &Trajectory::p2_Pa},
+                                                          {"q1", &Trajectory::q1_kg_per_s},
+                                                          {"q2", &Trajectory::q2_kg_per_s}};
+
 }  // namespace pneumaid

@@ -4,6 +4,9 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <map>
+#include <string>
+#include <vector>
 
 namespace pneumaid::cli {
 
@@ -17,6 +20,12 @@ enum ExitStatus : int {
 };
 
 using CommandRunner = std::function<int()>;
+
+// "KEY=NUMBER" items of a repeatable option -> map. `expected` describes the
+// form in the error message; `key_allowed` (may be empty) vets each key.
+std::map<std::string, double> ParseAssignments(
+    const std::vector<std::string>& items, const std::string& option, const std::string& expected,
+    const std::function<bool(const std::string&)>& key_allowed = {});
 
 CommandRunner AddSimulateCommand(CLI::App* app);
 CommandRunner AddSynthCommand(CLI::App* app);

@@ -23,27 +23,13 @@ struct SynthArgs {
   std::vector<std::string> scale;   // "path=factor"
 };
 
-// "a.b=0.05" items -> map; `what` names the option in messages.
-std::map<std::string, double> ParseAssignments(const std::vector<std::string>& items,
-                                               const std::string& what) {
-  std::map<std::string, double> out;
-  for (const auto& item : items) {
-    const auto eq = item.find('=');
-    char* end = nullptr;
-    const double value = eq == std::string::npos ? 0 : std::strtod(item.c_str() + eq + 1, &end);
-    if (eq == std::string::npos || eq == 0 || end == item.c_str() + eq + 1 || *end != '\0') {
-      throw InputError(what, 0, 0, "'" + item + "': expected PATH=NUMBER, e.g. valve.*.q_max=0.05");
-    }
-    out[item.substr(0, eq)] = value;
-  }
-  return out;
-}
+const char* const kPathNumber = "PATH=NUMBER, e.g. valve.*.q_max=0.05";
 
 int RunSynth(const SynthArgs& args) {
   Parameters truth = LoadParams(args.truth_path);
   const Protocol protocol = LoadProtocol(args.protocol_path);
-  truth = ApplySpread(truth, ParseAssignments(args.spread, "--spread"), args.seed);
-  truth = ApplyScale(truth, ParseAssignments(args.scale, "--scale"));
+  truth = ApplySpread(truth, ParseAssignments(args.spread, "--spread", kPathNumber), args.seed);
+  truth = ApplyScale(truth, ParseAssignments(args.scale, "--scale", kPathNumber));
   const std::string unit_id = args.unit_id.empty() ? truth.unit : args.unit_id;
   const SyntheticUnit unit = Synthesize(truth, protocol, args.seed, unit_id);
   WriteDirectoryAtomically(args.out_dir, UnitFiles(unit));

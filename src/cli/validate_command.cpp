@@ -24,24 +24,16 @@ struct ValidateArgs {
   std::vector<std::string> experiments;
 };
 
+// "x=95" items: a channel of the comparison and a number.
 std::map<std::string, double> Thresholds(const std::vector<std::string>& items,
                                          const std::string& option) {
-  std::map<std::string, double> out;
-  for (const auto& item : items) {
-    const auto eq = item.find('=');
-    char* end = nullptr;
-    const double value = eq == std::string::npos ? 0 : std::strtod(item.c_str() + eq + 1, &end);
-    const std::string channel = item.substr(0, eq);
-    if (eq == std::string::npos || end == item.c_str() + eq + 1 || *end != '\0' ||
-        (channel != "x" && channel != "p1" && channel != "p2" && channel != "q1" &&
-         channel != "q2")) {
-      throw InputError(
-          option, 0, 0,
-          "'" + item + "': expected CHANNEL=NUMBER with CHANNEL one of x, p1, p2, q1, q2");
-    }
-    out[channel] = value;
-  }
-  return out;
+  return ParseAssignments(items, option, "CHANNEL=NUMBER with CHANNEL one of x, p1, p2, q1, q2",
+                          [](const std::string& channel) {
+                            for (const auto& c : kComparedChannels) {
+                              if (channel == c.name) return true;
+                            }
+                            return false;
+                          });
 }
 
 int RunValidate(const ValidateArgs& args) {

@@ -31,14 +31,8 @@ ChannelMetrics CompareChannel(const std::vector<double>& measured,
 std::map<std::string, ChannelMetrics> CompareRuns(
     const Trajectory& measured, const Trajectory& simulated,
     const std::map<std::string, double>& noise_sigma) {
-  const std::pair<const char*, std::vector<double> Trajectory::*> channels[] = {
-      {"x", &Trajectory::x_m},
-      {"p1", &Trajectory::p1_Pa},
-      {"p2", &Trajectory::p2_Pa},
-      {"q1", &Trajectory::q1_kg_per_s},
-      {"q2", &Trajectory::q2_kg_per_s}};
   std::map<std::string, ChannelMetrics> out;
-  for (const auto& [name, member] : channels) {
+  for (const auto& [name, member] : kComparedChannels) {
     const auto& y = measured.*member;
     const auto& y_sim = simulated.*member;
     if (y.empty() || y_sim.size() != y.size()) continue;

@@ -273,17 +273,11 @@ std::string ReportToJson(const ValidationReport& report) {
 }
 
 std::string ComparisonToCsv(const ExperimentValidation& e) {
-  const std::pair<const char*, std::vector<double> Trajectory::*> channels[] = {
-      {"x", &Trajectory::x_m},
-      {"p1", &Trajectory::p1_Pa},
-      {"p2", &Trajectory::p2_Pa},
-      {"q1", &Trajectory::q1_kg_per_s},
-      {"q2", &Trajectory::q2_kg_per_s}};
   std::ostringstream out;
   out << "# pneumaid validate: " << e.id << ", measured and simulated, SI (x from mid-stroke, "
       << "pressures absolute, mass flows)\nt,u";
   std::vector<const std::vector<double>*> columns = {&e.measured.t_s, &e.measured.u_V};
-  for (const auto& [name, member] : channels) {
+  for (const auto& [name, member] : kComparedChannels) {
     if ((e.measured.*member).empty() || (e.simulated.*member).size() != e.measured.size()) continue;
     out << "," << name << (name[0] == 'q' ? " [kg/s]" : "") << "," << name << "_sim"
         << (name[0] == 'q' ? " [kg/s]" : "");

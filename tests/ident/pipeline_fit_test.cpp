@@ -6,25 +6,20 @@
 #include <cmath>
 #include <filesystem>
 
+#include "../synth/synth_test_util.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/synth/synthetic_rig.h"
 
 namespace pneumaid {
 namespace {
 
-namespace fs = std::filesystem;
-
 Unit SyntheticTubes(const Parameters& truth, std::uint64_t seed) {
   Protocol protocol;
   protocol.tube_lengths_m = {0.09, 0.38, 1.2};
   protocol.sensors["q_in"] = {2e-7, 0.03, 0.0, true};
   protocol.sensors["q_out"] = {2e-7, 0.03, 0.0, true};
-  const fs::path dir = fs::path(::testing::TempDir()) / ("pipeline_fit_" + std::to_string(seed));
-  fs::remove_all(dir);
-  WriteDirectoryAtomically(dir.string(), UnitFiles(Synthesize(truth, protocol, seed, "P")));
-  Unit unit = ReadUnit(dir.string());
-  fs::remove_all(dir);
-  return unit;
+  return testing::WriteAndReadUnit(Synthesize(truth, protocol, seed, "P"),
+                                   "pipeline_fit_" + std::to_string(seed));
 }
 
 TEST(PipelineFitTest, RecoversDeltaWithinFivePercentFromAPriorThirtyPercentOff) {

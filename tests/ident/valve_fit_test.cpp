@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "../synth/synth_test_util.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/kvp.h"
@@ -14,8 +15,6 @@
 
 namespace pneumaid {
 namespace {
-
-namespace fs = std::filesystem;
 
 // A valve-only synthetic unit written and read back, as a user's would be.
 Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed) {
@@ -26,12 +25,8 @@ Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed) {
   protocol.sensors["q"] = {2e-7, 0.03, 0.0, true};
   protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
   protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
-  const fs::path dir = fs::path(::testing::TempDir()) / ("valve_fit_" + std::to_string(seed));
-  fs::remove_all(dir);
-  WriteDirectoryAtomically(dir.string(), UnitFiles(Synthesize(truth, protocol, seed, "V")));
-  Unit unit = ReadUnit(dir.string());
-  fs::remove_all(dir);
-  return unit;
+  return testing::WriteAndReadUnit(Synthesize(truth, protocol, seed, "V"),
+                                   "valve_fit_" + std::to_string(seed));
 }
 
 // A prior 20 % off the truth in every coefficient.

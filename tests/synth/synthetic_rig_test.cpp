@@ -11,6 +11,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/sim/simulate.h"
+#include "synth_test_util.h"
 
 namespace pneumaid {
 namespace {
@@ -33,14 +34,7 @@ Protocol SmallProtocol(double noise_scale) {
   return p;
 }
 
-Unit WriteAndRead(const SyntheticUnit& unit, const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) / name;
-  fs::remove_all(dir);
-  WriteDirectoryAtomically(dir.string(), UnitFiles(unit));
-  Unit read = ReadUnit(dir.string());
-  fs::remove_all(dir);
-  return read;
-}
+using testing::WriteAndReadUnit;
 
 const Experiment& Find(const Unit& unit, const std::string& id) {
   for (const auto& e : unit.experiments) {
@@ -65,7 +59,7 @@ std::vector<double> Lagged(const std::vector<double>& signal, double period, dou
 
 TEST(SyntheticRigTest, NoiseFreeRoundTripIsTheTruthThroughTheSensorModel) {
   const Parameters truth;
-  const Unit unit = WriteAndRead(Synthesize(truth, SmallProtocol(0.0), 7, "RT-0"), "synth_rt0");
+  const Unit unit = WriteAndReadUnit(Synthesize(truth, SmallProtocol(0.0), 7, "RT-0"), "synth_rt0");
   EXPECT_EQ(unit.manifest.rig.position_origin, PositionOrigin::kRetracted);
   const Experiment& step = Find(unit, "step-1");
   const Trajectory run = TruthRun(truth, step);
@@ -83,7 +77,8 @@ TEST(SyntheticRigTest, NoiseFreeRoundTripIsTheTruthThroughTheSensorModel) {
 
 TEST(SyntheticRigTest, NoisyRoundTripResidualsMatchTheDeclaredNoise) {
   const Parameters truth;
-  const Unit unit = WriteAndRead(Synthesize(truth, SmallProtocol(1.0), 11, "RT-1"), "synth_rt1");
+  const Unit unit =
+      WriteAndReadUnit(Synthesize(truth, SmallProtocol(1.0), 11, "RT-1"), "synth_rt1");
   const Experiment& step = Find(unit, "step-1");
   const Trajectory run = TruthRun(truth, step);
   double sum = 0, sum_sq = 0, worst_x = 0;
@@ -104,7 +99,7 @@ TEST(SyntheticRigTest, NoisyRoundTripResidualsMatchTheDeclaredNoise) {
 
 TEST(SyntheticRigTest, ValveTestShowsBothBranchesThroughTheMeterLag) {
   const Parameters truth;
-  const Unit unit = WriteAndRead(Synthesize(truth, SmallProtocol(0.0), 3, "V"), "synth_valve");
+  const Unit unit = WriteAndReadUnit(Synthesize(truth, SmallProtocol(0.0), 3, "V"), "synth_valve");
   const Experiment& valve = Find(unit, "valve-staircase");
   const auto& u = valve.column("u");
   const auto& q = valve.column("q");
@@ -157,9 +152,10 @@ TEST(SyntheticRigTest, MeasureSignalLagIsExactForHeldInput) {
 TEST(SyntheticRigTest, HiddenEffectActsWithoutBeingDeclared) {
   Parameters truth;
   truth.effects["flow_sensor_lag"] = {{"tau", 0.05}};
-  const Unit hidden = WriteAndRead(Synthesize(truth, SmallProtocol(0.0), 1, "H"), "synth_hidden");
+  const Unit hidden =
+      WriteAndReadUnit(Synthesize(truth, SmallProtocol(0.0), 1, "H"), "synth_hidden");
   const Unit plain =
-      WriteAndRead(Synthesize(Parameters{}, SmallProtocol(0.0), 1, "H"), "synth_plain");
+      WriteAndReadUnit(Synthesize(Parameters{}, SmallProtocol(0.0), 1, "H"), "synth_plain");
   EXPECT_EQ(hidden.manifest.sensors.at("q1").tau_s, plain.manifest.sensors.at("q1").tau_s);
   const auto& q_hidden = Find(hidden, "pipe-038").column("q_in");
   const auto& q_plain = Find(plain, "pipe-038").column("q_in");

@@ -1,0 +1,26 @@
+#include <cstdlib>
+
+#include "commands.h"
+#include "pneumaid/io/input_error.h"
+
+namespace pneumaid::cli {
+
+std::map<std::string, double> ParseAssignments(
+    const std::vector<std::string>& items, const std::string& option, const std::string& expected,
+    const std::function<bool(const std::string&)>& key_allowed) {
+  std::map<std::string, double> out;
+  for (const auto& item : items) {
+    const auto eq = item.find('=');
+    char* end = nullptr;
+    const double value = eq == std::string::npos ? 0 : std::strtod(item.c_str() + eq + 1, &end);
+    const std::string key = item.substr(0, eq);
+    if (eq == std::string::npos || eq == 0 || end == item.c_str() + eq + 1 || *end != '\0' ||
+        (key_allowed && !key_allowed(key))) {
+      throw InputError(option, 0, 0, "'" + item + "': expected " + expected);
+    }
+    out[key] = value;
+  }
+  return out;
+}
+
+}  // namespace pneumaid::cli
