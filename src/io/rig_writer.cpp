@@ -115,6 +115,9 @@ void WriteDirectoryAtomically(const std::string& directory,
       WriteFileAtomically((temporary / name).string(), contents);
     if (fs::exists(target)) fs::remove(target);  // empty, checked above
     fs::rename(temporary, target);
+  } catch (const fs::filesystem_error& failure) {
+    fs::remove_all(temporary, error);
+    throw InputError(directory, 0, 0, std::string("cannot move into place: ") + failure.what());
   } catch (...) {
     fs::remove_all(temporary, error);
     throw;
