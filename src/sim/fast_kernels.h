@@ -5,7 +5,7 @@
 // so its generic kernels cost ~20 000 instructions per BDF step for an 8-state
 // model, 6x more than our right-hand side. SUNDIALS lets a program install its
 // own kernels through the ops tables of its objects; clones inherit them.
-// The numbers are the same (same algorithms), only the code is compiled -O2.
+// The numbers are the same (same algorithms), only the code is optimised.
 #pragma once
 
 #include <nvector/nvector_serial.h>
