@@ -23,7 +23,7 @@ TEST(ValidateTest, TheTruthValidatesOnItsOwnSyntheticUnit) {
   EXPECT_TRUE(report.thresholds_met()) << report.BriefReport();
   for (const auto& e : report.experiments) {
     EXPECT_GT(*e.channels.at("x").nrmse_fit_percent, 99.0) << e.id;
-    EXPECT_LT(e.channels.at("p1").rmse, 0.05e5) << e.id;
+    EXPECT_LT(e.channels.at("p1").rmse, 1000.0) << e.id;  // ~3x the 300 Pa sensor noise
     EXPECT_EQ(e.simulated.size(), e.measured.size());
   }
   // Flows are compared through the declared 30 ms meter lag: without it the
