@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "pneumaid/eval/lag.h"
+
 namespace pneumaid {
 
 ChannelMetrics CompareChannel(const std::vector<double>& measured,
@@ -45,13 +47,9 @@ std::map<std::string, ChannelMetrics> CompareRuns(
 
 std::vector<double> FirstOrderLag(const std::vector<double>& t_s, const std::vector<double>& signal,
                                   double tau_s) {
-  if (tau_s <= 0 || signal.empty()) return signal;
-  std::vector<double> out(signal.size());
-  out[0] = signal[0];
-  for (std::size_t i = 1; i < signal.size(); ++i) {
-    const double keep = std::exp(-(t_s[i] - t_s[i - 1]) / tau_s);
-    out[i] = keep * out[i - 1] + (1 - keep) * signal[i - 1];
-  }
+  std::vector<double> out = signal;
+  if (tau_s > 0)
+    ApplyFirstOrderLag([&t_s](std::size_t i) { return t_s[i] - t_s[i - 1]; }, tau_s, &out);
   return out;
 }
 

@@ -13,16 +13,13 @@ namespace {
 void TakeRigConstants(const Unit& unit, Parameters* params) {
   const RigConstants& rig = unit.manifest.rig;
   params->unit = unit.manifest.unit;
-  params->gas = rig.gas;
-  params->supply.supply_pressure_Pa = rig.supply_pressure_Pa;
-  params->supply.atmospheric_pressure_Pa = rig.atmospheric_pressure_Pa;
+  ApplyRigConditions(rig, params);
+  params->gas = rig.gas;  // the unit's gas whole, not only its temperature
   params->cylinder.area_1_m2 = rig.area_1_m2();
   params->cylinder.area_2_m2 = rig.area_2_m2();
   params->cylinder.stroke_m = rig.stroke_m;
   params->cylinder.dead_volume_1_m3 = rig.dead_volume_1_m3;
   params->cylinder.dead_volume_2_m3 = rig.dead_volume_2_m3;
-  params->cylinder.load_mass_kg = rig.load_mass_kg;
-  params->cylinder.orientation = rig.orientation;
   params->pipeline.tube_length_m = rig.tube_length_m;
 }
 

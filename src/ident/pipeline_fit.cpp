@@ -6,22 +6,10 @@
 #include <cstdio>
 #include <sstream>
 
+#include "pneumaid/eval/lag.h"
+
 namespace pneumaid {
 namespace {
-
-// A first-order lag of time constant tau over samples held between times
-// (exact for a held input), as the rig's instruments and Eq. 5 act.
-template <typename T>
-void LagInPlace(const std::vector<double>& t, const T& tau, std::vector<T>* signal) {
-  using std::exp;
-  T previous_input = (*signal)[0];
-  for (std::size_t i = 1; i < signal->size(); ++i) {
-    const T keep = exp(-T(t[i] - t[i - 1]) / tau);
-    const T input = (*signal)[i];
-    (*signal)[i] = keep * (*signal)[i - 1] + (T(1.0) - keep) * previous_input;
-    previous_input = input;
-  }
-}
 
 // Residuals of both meters for theta = (flow amplitude [kg/s], delta [1/s]):
 // the valve's flow is a step at the command's step time; q_in is it through
@@ -38,10 +26,11 @@ struct TubeStepResiduals {
     const std::size_t n = t->size();
     std::vector<T> flow(n);
     for (std::size_t i = 0; i < n; ++i) flow[i] = (*t)[i] >= step_time_s ? theta[0] : T(0.0);
+    const auto interval = [this](std::size_t i) { return (*t)[i] - (*t)[i - 1]; };
     std::vector<T> inlet = flow;
-    if (tau_in_s > 0) LagInPlace(*t, T(tau_in_s), &inlet);
-    LagInPlace(*t, T(1.0) / theta[1], &flow);
-    if (tau_out_s > 0) LagInPlace(*t, T(tau_out_s), &flow);
+    if (tau_in_s > 0) ApplyFirstOrderLag(interval, T(tau_in_s), &inlet);
+    ApplyFirstOrderLag(interval, T(1.0) / theta[1], &flow);
+    if (tau_out_s > 0) ApplyFirstOrderLag(interval, T(tau_out_s), &flow);
     for (std::size_t i = 0; i < n; ++i) {
       residuals[i] = (inlet[i] - (*q_in)[i]) / sigma_in;
       residuals[n + i] = (flow[i] - (*q_out)[i]) / sigma_out;

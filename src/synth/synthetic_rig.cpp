@@ -4,6 +4,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "pneumaid/eval/lag.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/actuator.h"
@@ -15,7 +16,8 @@ namespace pneumaid {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kAirDensity_kg_per_m3 = 1.178;  // the spec's default, standard conditions
+// The rig-data format's default air density: standard conditions.
+const double kAirDensity_kg_per_m3 = RigConstants{}.air_density_kg_per_m3;
 constexpr double kHysteresisThreshold_V = 0.01;
 
 // One random stream per experiment, derived from the seed and the experiment
@@ -36,22 +38,20 @@ std::vector<double> SampleTimes(double duration_s, double rate_Hz) {
   return UniformTimes(0.0, duration_s, rate_Hz);
 }
 
-// First-order lag of a sampled signal held between samples.
+// First-order lag of a signal sampled every period_s and held between samples.
 std::vector<double> Lag(const std::vector<double>& signal, double period_s, double tau_s) {
-  if (tau_s <= 0 || signal.empty()) return signal;
-  const double keep = std::exp(-period_s / tau_s);
-  std::vector<double> out(signal.size());
-  out[0] = signal[0];
-  for (std::size_t i = 1; i < signal.size(); ++i) {
-    out[i] = keep * out[i - 1] + (1 - keep) * signal[i - 1];
-  }
+  std::vector<double> out = signal;
+  if (tau_s > 0) ApplyFirstOrderLag([period_s](std::size_t) { return period_s; }, tau_s, &out);
   return out;
 }
 
 class RigBuilder {
  public:
   RigBuilder(const Parameters& truth, const Protocol& protocol, std::uint64_t seed)
-      : truth_(truth), protocol_(protocol), seed_(seed) {}
+      : truth_(truth),
+        protocol_(protocol),
+        seed_(seed),
+        coefficients_(MakeActuatorCoefficients<double>(truth, ModelRegularization{})) {}
 
   Manifest MakeManifest(const std::string& unit_id) const {
     Manifest m;
@@ -146,7 +146,7 @@ class RigBuilder {
   // Mass flow [kg/s] through one valve of the truth at opening u, branch as
   // latched, from p_up to p_down; honours valve_deadzone.
   double ValveFlow(double opening_V, bool decreasing, double p_up, double p_down) const {
-    const auto c = MakeActuatorCoefficients<double>(truth_, ModelRegularization{});
+    const auto& c = coefficients_;
     const auto& branch = decreasing ? c.decreasing : c.increasing;
     const double gain = Kvp(EffectiveOpening(opening_V, c.deadzone_V), branch);
     return OrificeMassFlow(gain, p_up, p_down, c.orifice);
@@ -323,6 +323,7 @@ class RigBuilder {
   const Parameters& truth_;
   const Protocol& protocol_;
   std::uint64_t seed_;
+  ActuatorCoefficients<double> coefficients_;  // of the truth, for the valve and tube tests
 };
 
 bool PathMatches(const std::string& pattern, const std::string& path) {

@@ -199,11 +199,7 @@ Parameters WithRigConditions(const Parameters& params, const Unit& unit) {
   CheckGeometry(unit, "rig.cylinder.dead_volume_2", rig.dead_volume_2_m3,
                 params.cylinder.dead_volume_2_m3, Stated(m, "rig.cylinder.dead_volume_2"));
   Parameters out = params;
-  out.supply.supply_pressure_Pa = rig.supply_pressure_Pa;
-  out.supply.atmospheric_pressure_Pa = rig.atmospheric_pressure_Pa;
-  out.gas.temperature_K = rig.gas.temperature_K;
-  out.cylinder.orientation = rig.orientation;
-  out.cylinder.load_mass_kg = rig.load_mass_kg;
+  ApplyRigConditions(rig, &out);
   return out;
 }
 

@@ -99,6 +99,10 @@ Unit ReadUnit(const std::string& directory);
 Experiment ParseExperiment(const std::string& text, const std::string& path,
                            const ExperimentEntry& entry, const Manifest& manifest);
 
+// A log's conditions into a parameter set ("which constants win"): supply and
+// atmospheric pressure, gas temperature, orientation and load mass.
+void ApplyRigConditions(const RigConstants& rig, Parameters* params);
+
 // When `csv_path` is one of the logs listed in the unit.yaml beside it, that
 // log read as its unit's manifest says (origin, units, gauge pressures);
 // otherwise nothing. Throws InputError for a malformed manifest or log.
