@@ -56,10 +56,17 @@ class ProtocolReader : internal::YamlReader {
       if (pipe["duration"]) p.pipeline_duration_s = Positive(pipe["duration"], "pipeline.duration");
     }
     if (const YAML::Node stroke = root["stroke"]) {
-      Keys(stroke, "stroke.", {"levels", "margin", "max_leg"});
+      Keys(stroke, "stroke.", {"levels", "cycles", "margin", "max_leg"});
       p.stroke_levels_V = List(stroke["levels"], "stroke.levels");
       if (stroke["margin"]) p.stroke_margin_m = Positive(stroke["margin"], "stroke.margin");
       if (stroke["max_leg"]) p.stroke_max_leg_s = Positive(stroke["max_leg"], "stroke.max_leg");
+      if (stroke["cycles"]) {
+        const double cycles = Positive(stroke["cycles"], "stroke.cycles");
+        if (cycles != std::floor(cycles) || cycles > 100) {
+          Fail(stroke["cycles"], "stroke.cycles: expected a whole number of cycles from 1 to 100");
+        }
+        p.stroke_cycles = static_cast<int>(cycles);
+      }
     }
     if (const YAML::Node validation = root["validation"]) {
       Keys(validation, "validation.", {"paper_step", "rich_profile"});

@@ -241,7 +241,10 @@ class RigBuilder {
 
   ActuatorCommand StrokeCommand(double level) const {
     ActuatorCommand command;
-    command.leg_levels_V = {level, -level};
+    for (int cycle = 0; cycle < protocol_.stroke_cycles; ++cycle) {
+      command.leg_levels_V.push_back(level);
+      command.leg_levels_V.push_back(-level);
+    }
     return command;
   }
 

@@ -40,8 +40,10 @@ struct Protocol {
   double pipeline_step_time_s = 0.1;
   double pipeline_duration_s = 1.5;
 
-  // Stroke tests: per level, extend until stroke_margin_m before the end, then retract.
+  // Stroke tests: per level, extend until stroke_margin_m before the end, then
+  // retract; stroke_cycles such cycles in each level's log.
   std::vector<double> stroke_levels_V;
+  int stroke_cycles = 1;
   double stroke_margin_m = 1e-3;
   double stroke_max_leg_s = 3.0;
 

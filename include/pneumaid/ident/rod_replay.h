@@ -1,0 +1,187 @@
+// The rod's equation of motion (seed paper Eq. 9 with Eq. 12, stick included)
+// replayed under a measured driving force: the friction fit's model.
+//
+//   M x'' = F(t) - F_friction(v),  F(t) = p1 A1 - p2 A2 - p_atm A_h - M g
+//
+// F(t) comes from the logged chamber pressures, linear between samples, so
+// the two-state rod model needs no valve, tube or chamber model. The rod
+// sticks while |F| stays below the static force of the direction it pushes
+// in; breakaway and the return to stick are located inside a sample interval
+// (the crossing of the linear F, the zero of v), so the replayed positions are
+// continuous in the friction coefficients and ceres::Jet differentiates them.
+// Sliding is integrated by classical RK4 with a fixed number of substeps per
+// sample interval: the Stribeck drop is fast (M vs / (Fs - Fd), 0.16 ms with
+// the paper's values) but bounded, and a fixed count keeps the cost smooth.
+#pragma once
+
+#include <cstddef>
+
+#include "pneumaid/model/friction.h"
+
+namespace pneumaid {
+
+// One stretch of a log to replay: the driving force at each sample, starting
+// stuck at `initial_position_m`.
+struct RodReplayInput {
+  const double* force_N = nullptr;  // F at samples 0 .. samples-1
+  std::size_t samples = 0;
+  double period_s = 1e-3;
+  double mass_kg = 0.15;
+  double initial_position_m = 0;
+  int substeps = 8;  // RK4 substeps per sample interval while sliding
+};
+
+namespace rod_replay_detail {
+
+template <typename T>
+struct RodState {
+  T x, v;
+  int direction;  // 0 stuck, +1 sliding towards +x, -1 towards -x
+};
+
+inline double ScalarPart(double value) { return value; }
+template <typename Jet>
+double ScalarPart(const Jet& value) {
+  return value.a;
+}
+
+// Acceleration while sliding in `direction`: friction opposes that direction
+// with the Stribeck magnitude at the speed along it (0 when v has crossed).
+template <typename T>
+T SlidingAcceleration(const T& force_N, const T& v, int direction,
+                      const StribeckCoefficients<T>& positive,
+                      const StribeckCoefficients<T>& negative, double mass_kg) {
+  const T speed = T(direction) * v;
+  const T along = speed > T(0.0) ? speed : T(0.0);
+  const T friction =
+      direction > 0 ? StribeckMagnitude(along, positive) : StribeckMagnitude(along, negative);
+  return (force_N - T(direction) * friction) / T(mass_kg);
+}
+
+// Earliest time in [from, h] at which the linear force F_a -> F_b leaves the
+// stick band (-Fs_neg, Fs_pos); sets `direction`. False when it stays inside.
+template <typename T>
+bool FindBreakaway(const T& from, double h, double force_a, double force_b,
+                   const StribeckCoefficients<T>& positive, const StribeckCoefficients<T>& negative,
+                   T* at, int* direction) {
+  const T slope = T((force_b - force_a) / h);
+  const T force_from = T(force_a) + slope * from;
+  if (force_from > positive.static_force_N) {
+    *at = from, *direction = +1;
+    return true;
+  }
+  if (force_from < -negative.static_force_N) {
+    *at = from, *direction = -1;
+    return true;
+  }
+  if (force_b > positive.static_force_N) {
+    *at = (positive.static_force_N - T(force_a)) / slope, *direction = +1;
+    return true;
+  }
+  if (force_b < -negative.static_force_N) {
+    *at = (-negative.static_force_N - T(force_a)) / slope, *direction = -1;
+    return true;
+  }
+  return false;
+}
+
+// Slides from local time `from` to `to` (either way: backward when to < from)
+// of a sample interval whose force is force_a + slope t, in `substeps` RK4
+// steps, or until v reaches zero; then the rod is stuck from the located
+// time, which is returned.
+template <typename T>
+T Slide(const T& from, const T& to, double force_a, double slope, int substeps,
+        const StribeckCoefficients<T>& positive, const StribeckCoefficients<T>& negative,
+        double mass_kg, RodState<T>* s) {
+  const T dt = (to - from) / T(substeps);
+  T t = from;
+  const auto accel = [&](const T& time, const T& v) {
+    return SlidingAcceleration(T(force_a) + T(slope) * time, v, s->direction, positive, negative,
+                               mass_kg);
+  };
+  for (int k = 0; k < substeps; ++k) {
+    const T half = T(0.5) * dt;
+    const T a1 = accel(t, s->v);
+    const T v2 = s->v + half * a1;
+    const T a2 = accel(t + half, v2);
+    const T v3 = s->v + half * a2;
+    const T a3 = accel(t + half, v3);
+    const T v4 = s->v + dt * a3;
+    const T a4 = accel(t + dt, v4);
+    const T v_next = s->v + dt / T(6.0) * (a1 + T(2.0) * a2 + T(2.0) * a3 + a4);
+    const T x_next = s->x + dt / T(6.0) * (s->v + T(2.0) * v2 + T(2.0) * v3 + v4);
+    if (T(s->direction) * v_next <= T(0.0)) {
+      // v reached zero inside this substep: linear in v, so x gains half the
+      // distance at the starting speed over the located fraction.
+      const T fraction = s->v == T(0.0) ? T(0.0) : s->v / (s->v - v_next);
+      s->x = s->x + T(0.5) * s->v * fraction * dt;
+      s->v = T(0.0);
+      s->direction = 0;
+      return t + fraction * dt;
+    }
+    s->x = x_next, s->v = v_next, t = t + dt;
+  }
+  return to;
+}
+
+}  // namespace rod_replay_detail
+
+// Replays the rod over `input` and writes x at every sample (position[0] is
+// the initial position). At most `max_switches` stick/slip switches are
+// followed inside one sample interval (bounded work; a Zeno sequence would be
+// cut there and stay stuck).
+template <typename T>
+void ReplayRod(const RodReplayInput& input, const StribeckCoefficients<T>& positive,
+               const StribeckCoefficients<T>& negative, T* position, int max_switches = 4) {
+  using namespace rod_replay_detail;
+  if (input.samples == 0) return;
+  RodState<T> s{T(input.initial_position_m), T(0.0), 0};
+  const double h = input.period_s;
+  position[0] = s.x;
+  for (std::size_t i = 0; i + 1 < input.samples; ++i) {
+    const double force_a = input.force_N[i], force_b = input.force_N[i + 1];
+    T t(0.0);
+    for (int switches = 0; switches <= max_switches; ++switches) {
+      if (s.direction == 0 &&
+          !FindBreakaway(t, h, force_a, force_b, positive, negative, &t, &s.direction)) {
+        break;
+      }
+      t = Slide(t, T(h), force_a, (force_b - force_a) / h, input.substeps, positive, negative,
+                input.mass_kg, &s);
+      if (s.direction != 0) break;  // still sliding at the interval's end
+    }
+    position[i + 1] = s.x;
+  }
+}
+
+// Replays the end of a slide backward in time from its arrest: the rod came
+// to rest at `stop_position_m` at time `stop_time_s` (from sample 0), sliding
+// in `direction` before. Writes x at samples [first, samples): those at or
+// after the arrest hold the rest position. Backward in time the Stribeck drop
+// is stable and v = 0 at the arrest is known exactly, so the slow end of a
+// slide is predicted without the velocity error that a forward replay
+// accumulates from the force's noise over the whole slide.
+template <typename T>
+void ReplayArrestBackward(const RodReplayInput& input, const T& stop_time_s, double stop_position_m,
+                          int direction, std::size_t first, const StribeckCoefficients<T>& positive,
+                          const StribeckCoefficients<T>& negative, T* position) {
+  using namespace rod_replay_detail;
+  const double h = input.period_s;
+  const double stop = static_cast<double>(ScalarPart(stop_time_s)) / h;
+  std::size_t k = stop <= 0 ? 0 : static_cast<std::size_t>(stop);
+  if (k >= input.samples - 1) k = input.samples - 2;
+  for (std::size_t j = k + 1; j < input.samples; ++j) position[j] = T(stop_position_m);
+  RodState<T> s{T(stop_position_m), T(0.0), direction};
+  T from = stop_time_s - T(static_cast<double>(k) * h);
+  for (std::size_t j = k + 1; j-- > first;) {
+    const double force_a = input.force_N[j], force_b = input.force_N[j + 1];
+    if (s.direction != 0) {
+      Slide(from, T(0.0), force_a, (force_b - force_a) / h, input.substeps, positive, negative,
+            input.mass_kg, &s);
+    }
+    position[j] = s.x;
+    from = T(h);
+  }
+}
+
+}  // namespace pneumaid

@@ -1,0 +1,607 @@
+#include "pneumaid/ident/friction_fit.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <sstream>
+
+#include "pneumaid/ident/rod_replay.h"
+#include "pneumaid/model/load.h"
+
+namespace pneumaid {
+namespace {
+
+constexpr int kDirectionParameters = 4;  // Fs, Fd, b, vs
+const char* const kParameterNames[kDirectionParameters] = {"static_force", "dynamic_force",
+                                                           "viscous", "stribeck_velocity"};
+// Lower bounds: forces and damping are magnitudes; vs > 0 keeps Eq. 12 defined.
+const double kLowerBounds[kDirectionParameters] = {0.0, 0.0, 0.0, 1e-4};
+
+using Block = std::array<double, kDirectionParameters>;
+
+Block Pack(const StribeckParams& p) {
+  return {p.static_force_N, p.dynamic_force_N, p.viscous_N_s_per_m, p.stribeck_velocity_m_per_s};
+}
+
+StribeckParams Unpack(const Block& b) { return {b[0], b[1], b[2], b[3]}; }
+
+template <typename T>
+StribeckCoefficients<T> Coefficients(const T* theta) {
+  return {theta[0], theta[1], theta[2], theta[3]};
+}
+
+// One stretch of a stroke log: starts stuck, ends a few samples into the next
+// stuck phase (or at the log's end).
+struct Segment {
+  const std::vector<double>* force_N;
+  const std::vector<double>* position_m;
+  std::size_t begin, end;  // samples [begin, end)
+  double initial_position_m;
+  int direction;  // of the slide: +1, -1, or 0 (stays stuck)
+  // A slide that ends in a logged arrest is replayed from both of its ends:
+  // forward from the start up to `split` (its fastest sample), backward from
+  // the arrest after it; the arrest time is a nuisance parameter.
+  bool two_sided = false;
+  std::size_t split = 0;
+  double stop_position_m = 0, stop_time_guess_s = 0, stop_time_min_s = 0, stop_time_max_s = 0;
+};
+
+RodReplayInput ReplayOf(const Segment& s, double period_s, double mass_kg, int substeps) {
+  RodReplayInput replay;
+  replay.force_N = s.force_N->data() + s.begin;
+  replay.samples = s.end - s.begin;
+  replay.period_s = period_s;
+  replay.mass_kg = mass_kg;
+  replay.initial_position_m = s.initial_position_m;
+  replay.substeps = substeps;
+  return replay;
+}
+
+// (replayed x - logged x) / sigma at every sample after the first: forward
+// from the segment's start, and for a two-sided segment backward from the
+// arrest after `split`.
+struct SegmentResidual {
+  const Segment* segment;
+  RodReplayInput replay;
+  double inverse_sigma;
+
+  template <typename T>
+  void Write(const std::vector<T>& x, T* residual) const {
+    const double* logged = segment->position_m->data() + segment->begin;
+    for (std::size_t j = 1; j < replay.samples; ++j) {
+      residual[j - 1] = (x[j] - T(logged[j])) * T(inverse_sigma);
+    }
+  }
+
+  template <typename T>
+  bool operator()(const T* positive, const T* negative, T* residual) const {
+    std::vector<T> x(replay.samples);
+    ReplayRod(replay, Coefficients(positive), Coefficients(negative), x.data());
+    Write(x, residual);
+    return true;
+  }
+
+  template <typename T>
+  bool operator()(const T* positive, const T* negative, const T* stop_time_s, T* residual) const {
+    std::vector<T> x(replay.samples);
+    const std::size_t split = segment->split - segment->begin;
+    RodReplayInput forward = replay;
+    forward.samples = split + 1;
+    ReplayRod(forward, Coefficients(positive), Coefficients(negative), x.data());
+    ReplayArrestBackward(replay, stop_time_s[0], segment->stop_position_m, segment->direction,
+                         split + 1, Coefficients(positive), Coefficients(negative), x.data());
+    Write(x, residual);
+    return true;
+  }
+};
+
+using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
+
+// Runs [begin, end) of at least `min_samples` samples whose values stay
+// within `band` of each other.
+Runs StuckRuns(const std::vector<double>& x, double band, int min_samples) {
+  Runs runs;
+  std::size_t begin = 0;
+  while (begin < x.size()) {
+    double low = x[begin], high = x[begin];
+    std::size_t end = begin + 1;
+    while (end < x.size() && std::max(high, x[end]) - std::min(low, x[end]) <= band) {
+      low = std::min(low, x[end]);
+      high = std::max(high, x[end]);
+      ++end;
+    }
+    if (static_cast<int>(end - begin) >= min_samples) {
+      runs.push_back({begin, end});
+      begin = end;
+    } else {
+      ++begin;
+    }
+  }
+  return runs;
+}
+
+// Declared noise of a sensor, or `fallback`.
+double SensorSigma(const Manifest& manifest, const std::string& name, double fallback) {
+  const auto it = manifest.sensors.find(name);
+  return it != manifest.sensors.end() && it->second.sigma ? *it->second.sigma : fallback;
+}
+
+// Everything the Ceres problem reads: per stroke log its driving force and
+// position, and the segments cut from them.
+struct StrokeData {
+  std::vector<std::vector<double>> force_N, position_m;
+  std::vector<double> period_s;
+  std::vector<Segment> segments;
+  int excluded = 0;
+  std::string skipped;  // logs that could not be used, why
+};
+
+// While the rod sticks the chamber volumes are constant and the force varies
+// smoothly (the valve filling a closed chamber), so its noise is averaged out
+// by a cubic fit over the last `window` samples of each stuck run. That
+// matters at breakaway: the first crossing of Fs by the raw noisy force comes
+// early, and a replay driven by it would bias Fs.
+void SmoothStuckForce(const Runs& runs, std::size_t window, std::vector<double>* force) {
+  for (const auto& [begin, end] : runs) {
+    // The first samples of a run still carry the arrest's pressure transient.
+    const std::size_t first =
+        end - std::min(window, end - begin - std::min<std::size_t>(3, end - begin));
+    const std::size_t n = end - 1 - first;  // the run's last sample may already move
+    if (n < 8) continue;
+    Eigen::MatrixXd design(n, 3);
+    Eigen::VectorXd y(n);
+    const double centre = 0.5 * static_cast<double>(first + end - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double s = (static_cast<double>(first + i) - centre) / static_cast<double>(n);
+      for (int power = 0; power < 3; ++power) design(i, power) = std::pow(s, power);
+      y(i) = (*force)[first + i];
+    }
+    const Eigen::Vector3d c = design.colPivHouseholderQr().solve(y);
+    for (std::size_t i = first; i < end; ++i) {
+      const double s = (static_cast<double>(i) - centre) / static_cast<double>(n);
+      (*force)[i] = c(0) + s * (c(1) + s * c(2));
+    }
+  }
+}
+
+double UniformPeriod(const std::vector<double>& t) {
+  if (t.size() < 2) return 0;
+  const double period = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (std::fabs(t[i] - t[i - 1] - period) > 0.01 * period) return 0;
+  }
+  return period;
+}
+
+// The slide of `s` ends in the stuck run `next`: where it stopped, when
+// (a guess and bounds for the nuisance parameter), and its fastest sample.
+void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
+                std::pair<std::size_t, std::size_t> next, double period_s, Segment* s) {
+  const auto [arrest, next_end] = next;
+  std::size_t split = slide_begin - 1;
+  for (std::size_t j = slide_begin - 1; j + 1 < arrest; ++j) {
+    if (std::fabs(x[j + 1] - x[j]) > std::fabs(x[split + 1] - x[split])) split = j;
+  }
+  if (split + 2 >= s->end || split < s->begin + 1) return;
+  const std::size_t settled_end = std::min(next_end, arrest + 21);
+  s->stop_position_m = std::accumulate(x.begin() + arrest + 1, x.begin() + settled_end, 0.0) /
+                       static_cast<double>(settled_end - arrest - 1);
+  s->split = split;
+  s->stop_time_min_s = (static_cast<double>(split - s->begin) + 0.05) * period_s;
+  s->stop_time_max_s = static_cast<double>(s->end - 1 - s->begin) * period_s;
+  s->stop_time_guess_s = std::clamp((static_cast<double>(arrest - s->begin) - 0.5) * period_s,
+                                    s->stop_time_min_s, s->stop_time_max_s);
+  s->two_sided = settled_end > arrest + 1;
+}
+
+void CutSegments(const std::vector<double>& force, const std::vector<double>& x, const Runs& runs,
+                 double band, double half_stroke_m, double period_s,
+                 const FrictionFitOptions& options, StrokeData* data) {
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const auto [stuck_begin, stuck_end] = runs[k];
+    Segment s{&force, &x, 0, 0, 0, 0};
+    s.begin = std::max(stuck_begin + 1,
+                       stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
+    // The run's last sample may already be the first of the slide.
+    const std::size_t settled_end = std::max(s.begin + 1, stuck_end - 1);
+    s.initial_position_m = std::accumulate(x.begin() + s.begin, x.begin() + settled_end, 0.0) /
+                           static_cast<double>(settled_end - s.begin);
+    s.end = k + 1 < runs.size()
+                ? runs[k + 1].first + std::min<std::size_t>(options.arrest_samples,
+                                                            runs[k + 1].second - runs[k + 1].first)
+                : stuck_end;
+    if (s.end - s.begin < 2) continue;
+    const auto [low, high] = std::minmax_element(x.begin() + s.begin, x.begin() + s.end);
+    if (*high > half_stroke_m - options.end_margin_m ||
+        *low < -half_stroke_m + options.end_margin_m) {
+      ++data->excluded;
+      continue;
+    }
+    const double travel = x[s.end - 1] - s.initial_position_m;
+    s.direction = travel > band ? +1 : (travel < -band ? -1 : 0);
+    if (s.direction != 0 && k + 1 < runs.size())
+      MarkArrest(x, stuck_end, runs[k + 1], period_s, &s);
+    data->segments.push_back(s);
+  }
+}
+
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band) {
+  const RigConstants& rig = unit.manifest.rig;
+  const double weight_N =
+      rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
+  StrokeData data;
+  std::size_t count = 0;
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind == ExperimentKind::kStroke) ++count;
+  }
+  // Segments point into these vectors: reserve so that they never move.
+  data.force_N.reserve(count);
+  data.position_m.reserve(count);
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind != ExperimentKind::kStroke) continue;
+    const double period = UniformPeriod(e.column("t"));
+    if (period <= 0) {
+      data.skipped += e.entry.id + " (not uniformly sampled) ";
+      continue;
+    }
+    const auto &p1 = e.column("p1"), &p2 = e.column("p2");
+    std::vector<double> force(p1.size());
+    for (std::size_t i = 0; i < force.size(); ++i) {
+      force[i] = PneumaticAndGravityForce(p1[i], p2[i], rig.atmospheric_pressure_Pa,
+                                          rig.area_1_m2(), rig.area_2_m2(), weight_N);
+    }
+    const auto& x = e.column("x");
+    const Runs runs = StuckRuns(x, band, options.min_stuck_samples);
+    SmoothStuckForce(runs, 20, &force);
+    data.force_N.push_back(std::move(force));
+    data.position_m.push_back(x);
+    data.period_s.push_back(period);
+    CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m, period,
+                options, &data);
+  }
+  return data;
+}
+
+// Median of the force on the last stuck sample before each slide of
+// `direction`: where the rod broke away, a starting point for Fs.
+double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
+  std::vector<double> forces;
+  for (const Segment& s : data.segments) {
+    if (s.direction != direction) continue;
+    std::size_t i = s.begin;
+    while (i + 1 < s.end && std::fabs((*s.position_m)[i + 1] - s.initial_position_m) <
+                                std::fabs((*s.position_m)[s.end - 1] - s.initial_position_m) / 4) {
+      ++i;
+    }
+    forces.push_back(direction * (*s.force_N)[i]);
+  }
+  if (forces.size() < 3) return fallback;
+  std::nth_element(forces.begin(), forces.begin() + forces.size() / 2, forces.end());
+  return forces[forces.size() / 2];
+}
+
+int SegmentsOf(const StrokeData& data, int direction) {
+  return static_cast<int>(
+      std::count_if(data.segments.begin(), data.segments.end(),
+                    [direction](const Segment& s) { return s.direction == direction; }));
+}
+
+// The Ceres problem over the segments: friction blocks shared, one arrest
+// time per two-sided segment.
+struct SegmentProblem {
+  ceres::Problem problem;
+  std::vector<int> rows;            // residuals per segment
+  std::vector<double> stop_time_s;  // per segment (unused when one-sided)
+};
+
+void BuildProblem(const StrokeData& data, const std::vector<double>& period_of_segment,
+                  double mass_kg, double sigma_m, const FrictionFitOptions& options,
+                  const std::vector<double>& huber_scale, Block* positive, Block* negative,
+                  SegmentProblem* p) {
+  p->stop_time_s.resize(data.segments.size());
+  for (std::size_t k = 0; k < data.segments.size(); ++k) {
+    const Segment& s = data.segments[k];
+    const RodReplayInput replay = ReplayOf(s, period_of_segment[k], mass_kg, options.substeps);
+    const int rows = static_cast<int>(replay.samples) - 1;
+    auto* functor = new SegmentResidual{&s, replay, 1.0 / sigma_m};
+    ceres::LossFunction* loss =
+        huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
+    if (s.two_sided) {
+      double* stop = &p->stop_time_s[k];
+      *stop = s.stop_time_guess_s;
+      p->problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<SegmentResidual, ceres::DYNAMIC, kDirectionParameters,
+                                          kDirectionParameters, 1>(functor, rows),
+          loss, positive->data(), negative->data(), stop);
+      p->problem.SetParameterLowerBound(stop, 0, s.stop_time_min_s);
+      p->problem.SetParameterUpperBound(stop, 0, s.stop_time_max_s);
+    } else {
+      p->problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<SegmentResidual, ceres::DYNAMIC, kDirectionParameters,
+                                          kDirectionParameters>(functor, rows),
+          loss, positive->data(), negative->data());
+    }
+    p->rows.push_back(rows);
+  }
+  for (Block* block : {positive, negative}) {
+    for (int i = 0; i < kDirectionParameters; ++i) {
+      p->problem.SetParameterLowerBound(block->data(), i, kLowerBounds[i]);
+    }
+  }
+}
+
+ceres::Solver::Summary Solve(const FrictionFitOptions& options, ceres::Problem* problem) {
+  ceres::Solver::Options solver_options;
+  // The arrest times are eliminated per segment (Schur complement).
+  solver_options.linear_solver_type = ceres::DENSE_SCHUR;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = 1e-10;
+  solver_options.parameter_tolerance = 1e-10;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, problem, &summary);
+  return summary;
+}
+
+// Per segment: its residuals, the Jacobian's friction columns (the free
+// blocks, positive first) and its arrest-time column (empty when one-sided),
+// robust loss applied.
+struct SegmentJacobian {
+  Eigen::VectorXd residuals;
+  Eigen::MatrixXd friction;
+  Eigen::VectorXd stop_time;
+};
+
+bool Evaluate(const StrokeData& data, const std::vector<double*>& free_blocks, SegmentProblem* p,
+              std::vector<SegmentJacobian>* out) {
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.parameter_blocks = free_blocks;
+  std::vector<int> stop_column(data.segments.size(), -1);
+  int column = static_cast<int>(free_blocks.size()) * kDirectionParameters;
+  for (std::size_t k = 0; k < data.segments.size(); ++k) {
+    if (!data.segments[k].two_sided) continue;
+    evaluate.parameter_blocks.push_back(&p->stop_time_s[k]);
+    stop_column[k] = column++;
+  }
+  std::vector<double> r;
+  ceres::CRSMatrix crs;
+  if (!p->problem.Evaluate(evaluate, nullptr, &r, nullptr, &crs)) return false;
+  const int friction_columns = static_cast<int>(free_blocks.size()) * kDirectionParameters;
+  out->assign(data.segments.size(), {});
+  int row = 0;
+  for (std::size_t k = 0; k < data.segments.size(); ++k) {
+    const int n = p->rows[k];
+    SegmentJacobian& j = (*out)[k];
+    j.residuals = Eigen::Map<Eigen::VectorXd>(r.data() + row, n);
+    j.friction.setZero(n, friction_columns);
+    if (stop_column[k] >= 0) j.stop_time.setZero(n);
+    for (int i = 0; i < n; ++i, ++row) {
+      for (int e = crs.rows[row]; e < crs.rows[row + 1]; ++e) {
+        if (crs.cols[e] < friction_columns) {
+          j.friction(i, crs.cols[e]) = crs.values[e];
+        } else if (crs.cols[e] == stop_column[k]) {
+          j.stop_time(i) = crs.values[e];
+        }
+      }
+    }
+  }
+  return true;
+}
+
+double Median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+// Cluster-robust covariance of the friction columns, segments being the
+// clusters and each arrest time eliminated inside its own segment (the Schur
+// complement); false when the information matrix is singular.
+bool SandwichCovariance(const std::vector<SegmentJacobian>& segments, Eigen::MatrixXd* covariance) {
+  const Eigen::Index m = segments.front().friction.cols();
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(m, m), meat = Eigen::MatrixXd::Zero(m, m);
+  for (const SegmentJacobian& j : segments) {
+    Eigen::MatrixXd a = j.friction;
+    Eigen::VectorXd r = j.residuals;
+    const double norm = j.stop_time.size() ? j.stop_time.squaredNorm() : 0.0;
+    if (norm > 0) {
+      a -= j.stop_time * (j.stop_time.transpose() * a) / norm;
+      r -= j.stop_time * (j.stop_time.dot(r) / norm);
+    }
+    information += a.transpose() * a;
+    const Eigen::VectorXd score = a.transpose() * r;
+    meat += score * score.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information);
+  if (eigen.eigenvalues().minCoeff() <= 1e-12 * eigen.eigenvalues().maxCoeff()) return false;
+  const double clusters = static_cast<double>(segments.size());
+  meat *= clusters / std::max(clusters - 1.0, 1.0);
+  const Eigen::MatrixXd bread = information.inverse();
+  *covariance = bread * meat * bread;
+  return true;
+}
+
+std::string ColumnName(int column) {
+  return std::string(column < kDirectionParameters ? "positive." : "negative.") +
+         kParameterNames[column % kDirectionParameters];
+}
+
+void Report(const Block& block, const std::vector<int>& free, const Eigen::MatrixXd& covariance,
+            int offset, double relative_limit, DirectionFit* fit) {
+  fit->params = Unpack(block);
+  for (std::size_t c = 0; c < free.size(); ++c) {
+    const int column = free[c];
+    if (column < offset || column >= offset + kDirectionParameters) continue;
+    const int i = column - offset;
+    const double error = std::sqrt(std::max(covariance(c, c), 0.0));
+    fit->standard_errors[kParameterNames[i]] = error;
+    if (error > relative_limit * std::fabs(block[i])) {
+      char line[160];
+      std::snprintf(line, sizeof(line),
+                    "%s = %.4g has a standard error of %.2g: not identifiable from these logs",
+                    kParameterNames[i], block[i], error);
+      fit->warnings.push_back(line);
+    }
+  }
+}
+
+}  // namespace
+
+bool FrictionFitOptions::IsValid(std::string* error) const {
+  const auto fail = [error](const char* what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (!(stuck_band_m > 0)) return fail("stuck_band_m must be > 0");
+  if (min_stuck_samples < 2) return fail("min_stuck_samples must be >= 2");
+  if (max_stuck_samples < 2) return fail("max_stuck_samples must be >= 2");
+  if (arrest_samples < 0) return fail("arrest_samples must be >= 0");
+  if (!(end_margin_m >= 0)) return fail("end_margin_m must be >= 0");
+  if (substeps < 1) return fail("substeps must be >= 1");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(outlier_ratio > 1)) return fail("outlier_ratio must be > 1");
+  if (!(identifiable_relative_error > 0)) return fail("identifiable_relative_error must be > 0");
+  return true;
+}
+
+FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
+                              const FrictionFitOptions& options) {
+  FrictionFitResult result;
+  result.positive.params = prior.positive;
+  result.negative.params = prior.negative;
+  const double sigma_m = SensorSigma(unit.manifest, "x", 1e-5);
+  const double band = options.stuck_band_m + 6.0 * sigma_m;
+  const StrokeData data = PrepareStrokes(unit, options, band);
+  result.excluded_segments = data.excluded;
+  result.positive.segments = SegmentsOf(data, +1);
+  result.negative.segments = SegmentsOf(data, -1);
+  if (result.positive.segments + result.negative.segments == 0) {
+    result.note = "no slide found in the stroke logs " + data.skipped + "; the prior is kept";
+    return result;
+  }
+  std::vector<double> period_of_segment;
+  for (const Segment& s : data.segments) {
+    const auto log = static_cast<std::size_t>(s.force_N - data.force_N.data());
+    period_of_segment.push_back(data.period_s[log]);
+  }
+  Block positive = Pack(prior.positive), negative = Pack(prior.negative);
+  positive[0] = BreakawayMedian(data, +1, positive[0]);
+  negative[0] = BreakawayMedian(data, -1, negative[0]);
+  const double mass_kg = unit.manifest.rig.load_mass_kg;
+  // A direction without slides keeps the prior: its block stays constant.
+  std::vector<double*> free_blocks;
+  std::vector<int> free;  // columns 0-3 positive, 4-7 negative
+  if (result.positive.segments > 0) free_blocks.push_back(positive.data());
+  if (result.negative.segments > 0) free_blocks.push_back(negative.data());
+  for (int c = 0; c < 2 * kDirectionParameters; ++c) {
+    if ((c < kDirectionParameters ? result.positive : result.negative).segments > 0)
+      free.push_back(c);
+  }
+
+  std::vector<SegmentJacobian> jacobians;
+  int iterations = 0;
+  std::vector<double> huber_scale;  // empty: plain least squares
+  for (int pass = 0; pass < 2; ++pass) {
+    SegmentProblem problem;
+    BuildProblem(data, period_of_segment, mass_kg, sigma_m, options, huber_scale, &positive,
+                 &negative, &problem);
+    for (double* block : {positive.data(), negative.data()}) {
+      if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end())
+        problem.problem.SetParameterBlockConstant(block);
+    }
+    const ceres::Solver::Summary summary = Solve(options, &problem.problem);
+    if (pass == 0) result.initial_cost = summary.initial_cost;
+    result.final_cost = summary.final_cost;
+    iterations += static_cast<int>(summary.iterations.size());
+    if (!summary.IsSolutionUsable() || !Evaluate(data, free_blocks, &problem, &jacobians)) {
+      result.note = "Ceres did not converge (" + summary.message + "); the prior is kept";
+      return result;
+    }
+    if (pass == 1) break;
+    // Segments far worse than the typical one (a disturbed stroke, a bump on
+    // the rod): refit with each segment's influence bounded (Huber).
+    std::vector<double> mean_squares;
+    for (std::size_t k = 0; k < jacobians.size(); ++k) {
+      mean_squares.push_back(jacobians[k].residuals.squaredNorm() / problem.rows[k]);
+    }
+    const double typical = Median(mean_squares);
+    result.outlier_segments =
+        static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
+          return m > options.outlier_ratio * typical;
+        }));
+    if (result.outlier_segments == 0) break;
+    for (int n : problem.rows) huber_scale.push_back(options.outlier_ratio * typical * n);
+  }
+  result.iterations = iterations;
+  result.segments = static_cast<int>(data.segments.size());
+  double squares = 0;
+  for (const auto& j : jacobians) {
+    result.samples += static_cast<int>(j.residuals.size());
+    squares += j.residuals.squaredNorm();
+  }
+  result.position_rms_m = sigma_m * std::sqrt(squares / std::max(result.samples, 1));
+  Eigen::MatrixXd covariance;
+  if (!SandwichCovariance(jacobians, &covariance)) {
+    result.note =
+        "the coefficients are not identifiable from these logs (singular J'J); the prior is kept";
+    return result;
+  }
+  result.fitted = true;
+  result.positive.fitted = result.positive.segments > 0;
+  result.negative.fitted = result.negative.segments > 0;
+  Report(positive, free, covariance, 0, options.identifiable_relative_error, &result.positive);
+  Report(negative, free, covariance, kDirectionParameters, options.identifiable_relative_error,
+         &result.negative);
+  for (std::size_t a = 0; a < free.size(); ++a) {
+    for (std::size_t b = a + 1; b < free.size(); ++b) {
+      result.correlations[ColumnName(free[a]) + "," + ColumnName(free[b])] =
+          covariance(a, b) / std::sqrt(covariance(a, a) * covariance(b, b));
+    }
+  }
+  if (!data.skipped.empty()) result.note = "not used: " + data.skipped;
+  return result;
+}
+
+std::string FrictionFitResult::BriefReport() const {
+  std::ostringstream out;
+  out << "Friction fit: ";
+  if (!fitted) {
+    out << "not fitted (" << note << ")\n";
+    return out.str();
+  }
+  char line[320];
+  std::snprintf(line, sizeof(line),
+                "%d segments (%d samples, %d near the stroke ends left out, %d outliers), cost "
+                "%.4g -> %.4g in %d iterations, position RMS %.3g mm\n",
+                segments, samples, excluded_segments, outlier_segments, initial_cost, final_cost,
+                iterations, position_rms_m * 1e3);
+  out << line;
+  for (const auto& [name, fit] :
+       {std::make_pair("positive", &positive), std::make_pair("negative", &negative)}) {
+    out << "  " << name << ": ";
+    if (!fit->fitted) {
+      out << "no slide this way; the prior is kept\n";
+      continue;
+    }
+    const auto& e = fit->standard_errors;
+    std::snprintf(line, sizeof(line),
+                  "%d slides; Fs %.4g +- %.2g N, Fd %.4g +- %.2g N, b %.4g +- %.2g N s/m, vs "
+                  "%.4g +- %.2g m/s\n",
+                  fit->segments, fit->params.static_force_N, e.at("static_force"),
+                  fit->params.dynamic_force_N, e.at("dynamic_force"), fit->params.viscous_N_s_per_m,
+                  e.at("viscous"), fit->params.stribeck_velocity_m_per_s,
+                  e.at("stribeck_velocity"));
+    out << line;
+    for (const auto& warning : fit->warnings) out << "    warning: " << warning << "\n";
+  }
+  for (const auto& [pair, r] : correlations) {
+    if (std::fabs(r) > 0.95) out << "  poorly separable: " << pair << " correlation " << r << "\n";
+  }
+  if (!note.empty()) out << "  " << note << "\n";
+  return out.str();
+}
+
+}  // namespace pneumaid
