@@ -66,7 +66,8 @@ int RunIdentify(const IdentifyArgs& args) {
 CommandRunner AddIdentifyCommand(CLI::App* app) {
   auto args = std::make_shared<IdentifyArgs>();
   app->add_option("unit", args->unit_dir, "unit directory")->required();
-  app->add_option("--only", args->only, "components to fit: valve, pipeline (friction: to come)");
+  app->add_option("--only", args->only,
+                  "components to fit: valve, pipeline, friction (default: all)");
   app->add_option("--prior", args->prior_path, "parameter set for what is not fitted")
       ->capture_default_str();
   app->add_option("--out", args->out_path, "identified parameter set (params-v1)")->required();

@@ -295,15 +295,15 @@ int SegmentsOf(const StrokeData& data, int direction) {
 // time per two-sided segment.
 struct SegmentProblem {
   ceres::Problem problem;
-  std::vector<int> rows;            // residuals per segment
-  std::vector<double> stop_time_s;  // per segment (unused when one-sided)
+  std::vector<int> rows;  // residuals per segment
+  // Per segment (unused when one-sided); kept from one pass to the next.
+  std::vector<double>* stop_time_s = nullptr;
 };
 
 void BuildProblem(const StrokeData& data, const std::vector<double>& period_of_segment,
                   double mass_kg, double sigma_m, const FrictionFitOptions& options,
                   const std::vector<double>& huber_scale, Block* positive, Block* negative,
                   SegmentProblem* p) {
-  p->stop_time_s.resize(data.segments.size());
   for (std::size_t k = 0; k < data.segments.size(); ++k) {
     const Segment& s = data.segments[k];
     const RodReplayInput replay = ReplayOf(s, period_of_segment[k], mass_kg, options.substeps);
@@ -312,8 +312,7 @@ void BuildProblem(const StrokeData& data, const std::vector<double>& period_of_s
     ceres::LossFunction* loss =
         huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
     if (s.two_sided) {
-      double* stop = &p->stop_time_s[k];
-      *stop = s.stop_time_guess_s;
+      double* stop = &(*p->stop_time_s)[k];
       p->problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<SegmentResidual, ceres::DYNAMIC, kDirectionParameters,
                                           kDirectionParameters, 1>(functor, rows),
@@ -340,8 +339,10 @@ ceres::Solver::Summary Solve(const FrictionFitOptions& options, ceres::Problem* 
   // The arrest times are eliminated per segment (Schur complement).
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;
-  solver_options.function_tolerance = 1e-10;
-  solver_options.parameter_tolerance = 1e-10;
+  // Relative changes far below the standard errors: more iterations would
+  // move nothing that the covariance resolves.
+  solver_options.function_tolerance = 1e-8;
+  solver_options.parameter_tolerance = 1e-8;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, problem, &summary);
   return summary;
@@ -364,7 +365,7 @@ bool Evaluate(const StrokeData& data, const std::vector<double*>& free_blocks, S
   int column = static_cast<int>(free_blocks.size()) * kDirectionParameters;
   for (std::size_t k = 0; k < data.segments.size(); ++k) {
     if (!data.segments[k].two_sided) continue;
-    evaluate.parameter_blocks.push_back(&p->stop_time_s[k]);
+    evaluate.parameter_blocks.push_back(&(*p->stop_time_s)[k]);
     stop_column[k] = column++;
   }
   std::vector<double> r;
@@ -501,11 +502,14 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
       free.push_back(c);
   }
 
+  std::vector<double> stop_time_s;
+  for (const Segment& s : data.segments) stop_time_s.push_back(s.stop_time_guess_s);
   std::vector<SegmentJacobian> jacobians;
   int iterations = 0;
   std::vector<double> huber_scale;  // empty: plain least squares
   for (int pass = 0; pass < 2; ++pass) {
     SegmentProblem problem;
+    problem.stop_time_s = &stop_time_s;
     BuildProblem(data, period_of_segment, mass_kg, sigma_m, options, huber_scale, &positive,
                  &negative, &problem);
     for (double* block : {positive.data(), negative.data()}) {

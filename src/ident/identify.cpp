@@ -83,6 +83,11 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
     out << ", pipeline: {delta_at_rig: " << FormatDouble(report.pipeline.delta_at_rig_per_s)
         << ", tubes: " << report.pipeline.tubes.size() << "}";
   }
+  if (report.friction.fitted) {
+    out << ", friction: {final_cost: " << FormatDouble(report.friction.final_cost)
+        << ", iterations: " << report.friction.iterations
+        << ", segments: " << report.friction.segments << "}";
+  }
   out << "}";
   return out.str();
 }
@@ -120,6 +125,43 @@ void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyO
   report->fitted.push_back("pipeline.delta_by_length");
 }
 
+const char* const kStribeckPaths[] = {"Fs", "Fd", "b", "vs"};
+const char* const kStribeckNames[] = {"static_force", "dynamic_force", "viscous",
+                                      "stribeck_velocity"};
+
+void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
+                      Parameters* params, IdentifyReport* report) {
+  if (!options.components.count(Component::kFriction)) {
+    AddPriorsUnder("friction.", "not requested", report);
+    return;
+  }
+  if (!HasKind(unit, ExperimentKind::kStroke)) {
+    if (options.components_explicit) {
+      throw InputError(unit.directory + "/unit.yaml", 0, 0,
+                       "--only friction: the unit has no stroke experiment to fit");
+    }
+    AddPriorsUnder("friction.", "no stroke experiment", report);
+    return;
+  }
+  report->friction = FitFriction(unit, prior.friction, options.friction);
+  const FrictionFitResult& fit = report->friction;
+  for (const auto& [name, direction, target] :
+       {std::make_tuple("positive", &fit.positive, &params->friction.positive),
+        std::make_tuple("negative", &fit.negative, &params->friction.negative)}) {
+    const std::string prefix = std::string("friction.") + name + ".";
+    if (!fit.fitted || !direction->fitted) {
+      AddPriorsUnder(prefix, fit.fitted ? "no slide in this direction" : fit.note, report);
+      continue;
+    }
+    *target = direction->params;
+    for (int i = 0; i < 4; ++i) {
+      const std::string path = prefix + kStribeckPaths[i];
+      report->fitted.push_back(path);
+      params->uncertainty[path] = direction->standard_errors.at(kStribeckNames[i]);
+    }
+  }
+}
+
 }  // namespace
 
 const char* ToString(Component component) {
@@ -135,12 +177,12 @@ const char* ToString(Component component) {
 }
 
 bool IdentifyOptions::IsValid(std::string* error) const {
-  return valve.IsValid(error) && pipeline.IsValid(error);
+  return valve.IsValid(error) && pipeline.IsValid(error) && friction.IsValid(error);
 }
 
 std::string IdentifyReport::BriefReport() const {
   std::ostringstream out;
-  out << valve.BriefReport() << pipeline.BriefReport();
+  out << valve.BriefReport() << pipeline.BriefReport() << friction.BriefReport();
   out << "Fitted: " << fitted.size() << " parameters";
   for (const auto& path : fitted) out << "\n  " << path;
   out << "\nFrom the prior: " << priors.size() << " parameters";
@@ -153,11 +195,6 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
                     IdentifyReport* report) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("identify options", 0, 0, error);
-  if (options.components_explicit && options.components.count(Component::kFriction)) {
-    throw InputError("--only", 0, 0,
-                     "the friction fit is not available yet; use --only valve,pipeline (the rest "
-                     "comes from --prior)");
-  }
   Parameters params = prior;
   params.uncertainty.clear();
   TakeRigConstants(unit, &params);
@@ -176,7 +213,7 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
     AddPriorsUnder("valve.", "no valve experiment", report);
   }
   IdentifyPipeline(unit, prior, options, &params, report);
-  AddPriorsUnder("friction.", "friction fit not available yet", report);
+  IdentifyFriction(unit, prior, options, &params, report);
   params.provenance_yaml = Provenance(unit, options, *report);
   const auto problems = Validate(params);
   if (!problems.empty()) {

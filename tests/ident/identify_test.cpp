@@ -27,13 +27,14 @@ TEST(IdentifyTest, FitsTheValveAndSaysWhatCameFromThePrior) {
   const Parameters p = Identify(unit, prior, IdentifyOptions{}, &report);
   EXPECT_NEAR(p.valve.increasing.q_max_kg_per_s, 9.25e-5, 0.01 * 9.25e-5);
   EXPECT_TRUE(Lists(report.fitted, "valve.increasing.q_max"));
-  EXPECT_TRUE(Lists(report.priors, "friction.positive.Fs"));
+  EXPECT_TRUE(Lists(report.fitted, "friction.positive.Fs"));
+  EXPECT_TRUE(Lists(report.fitted, "friction.negative.vs"));
+  EXPECT_GT(p.uncertainty.at("friction.negative.b"), 0.0);
   EXPECT_TRUE(Lists(report.fitted, "pipeline.delta"));
   EXPECT_NEAR(p.pipeline.delta_per_s, 8.0, 0.05 * 8.0);
   EXPECT_EQ(p.pipeline.delta_by_length.size(), 4u);
   EXPECT_GT(p.uncertainty.at("pipeline.delta"), 0.0);
   EXPECT_GT(p.uncertainty.at("valve.decreasing.d"), 0.0);
-  EXPECT_EQ(p.uncertainty.count("friction.positive.Fs"), 0u);  // no confident number from nothing
   EXPECT_EQ(p.unit, "paper-rig");
   EXPECT_NE(p.provenance_yaml.find(unit.experiments.front().sha256), std::string::npos);
   // The result is a valid params-v1 document that reads back.
@@ -41,21 +42,33 @@ TEST(IdentifyTest, FitsTheValveAndSaysWhatCameFromThePrior) {
   EXPECT_EQ(back.valve.decreasing.a, p.valve.decreasing.a);
 }
 
-TEST(IdentifyTest, ComponentsWithoutAFitOrDataAreRefusedWhenAskedFor) {
+TEST(IdentifyTest, ComponentsWithoutDataAreRefusedWhenAskedForAndPriorsOtherwise) {
   const Unit unit = ReadUnit(kUnit);
   IdentifyReport report;
   IdentifyOptions options;
+  const Parameters defaults;
+  Unit no_stroke = unit;
+  no_stroke.experiments.erase(
+      std::remove_if(no_stroke.experiments.begin(), no_stroke.experiments.end(),
+                     [](const Experiment& e) { return e.entry.kind == ExperimentKind::kStroke; }),
+      no_stroke.experiments.end());
   options.components = {Component::kFriction};
   options.components_explicit = true;
-  EXPECT_THROW(Identify(unit, Parameters{}, options, &report), InputError);
+  EXPECT_THROW(Identify(no_stroke, defaults, options, &report), InputError);
+  options.components_explicit = false;
+  const Parameters without_strokes = Identify(no_stroke, defaults, options, &report);
+  EXPECT_TRUE(Lists(report.priors, "friction.positive.Fs (no stroke experiment)"));
+  // No confident number from nothing: a prior carries no standard error.
+  EXPECT_EQ(without_strokes.uncertainty.count("friction.positive.Fs"), 0u);
+  options.components_explicit = true;
   Unit no_valve = unit;
   no_valve.experiments.erase(no_valve.experiments.begin());  // the valve staircase
   options.components = {Component::kValve};
-  EXPECT_THROW(Identify(no_valve, Parameters{}, options, &report), InputError);
+  EXPECT_THROW(Identify(no_valve, defaults, options, &report), InputError);
   options.components_explicit = false;  // by default: the prior, reported as such
-  const Parameters p = Identify(no_valve, Parameters{}, options, &report);
+  const Parameters p = Identify(no_valve, defaults, options, &report);
   EXPECT_TRUE(Lists(report.priors, "valve.increasing.a (no valve experiment)"));
-  EXPECT_EQ(p.valve.increasing.a, Parameters{}.valve.increasing.a);
+  EXPECT_EQ(p.valve.increasing.a, defaults.valve.increasing.a);
 }
 
 }  // namespace

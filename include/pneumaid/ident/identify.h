@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/ident/pipeline_fit.h"
 #include "pneumaid/ident/valve_fit.h"
 #include "pneumaid/io/rig_data.h"
@@ -19,12 +20,12 @@ enum class Component { kValve, kPipeline, kFriction };
 const char* ToString(Component component);
 
 struct IdentifyOptions {
-  // Components to fit (default: all). The friction fit is not available yet
-  // and may not be requested explicitly.
+  // Components to fit (default: all).
   std::set<Component> components = {Component::kValve, Component::kPipeline, Component::kFriction};
   bool components_explicit = false;  // --only was given
   ValveFitOptions valve;
-  PipelineFitOptions pipeline;           // initial_delta_per_s is taken from the prior
+  PipelineFitOptions pipeline;  // initial_delta_per_s is taken from the prior
+  FrictionFitOptions friction;
   std::string tool_version = "unknown";  // for provenance
   std::string date;                      // ISO 8601, for provenance
 
@@ -34,6 +35,7 @@ struct IdentifyOptions {
 struct IdentifyReport {
   ValveFitResult valve;
   PipelineFitResult pipeline;
+  FrictionFitResult friction;
   std::vector<std::string> fitted;  // parameter paths
   std::vector<std::string> priors;  // parameter paths taken from the prior, with why
   std::string BriefReport() const;

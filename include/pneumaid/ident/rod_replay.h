@@ -14,6 +14,8 @@
 // the paper's values) but bounded, and a fixed count keeps the cost smooth.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 #include "pneumaid/model/friction.h"
@@ -124,6 +126,16 @@ T Slide(const T& from, const T& to, double force_a, double slope, int substeps,
   return to;
 }
 
+// Substeps for the next interval: the full count near the Stribeck region,
+// a quarter well above it (there the rod is a slow first-order system, b/M).
+template <typename T>
+int SubstepsAt(const RodState<T>& s, const StribeckCoefficients<T>& positive,
+               const StribeckCoefficients<T>& negative, int substeps) {
+  const double stribeck = std::max(ScalarPart(positive.stribeck_velocity_m_per_s),
+                                   ScalarPart(negative.stribeck_velocity_m_per_s));
+  return std::fabs(ScalarPart(s.v)) > 4.0 * stribeck ? std::max(1, substeps / 4) : substeps;
+}
+
 }  // namespace rod_replay_detail
 
 // Replays the rod over `input` and writes x at every sample (position[0] is
@@ -146,7 +158,8 @@ void ReplayRod(const RodReplayInput& input, const StribeckCoefficients<T>& posit
           !FindBreakaway(t, h, force_a, force_b, positive, negative, &t, &s.direction)) {
         break;
       }
-      t = Slide(t, T(h), force_a, (force_b - force_a) / h, input.substeps, positive, negative,
+      t = Slide(t, T(h), force_a, (force_b - force_a) / h,
+                SubstepsAt(s, positive, negative, input.substeps), positive, negative,
                 input.mass_kg, &s);
       if (s.direction != 0) break;  // still sliding at the interval's end
     }
@@ -176,8 +189,9 @@ void ReplayArrestBackward(const RodReplayInput& input, const T& stop_time_s, dou
   for (std::size_t j = k + 1; j-- > first;) {
     const double force_a = input.force_N[j], force_b = input.force_N[j + 1];
     if (s.direction != 0) {
-      Slide(from, T(0.0), force_a, (force_b - force_a) / h, input.substeps, positive, negative,
-            input.mass_kg, &s);
+      Slide(from, T(0.0), force_a, (force_b - force_a) / h,
+            SubstepsAt(s, positive, negative, input.substeps), positive, negative, input.mass_kg,
+            &s);
     }
     position[j] = s.x;
     from = T(h);
