@@ -49,6 +49,12 @@ struct Segment {
   bool two_sided = false;
   std::size_t split = 0;
   double stop_position_m = 0, stop_time_guess_s = 0, stop_time_min_s = 0, stop_time_max_s = 0;
+  // Where the logged slide starts and (two-sided) stops, for the weights.
+  std::size_t slide_begin = 0, arrest = 0;
+  // 1 / (expected residual std) per sample of the segment: the position
+  // noise, and the drift that the force's noise integrated twice adds with
+  // the distance from the nearest exactly known state (stuck, v = 0).
+  std::vector<double> weight;
 };
 
 RodReplayInput ReplayOf(const Segment& s, double period_s, double mass_kg, int substeps) {
@@ -68,13 +74,12 @@ RodReplayInput ReplayOf(const Segment& s, double period_s, double mass_kg, int s
 struct SegmentResidual {
   const Segment* segment;
   RodReplayInput replay;
-  double inverse_sigma;
 
   template <typename T>
   void Write(const std::vector<T>& x, T* residual) const {
     const double* logged = segment->position_m->data() + segment->begin;
     for (std::size_t j = 1; j < replay.samples; ++j) {
-      residual[j - 1] = (x[j] - T(logged[j])) * T(inverse_sigma);
+      residual[j - 1] = (x[j] - T(logged[j])) * T(segment->weight[j]);
     }
   }
 
@@ -178,6 +183,21 @@ double UniformPeriod(const std::vector<double>& t) {
   return period;
 }
 
+// Residual weights of `s`: a sample n intervals from the last known state
+// (the breakaway forward, the arrest backward) carries the position noise and
+// a drift of variance (sigma_F h^2 / M)^2 n^3 / 3 from the force's noise.
+void SetWeights(double sigma_x_m, double drift_m, Segment* s) {
+  s->weight.assign(s->end - s->begin, 1.0 / sigma_x_m);
+  for (std::size_t i = s->begin; i < s->end; ++i) {
+    double n = i > s->slide_begin ? static_cast<double>(i - s->slide_begin) : 0.0;
+    if (s->two_sided && i > s->split) {
+      n = s->arrest > i ? static_cast<double>(s->arrest - i) : 0.0;
+    }
+    const double variance = sigma_x_m * sigma_x_m + drift_m * drift_m * n * n * n / 3.0;
+    s->weight[i - s->begin] = 1.0 / std::sqrt(variance);
+  }
+}
+
 // The slide of `s` ends in the stuck run `next`: where it stopped, when
 // (a guess and bounds for the nuisance parameter), and its fastest sample.
 void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
@@ -197,14 +217,17 @@ void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
   s->stop_time_guess_s = std::clamp((static_cast<double>(arrest - s->begin) - 0.5) * period_s,
                                     s->stop_time_min_s, s->stop_time_max_s);
   s->two_sided = settled_end > arrest + 1;
+  s->arrest = arrest;
 }
 
 void CutSegments(const std::vector<double>& force, const std::vector<double>& x, const Runs& runs,
-                 double band, double half_stroke_m, double period_s,
-                 const FrictionFitOptions& options, StrokeData* data) {
+                 double band, double half_stroke_m, double period_s, double sigma_x_m,
+                 double drift_m, const FrictionFitOptions& options, StrokeData* data) {
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const auto [stuck_begin, stuck_end] = runs[k];
-    Segment s{&force, &x, 0, 0, 0, 0};
+    Segment s{};
+    s.force_N = &force;
+    s.position_m = &x;
     s.begin = std::max(stuck_begin + 1,
                        stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
     // The run's last sample may already be the first of the slide.
@@ -224,14 +247,19 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
     }
     const double travel = x[s.end - 1] - s.initial_position_m;
     s.direction = travel > band ? +1 : (travel < -band ? -1 : 0);
+    s.slide_begin = stuck_end - 1;
     if (s.direction != 0 && k + 1 < runs.size())
       MarkArrest(x, stuck_end, runs[k + 1], period_s, &s);
+    SetWeights(sigma_x_m, drift_m, &s);
     data->segments.push_back(s);
   }
 }
 
-StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band) {
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
+                          double sigma_x_m) {
   const RigConstants& rig = unit.manifest.rig;
+  const double force_sigma_N = std::hypot(SensorSigma(unit.manifest, "p1", 0.0) * rig.area_1_m2(),
+                                          SensorSigma(unit.manifest, "p2", 0.0) * rig.area_2_m2());
   const double weight_N =
       rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
   StrokeData data;
@@ -261,8 +289,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
     data.period_s.push_back(period);
+    const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
     CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m, period,
-                options, &data);
+                sigma_x_m, drift_m, options, &data);
   }
   return data;
 }
@@ -301,14 +330,14 @@ struct SegmentProblem {
 };
 
 void BuildProblem(const StrokeData& data, const std::vector<double>& period_of_segment,
-                  double mass_kg, double sigma_m, const FrictionFitOptions& options,
+                  double mass_kg, const FrictionFitOptions& options,
                   const std::vector<double>& huber_scale, Block* positive, Block* negative,
                   SegmentProblem* p) {
   for (std::size_t k = 0; k < data.segments.size(); ++k) {
     const Segment& s = data.segments[k];
     const RodReplayInput replay = ReplayOf(s, period_of_segment[k], mass_kg, options.substeps);
     const int rows = static_cast<int>(replay.samples) - 1;
-    auto* functor = new SegmentResidual{&s, replay, 1.0 / sigma_m};
+    auto* functor = new SegmentResidual{&s, replay};
     ceres::LossFunction* loss =
         huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
     if (s.two_sided) {
@@ -475,7 +504,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   result.negative.params = prior.negative;
   const double sigma_m = SensorSigma(unit.manifest, "x", 1e-5);
   const double band = options.stuck_band_m + 6.0 * sigma_m;
-  const StrokeData data = PrepareStrokes(unit, options, band);
+  const StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
   result.excluded_segments = data.excluded;
   result.positive.segments = SegmentsOf(data, +1);
   result.negative.segments = SegmentsOf(data, -1);
@@ -510,8 +539,8 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   for (int pass = 0; pass < 2; ++pass) {
     SegmentProblem problem;
     problem.stop_time_s = &stop_time_s;
-    BuildProblem(data, period_of_segment, mass_kg, sigma_m, options, huber_scale, &positive,
-                 &negative, &problem);
+    BuildProblem(data, period_of_segment, mass_kg, options, huber_scale, &positive, &negative,
+                 &problem);
     for (double* block : {positive.data(), negative.data()}) {
       if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end())
         problem.problem.SetParameterBlockConstant(block);
@@ -542,11 +571,14 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   result.iterations = iterations;
   result.segments = static_cast<int>(data.segments.size());
   double squares = 0;
-  for (const auto& j : jacobians) {
-    result.samples += static_cast<int>(j.residuals.size());
-    squares += j.residuals.squaredNorm();
+  for (std::size_t k = 0; k < jacobians.size(); ++k) {
+    const Eigen::VectorXd& r = jacobians[k].residuals;
+    result.samples += static_cast<int>(r.size());
+    for (Eigen::Index i = 0; i < r.size(); ++i) {
+      squares += std::pow(r(i) / data.segments[k].weight[i + 1], 2);
+    }
   }
-  result.position_rms_m = sigma_m * std::sqrt(squares / std::max(result.samples, 1));
+  result.position_rms_m = std::sqrt(squares / std::max(result.samples, 1));
   Eigen::MatrixXd covariance;
   if (!SandwichCovariance(jacobians, &covariance)) {
     result.note =
