@@ -5,6 +5,8 @@
 // one unit of about 10^5 samples.
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
+
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/io/rig_writer.h"
 #include "pneumaid/synth/synthetic_rig.h"
@@ -24,6 +26,7 @@ Unit StrokeUnit() {
   Unit merged;
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     const std::string unit_dir = dir + std::to_string(seed);
+    std::filesystem::remove_all(unit_dir);  // a previous run's
     WriteDirectoryAtomically(unit_dir, UnitFiles(Synthesize(Parameters{}, protocol, seed, "B")));
     Unit unit = ReadUnit(unit_dir);
     if (seed == 1)
