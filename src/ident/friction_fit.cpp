@@ -17,8 +17,8 @@ namespace pneumaid {
 namespace {
 
 constexpr int kDirectionParameters = 4;  // Fs, Fd, b, vs
-const char* const kParameterNames[kDirectionParameters] = {"static_force", "dynamic_force",
-                                                           "viscous", "stribeck_velocity"};
+// params-v1 names (friction.<direction>.<name>).
+const char* const kParameterNames[kDirectionParameters] = {"Fs", "Fd", "b", "vs"};
 // Lower bounds: forces and damping are magnitudes; vs > 0 keeps Eq. 12 defined.
 const double kLowerBounds[kDirectionParameters] = {0.0, 0.0, 0.0, 1e-4};
 
@@ -41,6 +41,7 @@ struct Segment {
   const std::vector<double>* force_N;
   const std::vector<double>* position_m;
   std::size_t begin, end;  // samples [begin, end)
+  double period_s;         // of its log
   double initial_position_m;
   int direction;  // of the slide: +1, -1, or 0 (stays stuck)
   // A slide that ends in a logged arrest is replayed from both of its ends:
@@ -57,18 +58,18 @@ struct Segment {
   std::vector<double> weight;
 };
 
-RodReplayInput ReplayOf(const Segment& s, double period_s, double mass_kg, int substeps) {
+RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps) {
   RodReplayInput replay;
   replay.force_N = s.force_N->data() + s.begin;
   replay.samples = s.end - s.begin;
-  replay.period_s = period_s;
+  replay.period_s = s.period_s;
   replay.mass_kg = mass_kg;
   replay.initial_position_m = s.initial_position_m;
   replay.substeps = substeps;
   return replay;
 }
 
-// (replayed x - logged x) / sigma at every sample after the first: forward
+// (replayed x - logged x) x weight at every sample after the first: forward
 // from the segment's start, and for a two-sided segment backward from the
 // arrest after `split`.
 struct SegmentResidual {
@@ -130,17 +131,10 @@ Runs StuckRuns(const std::vector<double>& x, double band, int min_samples) {
   return runs;
 }
 
-// Declared noise of a sensor, or `fallback`.
-double SensorSigma(const Manifest& manifest, const std::string& name, double fallback) {
-  const auto it = manifest.sensors.find(name);
-  return it != manifest.sensors.end() && it->second.sigma ? *it->second.sigma : fallback;
-}
-
 // Everything the Ceres problem reads: per stroke log its driving force and
 // position, and the segments cut from them.
 struct StrokeData {
   std::vector<std::vector<double>> force_N, position_m;
-  std::vector<double> period_s;
   std::vector<Segment> segments;
   int excluded = 0;
   std::string skipped;  // logs that could not be used, why
@@ -148,7 +142,7 @@ struct StrokeData {
 
 // While the rod sticks the chamber volumes are constant and the force varies
 // smoothly (the valve filling a closed chamber), so its noise is averaged out
-// by a cubic fit over the last `window` samples of each stuck run. That
+// by a quadratic fit over the last `window` samples of each stuck run. That
 // matters at breakaway: the first crossing of Fs by the raw noisy force comes
 // early, and a replay driven by it would bias Fs.
 void SmoothStuckForce(const Runs& runs, std::size_t window, std::vector<double>* force) {
@@ -228,6 +222,7 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
     Segment s{};
     s.force_N = &force;
     s.position_m = &x;
+    s.period_s = period_s;
     s.begin = std::max(stuck_begin + 1,
                        stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
     // The run's last sample may already be the first of the slide.
@@ -258,8 +253,8 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
                           double sigma_x_m) {
   const RigConstants& rig = unit.manifest.rig;
-  const double force_sigma_N = std::hypot(SensorSigma(unit.manifest, "p1", 0.0) * rig.area_1_m2(),
-                                          SensorSigma(unit.manifest, "p2", 0.0) * rig.area_2_m2());
+  const double force_sigma_N = std::hypot(unit.manifest.DeclaredSigma("p1", 0.0) * rig.area_1_m2(),
+                                          unit.manifest.DeclaredSigma("p2", 0.0) * rig.area_2_m2());
   const double weight_N =
       rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
   StrokeData data;
@@ -285,10 +280,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     }
     const auto& x = e.column("x");
     const Runs runs = StuckRuns(x, band, options.min_stuck_samples);
-    SmoothStuckForce(runs, 20, &force);
+    SmoothStuckForce(runs, options.stuck_force_samples, &force);
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
-    data.period_s.push_back(period);
     const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
     CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m, period,
                 sigma_x_m, drift_m, options, &data);
@@ -296,8 +290,14 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
   return data;
 }
 
-// Median of the force on the last stuck sample before each slide of
-// `direction`: where the rod broke away, a starting point for Fs.
+double Median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+// Median over the slides of `direction` of the force on the last sample
+// before the rod has covered a quarter of the segment's travel: about where
+// it broke away, a starting point for Fs.
 double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
   std::vector<double> forces;
   for (const Segment& s : data.segments) {
@@ -309,9 +309,7 @@ double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
     }
     forces.push_back(direction * (*s.force_N)[i]);
   }
-  if (forces.size() < 3) return fallback;
-  std::nth_element(forces.begin(), forces.begin() + forces.size() / 2, forces.end());
-  return forces[forces.size() / 2];
+  return forces.size() < 3 ? fallback : Median(forces);
 }
 
 int SegmentsOf(const StrokeData& data, int direction) {
@@ -329,13 +327,12 @@ struct SegmentProblem {
   std::vector<double>* stop_time_s = nullptr;
 };
 
-void BuildProblem(const StrokeData& data, const std::vector<double>& period_of_segment,
-                  double mass_kg, const FrictionFitOptions& options,
+void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptions& options,
                   const std::vector<double>& huber_scale, Block* positive, Block* negative,
                   SegmentProblem* p) {
   for (std::size_t k = 0; k < data.segments.size(); ++k) {
     const Segment& s = data.segments[k];
-    const RodReplayInput replay = ReplayOf(s, period_of_segment[k], mass_kg, options.substeps);
+    const RodReplayInput replay = ReplayOf(s, mass_kg, options.substeps);
     const int rows = static_cast<int>(replay.samples) - 1;
     auto* functor = new SegmentResidual{&s, replay};
     ceres::LossFunction* loss =
@@ -422,11 +419,6 @@ bool Evaluate(const StrokeData& data, const std::vector<double*>& free_blocks, S
   return true;
 }
 
-double Median(std::vector<double> values) {
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 // Cluster-robust covariance of the friction columns, segments being the
 // clusters and each arrest time eliminated inside its own segment (the Schur
 // complement); false when the information matrix is singular.
@@ -489,6 +481,7 @@ bool FrictionFitOptions::IsValid(std::string* error) const {
   if (min_stuck_samples < 2) return fail("min_stuck_samples must be >= 2");
   if (max_stuck_samples < 2) return fail("max_stuck_samples must be >= 2");
   if (arrest_samples < 0) return fail("arrest_samples must be >= 0");
+  if (stuck_force_samples < 3) return fail("stuck_force_samples must be >= 3");
   if (!(end_margin_m >= 0)) return fail("end_margin_m must be >= 0");
   if (substeps < 1) return fail("substeps must be >= 1");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
@@ -502,7 +495,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   FrictionFitResult result;
   result.positive.params = prior.positive;
   result.negative.params = prior.negative;
-  const double sigma_m = SensorSigma(unit.manifest, "x", 1e-5);
+  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
   const double band = options.stuck_band_m + 6.0 * sigma_m;
   const StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
   result.excluded_segments = data.excluded;
@@ -512,11 +505,6 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     result.note = "no slide found in the stroke logs " + data.skipped + "; the prior is kept";
     return result;
   }
-  std::vector<double> period_of_segment;
-  for (const Segment& s : data.segments) {
-    const auto log = static_cast<std::size_t>(s.force_N - data.force_N.data());
-    period_of_segment.push_back(data.period_s[log]);
-  }
   Block positive = Pack(prior.positive), negative = Pack(prior.negative);
   positive[0] = BreakawayMedian(data, +1, positive[0]);
   negative[0] = BreakawayMedian(data, -1, negative[0]);
@@ -524,11 +512,12 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   // A direction without slides keeps the prior: its block stays constant.
   std::vector<double*> free_blocks;
   std::vector<int> free;  // columns 0-3 positive, 4-7 negative
-  if (result.positive.segments > 0) free_blocks.push_back(positive.data());
-  if (result.negative.segments > 0) free_blocks.push_back(negative.data());
-  for (int c = 0; c < 2 * kDirectionParameters; ++c) {
-    if ((c < kDirectionParameters ? result.positive : result.negative).segments > 0)
-      free.push_back(c);
+  for (const auto& [segments, block, offset] :
+       {std::make_tuple(result.positive.segments, &positive, 0),
+        std::make_tuple(result.negative.segments, &negative, kDirectionParameters)}) {
+    if (segments == 0) continue;
+    free_blocks.push_back(block->data());
+    for (int i = 0; i < kDirectionParameters; ++i) free.push_back(offset + i);
   }
 
   std::vector<double> stop_time_s;
@@ -539,8 +528,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   for (int pass = 0; pass < 2; ++pass) {
     SegmentProblem problem;
     problem.stop_time_s = &stop_time_s;
-    BuildProblem(data, period_of_segment, mass_kg, options, huber_scale, &positive, &negative,
-                 &problem);
+    BuildProblem(data, mass_kg, options, huber_scale, &positive, &negative, &problem);
     for (double* block : {positive.data(), negative.data()}) {
       if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end())
         problem.problem.SetParameterBlockConstant(block);
@@ -626,10 +614,9 @@ std::string FrictionFitResult::BriefReport() const {
     std::snprintf(line, sizeof(line),
                   "%d slides; Fs %.4g +- %.2g N, Fd %.4g +- %.2g N, b %.4g +- %.2g N s/m, vs "
                   "%.4g +- %.2g m/s\n",
-                  fit->segments, fit->params.static_force_N, e.at("static_force"),
-                  fit->params.dynamic_force_N, e.at("dynamic_force"), fit->params.viscous_N_s_per_m,
-                  e.at("viscous"), fit->params.stribeck_velocity_m_per_s,
-                  e.at("stribeck_velocity"));
+                  fit->segments, fit->params.static_force_N, e.at("Fs"),
+                  fit->params.dynamic_force_N, e.at("Fd"), fit->params.viscous_N_s_per_m, e.at("b"),
+                  fit->params.stribeck_velocity_m_per_s, e.at("vs"));
     out << line;
     for (const auto& warning : fit->warnings) out << "    warning: " << warning << "\n";
   }

@@ -125,10 +125,6 @@ void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyO
   report->fitted.push_back("pipeline.delta_by_length");
 }
 
-const char* const kStribeckPaths[] = {"Fs", "Fd", "b", "vs"};
-const char* const kStribeckNames[] = {"static_force", "dynamic_force", "viscous",
-                                      "stribeck_velocity"};
-
 void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
                       Parameters* params, IdentifyReport* report) {
   if (!options.components.count(Component::kFriction)) {
@@ -154,10 +150,9 @@ void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyO
       continue;
     }
     *target = direction->params;
-    for (int i = 0; i < 4; ++i) {
-      const std::string path = prefix + kStribeckPaths[i];
-      report->fitted.push_back(path);
-      params->uncertainty[path] = direction->standard_errors.at(kStribeckNames[i]);
+    for (const auto& [name, error] : direction->standard_errors) {
+      report->fitted.push_back(prefix + name);
+      params->uncertainty[prefix + name] = error;
     }
   }
 }

@@ -39,13 +39,6 @@ struct TubeStepResiduals {
   }
 };
 
-double SensorValue(const Manifest& m, const std::string& name, bool tau, double fallback) {
-  const auto found = m.sensors.find(name);
-  if (found == m.sensors.end()) return fallback;
-  const auto& value = tau ? found->second.tau_s : found->second.sigma;
-  return value ? *value : fallback;
-}
-
 double Spread(const std::vector<double>& v, std::size_t end) {
   // Noise level from the samples before the step (flow should be zero there).
   double mean = 0, sq = 0;
@@ -72,16 +65,15 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
       return fit;
     }
   }
-  const double sigma_in = SensorValue(manifest, "q_in", false, Spread(e.column("q_in"), step));
-  const double sigma_out = SensorValue(manifest, "q_out", false, Spread(e.column("q_out"), step));
+  const double sigma_in = manifest.DeclaredSigma("q_in", Spread(e.column("q_in"), step));
+  const double sigma_out = manifest.DeclaredSigma("q_out", Spread(e.column("q_out"), step));
   const std::size_t n = t.size();
   const double tail_flow = e.column("q_in").back();
   double theta[2] = {tail_flow, options.initial_delta_per_s};
   ceres::Problem problem;
   auto* cost = new ceres::DynamicAutoDiffCostFunction<TubeStepResiduals, 4>(new TubeStepResiduals{
-      &t, &e.column("q_in"), &e.column("q_out"), t[step], SensorValue(manifest, "q_in", true, 0.0),
-      SensorValue(manifest, "q_out", true, 0.0), std::max(sigma_in, 1e-12),
-      std::max(sigma_out, 1e-12)});
+      &t, &e.column("q_in"), &e.column("q_out"), t[step], manifest.DeclaredTau("q_in", 0.0),
+      manifest.DeclaredTau("q_out", 0.0), std::max(sigma_in, 1e-12), std::max(sigma_out, 1e-12)});
   cost->AddParameterBlock(2);
   cost->SetNumResiduals(static_cast<int>(2 * n));
   problem.AddResidualBlock(cost, nullptr, theta);

@@ -176,9 +176,7 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
   const auto orifice =
       MakeOrificeCoefficients<double>(rig.gas.heat_capacity_ratio, rig.gas.gas_constant_J_per_kgK,
                                       rig.gas.temperature_K, normalization);
-  const auto sensor = unit.manifest.sensors.find("q");
-  const double tau =
-      sensor != unit.manifest.sensors.end() && sensor->second.tau_s ? *sensor->second.tau_s : 0.0;
+  const double tau = unit.manifest.DeclaredTau("q", 0.0);
   std::vector<ValvePlateau> plateaus;
   for (const Experiment& e : unit.experiments) {
     if (e.entry.kind != ExperimentKind::kValve) continue;
@@ -200,9 +198,7 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
       const double q_mean = Mean(q, first, end);
       double spread = 0;
       for (std::size_t i = first; i < end; ++i) spread += (q[i] - q_mean) * (q[i] - q_mean);
-      const double q_sigma = sensor != unit.manifest.sensors.end() && sensor->second.sigma
-                                 ? *sensor->second.sigma
-                                 : std::sqrt(spread / (n - 1));
+      const double q_sigma = unit.manifest.DeclaredSigma("q", std::sqrt(spread / (n - 1)));
       const double up = Mean(p_up, first, end), down = Mean(p_down, first, end);
       // Eq. 4 per unit of K_vp at the plateau's pressures.
       const double per_kvp = orifice.flow_scale * up * FlowShape(down / up, orifice);

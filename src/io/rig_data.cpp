@@ -467,6 +467,16 @@ const char* ToString(PositionOrigin origin) {
 double RigConstants::area_1_m2() const { return 0.25 * kPi * bore_m * bore_m; }
 double RigConstants::area_2_m2() const { return area_1_m2() - 0.25 * kPi * rod_m * rod_m; }
 
+double Manifest::DeclaredSigma(const std::string& column, double fallback) const {
+  const auto found = sensors.find(column);
+  return found != sensors.end() && found->second.sigma ? *found->second.sigma : fallback;
+}
+
+double Manifest::DeclaredTau(const std::string& column, double fallback) const {
+  const auto found = sensors.find(column);
+  return found != sensors.end() && found->second.tau_s ? *found->second.tau_s : fallback;
+}
+
 std::size_t Experiment::samples() const { return column("t").size(); }
 
 const std::vector<double>& Experiment::column(const std::string& name) const {

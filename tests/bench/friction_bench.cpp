@@ -2,11 +2,12 @@
 // covariance) from 10^5 stroke samples in 1 s or less on one core. The logs
 // are synthetic (the paper's truth, the stroke part of protocol-full with its
 // instruments): five units of seeds 1..5, three cycles per level, merged into
-// one unit of about 10^5 samples.
+// one unit of 136 050 samples.
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
 
+#include "../ident/friction_test_util.h"
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/io/rig_writer.h"
 #include "pneumaid/synth/synthetic_rig.h"
@@ -15,13 +16,7 @@ namespace pneumaid {
 namespace {
 
 Unit StrokeUnit() {
-  Protocol protocol;
-  protocol.stroke_levels_V = {0.3, 0.45, 0.6, 0.8, 1.0};
-  protocol.stroke_cycles = 3;
-  protocol.stroke_max_leg_s = 2.0;
-  protocol.sensors["x"] = {5e-6, 0.0, 1e-5, true};
-  protocol.sensors["p1"] = {300, 0.0, 0.0, true};
-  protocol.sensors["p2"] = {300, 0.0, 0.0, true};
+  const Protocol protocol = testing::StrokeProtocol(3);
   const std::string dir = std::string(PNEUMAID_BINARY_DIR) + "/friction_bench_unit";
   Unit merged;
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
@@ -42,13 +37,7 @@ void BM_FrictionFit100kSamples(benchmark::State& state) {
   static const Unit unit = StrokeUnit();
   std::size_t samples = 0;
   for (const auto& e : unit.experiments) samples += e.samples();
-  FrictionParams prior;  // 30 % off the truth
-  for (StribeckParams* p : {&prior.positive, &prior.negative}) {
-    p->static_force_N *= 1.3;
-    p->dynamic_force_N *= 0.7;
-    p->viscous_N_s_per_m *= 1.3;
-    p->stribeck_velocity_m_per_s *= 0.7;
-  }
+  const FrictionParams prior = testing::ThirtyPercentOff(Parameters{}.friction);
   FrictionFitResult fit;
   for (auto _ : state) {
     fit = FitFriction(unit, prior, FrictionFitOptions{});

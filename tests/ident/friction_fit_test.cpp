@@ -8,22 +8,15 @@
 #include <iostream>
 
 #include "../synth/synth_test_util.h"
+#include "friction_test_util.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/synth/synthetic_rig.h"
 
 namespace pneumaid {
 namespace {
 
-// The stroke part of configs/protocol-full.yaml, with its instruments.
 Unit SyntheticStrokes(const Parameters& truth, std::uint64_t seed, int cycles = 3) {
-  Protocol protocol;
-  protocol.stroke_levels_V = {0.3, 0.45, 0.6, 0.8, 1.0};
-  protocol.stroke_cycles = cycles;
-  protocol.stroke_max_leg_s = 2.0;
-  protocol.sensors["x"] = {5e-6, 0.0, 1e-5, true};
-  protocol.sensors["p1"] = {300, 0.0, 0.0, true};
-  protocol.sensors["p2"] = {300, 0.0, 0.0, true};
-  return testing::WriteAndReadUnit(Synthesize(truth, protocol, seed, "F"),
+  return testing::WriteAndReadUnit(Synthesize(truth, testing::StrokeProtocol(cycles), seed, "F"),
                                    "friction_fit_" + std::to_string(seed));
 }
 
@@ -47,16 +40,7 @@ void ExpectWithinTolerance(const StribeckParams& fit, const StribeckParams& trut
       << direction;
 }
 
-FrictionParams ThirtyPercentOff(const FrictionParams& truth) {
-  FrictionParams prior = truth;
-  for (StribeckParams* p : {&prior.positive, &prior.negative}) {
-    p->static_force_N *= 1.3;
-    p->dynamic_force_N *= 0.7;
-    p->viscous_N_s_per_m *= 1.3;
-    p->stribeck_velocity_m_per_s *= 0.7;
-  }
-  return prior;
-}
+using testing::ThirtyPercentOff;
 
 void ExpectRecovery(const Parameters& truth, std::uint64_t seed) {
   const FrictionFitResult fit = FitFriction(SyntheticStrokes(truth, seed),
@@ -118,7 +102,7 @@ TEST(FrictionFitTest, StandardErrorsAreHonestOverTenSeeds) {
                                 fitted->params.stribeck_velocity_m_per_s};
       const double truths[4] = {exact->static_force_N, exact->dynamic_force_N,
                                 exact->viscous_N_s_per_m, exact->stribeck_velocity_m_per_s};
-      const char* names[4] = {"static_force", "dynamic_force", "viscous", "stribeck_velocity"};
+      const char* names[4] = {"Fs", "Fd", "b", "vs"};
       for (int i = 0; i < 4; ++i) {
         const double z = (values[i] - truths[i]) / fitted->standard_errors.at(names[i]);
         std::cout << "seed " << seed << " " << names[i] << " z " << z << "\n";

@@ -37,6 +37,9 @@ struct FrictionFitOptions {
   // where the replay must have arrested the rod at the right place.
   int max_stuck_samples = 40;
   int arrest_samples = 10;
+  // The force while stuck is replaced by a quadratic fitted to this many of
+  // the stuck phase's last samples (its noise would trigger breakaway early).
+  int stuck_force_samples = 20;
   // Segments with a logged position closer than this to a stroke end [m] are
   // left out: end-stop forces are not part of the friction model.
   double end_margin_m = 1e-3;
@@ -60,7 +63,7 @@ struct FrictionFitOptions {
 struct DirectionFit {
   bool fitted = false;  // false: no slide in this direction, the prior is kept
   StribeckParams params;
-  std::map<std::string, double> standard_errors;  // "static_force" .. "stribeck_velocity"
+  std::map<std::string, double> standard_errors;  // "Fs", "Fd", "b", "vs"
   std::vector<std::string> warnings;              // parameters not identifiable, why
   int segments = 0;                               // segments whose slide goes this way
 };
@@ -69,7 +72,7 @@ struct FrictionFitResult {
   bool fitted = false;
   std::string note;  // why not, or warnings
   DirectionFit positive, negative;
-  std::map<std::string, double> correlations;  // "positive.static_force,negative.viscous" -> r
+  std::map<std::string, double> correlations;  // "positive.Fs,negative.b" -> r
   int segments = 0, samples = 0, excluded_segments = 0, outlier_segments = 0;
   double initial_cost = 0, final_cost = 0;
   int iterations = 0;

@@ -10,8 +10,9 @@
 // (the crossing of the linear F, the zero of v), so the replayed positions are
 // continuous in the friction coefficients and ceres::Jet differentiates them.
 // Sliding is integrated by classical RK4 with a fixed number of substeps per
-// sample interval: the Stribeck drop is fast (M vs / (Fs - Fd), 0.16 ms with
-// the paper's values) but bounded, and a fixed count keeps the cost smooth.
+// sample interval near the Stribeck region: the drop there is fast
+// (M vs / (Fs - Fd), 0.16 ms with the paper's values) but bounded. Above
+// 4 vs a quarter of them suffices (the rod is then a slow first-order system).
 #pragma once
 
 #include <algorithm>
@@ -180,10 +181,13 @@ void ReplayArrestBackward(const RodReplayInput& input, const T& stop_time_s, dou
                           const StribeckCoefficients<T>& negative, T* position) {
   using namespace rod_replay_detail;
   const double h = input.period_s;
-  const double stop = static_cast<double>(ScalarPart(stop_time_s)) / h;
+  const double stop = ScalarPart(stop_time_s) / h;
   std::size_t k = stop <= 0 ? 0 : static_cast<std::size_t>(stop);
   if (k >= input.samples - 1) k = input.samples - 2;
-  for (std::size_t j = k + 1; j < input.samples; ++j) position[j] = T(stop_position_m);
+  // Samples before `first` belong to the forward replay: never overwritten.
+  for (std::size_t j = std::max(k + 1, first); j < input.samples; ++j) {
+    position[j] = T(stop_position_m);
+  }
   RodState<T> s{T(stop_position_m), T(0.0), direction};
   T from = stop_time_s - T(static_cast<double>(k) * h);
   for (std::size_t j = k + 1; j-- > first;) {

@@ -63,6 +63,10 @@ struct Manifest {
   std::map<std::string, SensorInfo> sensors;
   std::vector<ExperimentEntry> experiments;
   std::vector<std::string> defaults_used;  // rig keys that took their default
+
+  // What the sensors block declares for a column's instrument, or `fallback`.
+  double DeclaredSigma(const std::string& column, double fallback) const;
+  double DeclaredTau(const std::string& column, double fallback) const;
 };
 
 struct Experiment {
