@@ -150,9 +150,9 @@ void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyO
       continue;
     }
     *target = direction->params;
-    for (const auto& [name, error] : direction->standard_errors) {
-      report->fitted.push_back(prefix + name);
-      params->uncertainty[prefix + name] = error;
+    for (const auto& [coefficient, error] : direction->standard_errors) {
+      report->fitted.push_back(prefix + coefficient);
+      params->uncertainty[prefix + coefficient] = error;
     }
   }
 }
