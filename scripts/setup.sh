@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(build-essential cmake libeigen3-dev libceres-dev libsundials-dev libyaml-cpp-dev
-          googletest libgtest-dev libcli11-dev libbenchmark-dev)
+          googletest libgtest-dev libcli11-dev libbenchmark-dev curl xz-utils)
 missing=()
 for package in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||
@@ -21,6 +21,9 @@ if ((${#missing[@]})); then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
+
+# An optimised build of Debian's own SUNDIALS source (why: scripts/build-sundials.sh).
+scripts/build-sundials.sh
 
 BUILD_DIR=${BUILD_DIR:-build}
 # shellcheck disable=SC2086
