@@ -44,26 +44,4 @@ ActuatorLayout ActuatorLayout::For(const Parameters& params) {
   return layout;
 }
 
-void SetLagStatesToEquilibrium(const ActuatorLayout& layout, const ActuatorCoefficients<double>& c,
-                               const ValveCommand& command, double* y) {
-  if (layout.valve_lag) {
-    for (int i = 0; i < kValveCount; ++i) y[layout.opening_begin + i] = command.opening[i];
-  }
-  const auto opening = ValveOpeningsInUse(layout, command, y);
-  const auto gain = ValveGains(c, command, opening);
-  if (layout.conductance_lag) {
-    for (int i = 0; i < kValveCount; ++i) y[layout.conductance_begin + i] = gain[i];
-  }
-  const ChamberPressures<double> chambers = DecodeChambers(c, y);
-  const auto flow = ValveFlows(c, gain, chambers.p1_Pa, chambers.p2_Pa);
-  if (layout.flow_lag) {
-    y[layout.flow_begin] = flow[0];
-    y[layout.flow_begin + 1] = flow[1];
-  }
-  if (layout.flow_sensor_lag) {
-    y[layout.sensor_begin] = flow[0];
-    y[layout.sensor_begin + 1] = flow[1];
-  }
-}
-
 }  // namespace pneumaid

@@ -11,6 +11,7 @@
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 namespace pneumaid::internal {
 
@@ -36,6 +37,28 @@ using MatrixPtr = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, MatrixDelete
 using LinearSolverPtr =
     std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, LinearSolverDeleter>;
 using CvodePtr = std::unique_ptr<void, CvodeDeleter>;
+
+// An owned N_VCloneVectorArray (the sensitivity vectors).
+class VectorArray {
+ public:
+  VectorArray() = default;
+  VectorArray(N_Vector* vectors, int count) : vectors_(vectors), count_(count) {}
+  VectorArray(const VectorArray&) = delete;
+  VectorArray& operator=(const VectorArray&) = delete;
+  VectorArray& operator=(VectorArray&& other) noexcept {
+    std::swap(vectors_, other.vectors_);
+    std::swap(count_, other.count_);
+    return *this;
+  }
+  ~VectorArray() {
+    if (vectors_ != nullptr) N_VDestroyVectorArray(vectors_, count_);
+  }
+  N_Vector* get() const { return vectors_; }
+
+ private:
+  N_Vector* vectors_ = nullptr;
+  int count_ = 0;
+};
 
 // Thrown only while setting the solver up (allocation failures), never from a
 // callback; Simulate converts it into a failed summary.

@@ -4,16 +4,27 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 #include "cvode_handles.h"
 #include "fast_kernels.h"
 #include "pneumaid/model/effects.h"
+#include "pneumaid/model/parameter_table.h"
+#include "pneumaid/sim/sensitivities.h"
 
 namespace pneumaid {
 namespace {
 
 using JetN = ceres::Jet<double, kMaxStates>;
+// One derivative direction per free parameter (sensitivities.h).
+using JetP = ceres::Jet<double, kMaxSensitivityParameters>;
+
+inline double Value(double x) { return x; }
+template <int N>
+double Value(const ceres::Jet<double, N>& x) {
+  return x.a;
+}
 
 // Everything the CVODE callbacks need. The command changes between segments;
 // the layout and coefficients are fixed for the run.
@@ -29,7 +40,42 @@ struct ModelData {
   // right after a restart v is only known to within its tolerance.
   double reversal_velocity_m_per_s = 0.0;
   std::string last_solver_message;
+  // Parameter sensitivities: how many (0: none), and the coefficients with
+  // their derivatives with respect to each free parameter.
+  int parameter_count = 0;
+  std::unique_ptr<ActuatorCoefficients<JetP>> parameter_coefficients;  // null without
 };
+
+// The state as Jets whose derivative j is the sensitivity s_j = dy/dp_j.
+void LoadStateJets(int size, int parameter_count, const double* y, const N_Vector* sensitivities,
+                   JetP* jets) {
+  for (int i = 0; i < size; ++i) {
+    jets[i] = JetP(y[i]);
+    for (int j = 0; j < parameter_count; ++j)
+      jets[i].v[j] = N_VGetArrayPointer(sensitivities[j])[i];
+  }
+}
+
+// CVODES sensitivity right-hand sides, all at once: s_j' = f_y s_j + f_p_j is
+// the derivative part of f evaluated at Jets carrying s_j and dc/dp_j.
+int SensitivityRightHandSide(int count, sunrealtype, N_Vector y, N_Vector, N_Vector* sensitivities,
+                             N_Vector* rates, void* user_data, N_Vector, N_Vector) {
+  const auto* data = static_cast<const ModelData*>(user_data);
+  const int n = data->layout.size;
+  JetP state[kMaxStates];
+  JetP rate[kMaxStates];
+  LoadStateJets(n, count, N_VGetArrayPointer(y), sensitivities, state);
+  ActuatorDerivatives(data->layout, *data->parameter_coefficients, data->command, data->motion,
+                      state, rate, static_cast<ActuatorOutputs<JetP>*>(nullptr));
+  for (int j = 0; j < count; ++j) {
+    double* out = N_VGetArrayPointer(rates[j]);
+    for (int i = 0; i < n; ++i) {
+      out[i] = rate[i].v[j];
+      if (!std::isfinite(out[i])) return 1;
+    }
+  }
+  return 0;
+}
 
 // CVODE right-hand side. Returns 1 (recoverable: CVODE retries with a smaller
 // step) on a non-finite rate; never throws. (Pressures are positive by
@@ -71,46 +117,50 @@ int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_d
 // it, this margin only absorbs round-off.
 constexpr double kAtStop_m = 1e-9;
 
-bool AtExtendedStop(const ModelData& data, const double* y) {
-  return y[kPosition] >= data.coefficients.end_stop.half_stroke_m - kAtStop_m;
+bool AtExtendedStop(const ModelData& data, double position_m) {
+  return position_m >= data.coefficients.end_stop.half_stroke_m - kAtStop_m;
 }
-bool AtRetractedStop(const ModelData& data, const double* y) {
-  return y[kPosition] <= -data.coefficients.end_stop.half_stroke_m + kAtStop_m;
+bool AtRetractedStop(const ModelData& data, double position_m) {
+  return position_m <= -data.coefficients.end_stop.half_stroke_m + kAtStop_m;
 }
 
 // Stick/slip and end-stop switching surfaces. Stuck: the driving force
 // reaches the breakaway force plus a margin (the switching hysteresis) in a
 // direction the rod can move. Sliding: the velocity returns to zero (g0) or
-// the rod reaches the end of the stroke (g1). Never throws.
-int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
-  const auto* data = static_cast<const ModelData*>(user_data);
-  const double* state = N_VGetArrayPointer(y);
-  const auto& c = data->coefficients;
-  const double half_stroke = c.end_stop.half_stroke_m;
-  switch (data->motion) {
+// the rod reaches the end of the stroke (g1). Templated so that the event
+// sensitivities can differentiate them.
+template <typename T>
+void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g) {
+  const T half_stroke = c.end_stop.half_stroke_m;
+  const T margin(data.breakaway_margin_N);
+  const T reversal(data.reversal_velocity_m_per_s);
+  switch (data.motion) {
     case MotionMode::kStuck: {
-      const ChamberPressures<double> p = DecodeChambers(c, state);
-      const double force = DrivingForce(c, state, p);
-      g[0] = AtExtendedStop(*data, state)
-                 ? -1.0
-                 : force - BreakawayForce(c, p, +1.0) - data->breakaway_margin_N;
-      g[1] = AtRetractedStop(*data, state)
-                 ? 1.0
-                 : force + BreakawayForce(c, p, -1.0) + data->breakaway_margin_N;
+      const ChamberPressures<T> p = DecodeChambers(c, y);
+      const T force = DrivingForce(c, y, p);
+      const double x = Value(y[kPosition]);
+      g[0] = AtExtendedStop(data, x) ? T(-1.0) : force - BreakawayForce(c, p, +1.0) - margin;
+      g[1] = AtRetractedStop(data, x) ? T(1.0) : force + BreakawayForce(c, p, -1.0) + margin;
       break;
     }
     case MotionMode::kSlidingPositive:
-      g[0] = state[kVelocity] + data->reversal_velocity_m_per_s;
-      g[1] = half_stroke - state[kPosition];
+      g[0] = y[kVelocity] + reversal;
+      g[1] = half_stroke - y[kPosition];
       break;
     case MotionMode::kSlidingNegative:
-      g[0] = state[kVelocity] - data->reversal_velocity_m_per_s;
-      g[1] = state[kPosition] + half_stroke;
+      g[0] = y[kVelocity] - reversal;
+      g[1] = y[kPosition] + half_stroke;
       break;
     case MotionMode::kRegularized:
-      g[0] = g[1] = 1.0;
+      g[0] = g[1] = T(1.0);
       break;
   }
+}
+
+// CVODE root function. Never throws.
+int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
+  const auto* data = static_cast<const ModelData*>(user_data);
+  SwitchingValues(*data, data->coefficients, N_VGetArrayPointer(y), g);
   return 0;
 }
 
@@ -121,10 +171,12 @@ MotionMode ModeAtRest(const ModelData& data, const double* y) {
   const auto& c = data.coefficients;
   const ChamberPressures<double> p = DecodeChambers(c, y);
   const double force = DrivingForce(c, y, p);
-  if (!AtExtendedStop(data, y) && force > BreakawayForce(c, p, +1.0) + data.breakaway_margin_N) {
+  if (!AtExtendedStop(data, y[kPosition]) &&
+      force > BreakawayForce(c, p, +1.0) + data.breakaway_margin_N) {
     return MotionMode::kSlidingPositive;
   }
-  if (!AtRetractedStop(data, y) && force < -BreakawayForce(c, p, -1.0) - data.breakaway_margin_N) {
+  if (!AtRetractedStop(data, y[kPosition]) &&
+      force < -BreakawayForce(c, p, -1.0) - data.breakaway_margin_N) {
     return MotionMode::kSlidingNegative;
   }
   return MotionMode::kStuck;
@@ -183,6 +235,38 @@ class Integrator {
 
   double* state() { return N_VGetArrayPointer(state_.get()); }
 
+  // Turns on forward sensitivities for data->parameter_count parameters,
+  // starting from initial[j][i] = dy_i(t0)/dp_j.
+  void EnableSensitivities(const std::vector<std::vector<double>>& initial,
+                           const SensitivityOptions& options) {
+    const int count = data_->parameter_count;
+    sensitivity_storage_ = internal::VectorArray(
+        CheckAllocated(N_VCloneVectorArray(count, state_.get()), "N_VCloneVectorArray"), count);
+    sensitivities_ = sensitivity_storage_.get();
+    for (int j = 0; j < count; ++j) {
+      for (int i = 0; i < size_; ++i) N_VGetArrayPointer(sensitivities_[j])[i] = initial[j][i];
+    }
+    void* mem = memory_.get();
+    CheckFlag(CVodeSensInit(mem, count, CV_STAGGERED, SensitivityRightHandSide, sensitivities_),
+              "CVodeSensInit");
+    std::vector<double> scales = options.parameter_scales;
+    CheckFlag(CVodeSetSensParams(mem, nullptr, scales.data(), nullptr), "CVodeSetSensParams");
+    CheckFlag(CVodeSensEEtolerances(mem), "CVodeSensEEtolerances");
+    CheckFlag(CVodeSetSensErrCon(mem, options.error_control ? SUNTRUE : SUNFALSE),
+              "CVodeSetSensErrCon");
+  }
+
+  // dy/dp_j at the time CVODE last returned (nullptr without sensitivities).
+  const N_Vector* Sensitivities() {
+    if (sensitivities_ == nullptr) return nullptr;
+    if (!sensitivities_current_) {
+      double t = 0;
+      if (CVodeGetSens(memory_.get(), &t, sensitivities_) < 0) return nullptr;
+      sensitivities_current_ = true;
+    }
+    return sensitivities_;
+  }
+
   // Integrates to `target`, never past `stop`, switching the motion mode at
   // every stick/slip event on the way. Returns CVODE's flag (< 0 fails).
   int AdvanceTo(double target, double stop) {
@@ -191,6 +275,7 @@ class Integrator {
     while (flag >= 0) {
       double reached = 0;
       flag = CVode(mem, target, state_.get(), &reached, CV_NORMAL);
+      sensitivities_current_ = false;
       if (flag != CV_ROOT_RETURN) return flag;
       SwitchMotionMode();
       flag = Restart(reached);
@@ -201,11 +286,18 @@ class Integrator {
 
   long events() const { return events_; }
 
-  // Restarts at low order after a jump of the right-hand side at time t.
+  // Restarts at low order after a jump of the right-hand side at time t
+  // (the sensitivities carry over, with any jump SwitchMotionMode applied).
   int Restart(double t) {
+    const N_Vector* sensitivities = Sensitivities();
     banked_ = Counters();  // CVodeReInit zeroes CVODE's counters
     ++restarts_;
-    return CVodeReInit(memory_.get(), t, state_.get());
+    int flag = CVodeReInit(memory_.get(), t, state_.get());
+    if (flag >= 0 && sensitivities != nullptr) {
+      flag = CVodeSensReInit(memory_.get(), CV_STAGGERED, sensitivities_);
+    }
+    sensitivities_current_ = false;
+    return flag;
   }
 
   // At a root of SwitchingFunctions: stuck -> sliding in the direction that
@@ -216,18 +308,75 @@ class Integrator {
     double* y = state();
     int roots[2] = {0, 0};
     CVodeGetRootInfo(memory_.get(), roots);
+    const int fired = roots[0] != 0 ? 0 : 1;
+    EventJump jump;
+    const bool with_sensitivities = Sensitivities() != nullptr;
+    if (with_sensitivities) jump = EventTimeSensitivities(fired);
     if (data_->motion == MotionMode::kStuck) {
-      data_->motion = roots[0] != 0 ? MotionMode::kSlidingPositive : MotionMode::kSlidingNegative;
-      return;
+      data_->motion = fired == 0 ? MotionMode::kSlidingPositive : MotionMode::kSlidingNegative;
+    } else {
+      if (fired == 1) {
+        const double half_stroke = data_->coefficients.end_stop.half_stroke_m;
+        y[kPosition] = data_->motion == MotionMode::kSlidingPositive ? half_stroke : -half_stroke;
+        jump.reset_position = true;
+      }
+      y[kVelocity] = 0.0;
+      jump.reset_velocity = true;
+      data_->motion = ModeAtRest(*data_, y);
     }
-    if (roots[1] != 0) {
-      const double half_stroke = data_->coefficients.end_stop.half_stroke_m;
-      y[kPosition] = data_->motion == MotionMode::kSlidingPositive ? half_stroke : -half_stroke;
-    }
-    y[kVelocity] = 0.0;
-    data_->motion = ModeAtRest(*data_, y);
+    if (with_sensitivities) ApplySensitivityJump(jump);
   }
 
+ private:
+  // What an event does to the sensitivities: the right-hand side before it,
+  // d(event time)/dp, and which states the reset overwrites.
+  struct EventJump {
+    double rate_before[kMaxStates] = {};
+    double time_derivative[kMaxSensitivityParameters] = {};
+    bool reset_position = false, reset_velocity = false;
+  };
+
+  // tau_p = -(g_y s + g_p) / (g_y f) for the switching function that fired.
+  EventJump EventTimeSensitivities(int fired) {
+    EventJump jump;
+    const double* y = state();
+    const int count = data_->parameter_count;
+    ActuatorDerivatives(data_->layout, data_->coefficients, data_->command, data_->motion, y,
+                        jump.rate_before, static_cast<ActuatorOutputs<double>*>(nullptr));
+    JetN along_state[kMaxStates];
+    for (int i = 0; i < size_; ++i) along_state[i] = JetN(y[i], i);
+    JetN g_state[2];
+    SwitchingValues(*data_, data_->jet_coefficients, along_state, g_state);
+    double g_rate = 0;  // dg/dt along the trajectory
+    for (int i = 0; i < size_; ++i) g_rate += g_state[fired].v[i] * jump.rate_before[i];
+    // A grazing event (dg/dt ~ 0) has no well-defined time derivative; its
+    // jump is left out (the rod touches the surface without crossing it).
+    if (!(std::fabs(g_rate) > 1e-12)) return jump;
+    JetP carried[kMaxStates];
+    LoadStateJets(size_, count, y, sensitivities_, carried);
+    JetP g_parameter[2];
+    SwitchingValues(*data_, *data_->parameter_coefficients, carried, g_parameter);
+    for (int j = 0; j < count; ++j) jump.time_derivative[j] = -g_parameter[fired].v[j] / g_rate;
+    return jump;
+  }
+
+  // s+ = H (s- + f- tau_p) - f+ tau_p, with H zeroing the reset states.
+  void ApplySensitivityJump(const EventJump& jump) {
+    double rate_after[kMaxStates];
+    ActuatorDerivatives(data_->layout, data_->coefficients, data_->command, data_->motion, state(),
+                        rate_after, static_cast<ActuatorOutputs<double>*>(nullptr));
+    for (int j = 0; j < data_->parameter_count; ++j) {
+      double* s = N_VGetArrayPointer(sensitivities_[j]);
+      const double tau = jump.time_derivative[j];
+      for (int i = 0; i < size_; ++i) {
+        const bool reset =
+            (i == kPosition && jump.reset_position) || (i == kVelocity && jump.reset_velocity);
+        s[i] = (reset ? 0.0 : s[i] + jump.rate_before[i] * tau) - rate_after[i] * tau;
+      }
+    }
+  }
+
+ public:
   // Work done so far, restarts included.
   SimulationSummary Counters() const {
     void* mem = memory_.get();
@@ -275,7 +424,10 @@ class Integrator {
   internal::VectorPtr tolerances_;
   internal::MatrixPtr matrix_;
   internal::LinearSolverPtr solver_;
+  internal::VectorArray sensitivity_storage_;  // before memory_: outlives CVODES
   internal::CvodePtr memory_;
+  N_Vector* sensitivities_ = nullptr;  // sensitivity_storage_'s vectors, or null
+  bool sensitivities_current_ = false;
   SimulationSummary banked_;
   long restarts_ = 0;
   long events_ = 0;
@@ -357,10 +509,76 @@ void AppendSample(const ModelData& data, double t, double command_V, const doubl
   out->q2_kg_per_s.push_back(outputs.q2_kg_per_s);
 }
 
-// The run itself, once inputs are known to be valid.
+// The coefficients with dc/dp_j of each free parameter in derivative j, by
+// central differences of the (algebraic) parameter -> coefficient map.
+ActuatorCoefficients<JetP> CoefficientsWithDerivatives(const Parameters& params,
+                                                       const SensitivityOptions& sensitivity,
+                                                       const ModelRegularization& regularization) {
+  auto base = MakeActuatorCoefficients<double>(params, regularization);
+  ActuatorCoefficients<JetP> result;
+  JetP* out = CoefficientArray(&result);
+  const double* value = CoefficientArray(&base);
+  for (int k = 0; k < kCoefficientCount<double>; ++k) out[k] = JetP(value[k]);
+  for (size_t j = 0; j < sensitivity.parameter_paths.size(); ++j) {
+    const std::string& path = sensitivity.parameter_paths[j];
+    double nominal = 0;
+    GetParameter(params, path, &nominal);
+    const double step = 1e-6 * sensitivity.parameter_scales[j];
+    Parameters up = params, down = params;
+    SetParameter(&up, path, nominal + step);
+    SetParameter(&down, path, nominal - step);
+    auto plus = MakeActuatorCoefficients<double>(up, regularization);
+    auto minus = MakeActuatorCoefficients<double>(down, regularization);
+    const double* p = CoefficientArray(&plus);
+    const double* m = CoefficientArray(&minus);
+    for (int k = 0; k < kCoefficientCount<double>; ++k) out[k].v[j] = (p[k] - m[k]) / (2 * step);
+  }
+  return result;
+}
+
+// Fills row `row` of the output sensitivities from the state sensitivities.
+void AppendSensitivities(const ModelData& data, const double* y, const N_Vector* sensitivities,
+                         Eigen::Index row, TrajectorySensitivities* out) {
+  JetP state[kMaxStates];
+  JetP rate[kMaxStates];
+  LoadStateJets(data.layout.size, data.parameter_count, y, sensitivities, state);
+  ActuatorOutputs<JetP> outputs;
+  ActuatorDerivatives(data.layout, *data.parameter_coefficients, data.command, data.motion, state,
+                      rate, &outputs);
+  const ChamberPressures<JetP> chambers = DecodeChambers(*data.parameter_coefficients, state);
+  for (int j = 0; j < data.parameter_count; ++j) {
+    out->x(row, j) = state[kPosition].v[j];
+    out->p1(row, j) = chambers.p1_Pa.v[j];
+    out->p2(row, j) = chambers.p2_Pa.v[j];
+    out->q1(row, j) = outputs.q1_kg_per_s.v[j];
+    out->q2(row, j) = outputs.q2_kg_per_s.v[j];
+  }
+}
+
+// dy(t0)/dp: the chamber states and settled lags depend on the parameters
+// even though the initial pressures and position do not.
+std::vector<std::vector<double>> InitialSensitivities(const ModelData& data,
+                                                      const InitialState& initial) {
+  JetP y[kMaxStates];
+  for (auto& value : y) value = JetP(0.0);
+  y[kPosition] = JetP(initial.position_m);
+  y[kVelocity] = JetP(data.motion == MotionMode::kStuck ? 0.0 : initial.velocity_m_per_s);
+  SetChamberPressures(*data.parameter_coefficients, JetP(initial.p1_Pa), JetP(initial.p2_Pa), y);
+  SetLagStatesToEquilibrium(data.layout, *data.parameter_coefficients, data.command, y);
+  std::vector<std::vector<double>> s(static_cast<size_t>(data.parameter_count),
+                                     std::vector<double>(static_cast<size_t>(data.layout.size)));
+  for (int j = 0; j < data.parameter_count; ++j) {
+    for (int i = 0; i < data.layout.size; ++i) s[j][i] = y[i].v[j];
+  }
+  return s;
+}
+
+// The run itself, once inputs are known to be valid. `sensitivity` and
+// `derivatives` are both null (plain run) or both set.
 SimulationSummary Run(const Parameters& params, const CommandSignal& command,
                       const InitialState& initial, const std::vector<double>& times,
-                      const SimulationOptions& options, Trajectory* out) {
+                      const SimulationOptions& options, const SensitivityOptions* sensitivity,
+                      Trajectory* out, TrajectorySensitivities* derivatives) {
   ModelData data;
   data.layout = ActuatorLayout::For(params);
   data.coefficients = MakeActuatorCoefficients<double>(params, options.regularization);
@@ -379,6 +597,15 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
                                                                   : MotionMode::kRegularized;
   if (data.motion == MotionMode::kStuck) y0[kVelocity] = 0.0;
 
+  // Taken where y0 is: before the knots at t0 change the command.
+  std::vector<std::vector<double>> initial_sensitivities;
+  if (sensitivity != nullptr) {
+    data.parameter_count = static_cast<int>(sensitivity->parameter_paths.size());
+    data.parameter_coefficients = std::make_unique<ActuatorCoefficients<JetP>>(
+        CoefficientsWithDerivatives(params, *sensitivity, options.regularization));
+    initial_sensitivities = InitialSensitivities(data, initial);
+  }
+
   // Knots at or before t0 have already happened: apply them in order.
   size_t next_knot = 0;
   double current_V = command.initial_V;
@@ -388,6 +615,13 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   }
 
   Integrator integrator(&data, options, t0, y0);
+  if (sensitivity != nullptr) {
+    integrator.EnableSensitivities(initial_sensitivities, *sensitivity);
+    for (Eigen::MatrixXd* m : {&derivatives->x, &derivatives->p1, &derivatives->p2,
+                               &derivatives->q1, &derivatives->q2}) {
+      m->setZero(static_cast<Eigen::Index>(times.size()), data.parameter_count);
+    }
+  }
   double t = t0;
   const double t_end = times.back();
   *out = Trajectory{};
@@ -427,6 +661,12 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
     }
     if (integrator.Counters().steps > options.max_steps) return fail("step budget exhausted");
     if (integrator.events() > options.max_events) return fail("stick/slip event budget exhausted");
+    if (sensitivity != nullptr) {
+      const N_Vector* s = integrator.Sensitivities();
+      if (s == nullptr) return fail("sensitivities unavailable");
+      AppendSensitivities(data, integrator.state(), s, static_cast<Eigen::Index>(out->size()),
+                          derivatives);
+    }
     AppendSample(data, t_out, current_V, integrator.state(), out);
   }
   summary = integrator.Counters();
@@ -477,17 +717,26 @@ std::string SimulationSummary::BriefReport() const {
   return out.str();
 }
 
-SimulationSummary Simulate(const Parameters& params, const CommandSignal& command,
-                           const InitialState& initial, const std::vector<double>& output_times_s,
-                           const SimulationOptions& options, Trajectory* out) {
+namespace {
+
+SimulationSummary SimulateTimed(const Parameters& params, const CommandSignal& command,
+                                const InitialState& initial,
+                                const std::vector<double>& output_times_s,
+                                const SimulationOptions& options,
+                                const SensitivityOptions* sensitivity, Trajectory* out,
+                                TrajectorySensitivities* derivatives) {
   const auto start = std::chrono::steady_clock::now();
   SimulationSummary summary;
-  const std::string problem = CheckInputs(params, command, initial, output_times_s, options);
+  std::string problem = CheckInputs(params, command, initial, output_times_s, options);
+  if (problem.empty() && sensitivity != nullptr) {
+    if (!sensitivity->IsValid(params, &problem)) problem = "sensitivities: " + problem;
+  }
   if (!problem.empty()) {
     summary = Failure(SimulationStatus::kInvalidInput, problem);
   } else {
     try {
-      summary = Run(params, command, initial, output_times_s, options, out);
+      summary =
+          Run(params, command, initial, output_times_s, options, sensitivity, out, derivatives);
     } catch (const internal::SundialsSetupError& error) {
       summary = Failure(SimulationStatus::kSolverFailure, error.what());
     }
@@ -496,6 +745,48 @@ SimulationSummary Simulate(const Parameters& params, const CommandSignal& comman
   summary.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
+}
+
+}  // namespace
+
+SimulationSummary Simulate(const Parameters& params, const CommandSignal& command,
+                           const InitialState& initial, const std::vector<double>& output_times_s,
+                           const SimulationOptions& options, Trajectory* out) {
+  return SimulateTimed(params, command, initial, output_times_s, options, nullptr, out, nullptr);
+}
+
+SimulationSummary SimulateWithSensitivities(const Parameters& params, const CommandSignal& command,
+                                            const InitialState& initial,
+                                            const std::vector<double>& output_times_s,
+                                            const SimulationOptions& options,
+                                            const SensitivityOptions& sensitivity, Trajectory* out,
+                                            TrajectorySensitivities* derivatives) {
+  return SimulateTimed(params, command, initial, output_times_s, options, &sensitivity, out,
+                       derivatives);
+}
+
+bool SensitivityOptions::IsValid(const Parameters& params, std::string* error) const {
+  const auto fail = [error](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (parameter_paths.empty()) return fail("no free parameters");
+  if (parameter_paths.size() > static_cast<size_t>(kMaxSensitivityParameters)) {
+    return fail("at most " + std::to_string(kMaxSensitivityParameters) + " free parameters");
+  }
+  if (parameter_scales.size() != parameter_paths.size()) {
+    return fail("one scale per free parameter expected");
+  }
+  for (size_t j = 0; j < parameter_paths.size(); ++j) {
+    double value = 0;
+    if (!GetParameter(params, parameter_paths[j], &value)) {
+      return fail("no parameter " + parameter_paths[j] + " in this parameter set");
+    }
+    if (!(parameter_scales[j] > 0 && std::isfinite(parameter_scales[j]))) {
+      return fail("the scale of " + parameter_paths[j] + " must be > 0");
+    }
+  }
+  return true;
 }
 
 std::vector<double> UniformTimes(double t0_s, double t_end_s, double rate_Hz) {

@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <string>
+#include <type_traits>
 
 #include "pneumaid/model/chamber.h"
 #include "pneumaid/model/friction.h"
@@ -343,7 +344,38 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
 
 // Sets the lag states of `y` to their steady values for `command` at the
 // pressures already in `y`, as if the command had been held for a long time.
-void SetLagStatesToEquilibrium(const ActuatorLayout& layout, const ActuatorCoefficients<double>& c,
-                               const ValveCommand& command, double* y);
+template <typename T>
+void SetLagStatesToEquilibrium(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                               const ValveCommand& command, T* y) {
+  if (layout.valve_lag) {
+    for (int i = 0; i < kValveCount; ++i) y[layout.opening_begin + i] = T(command.opening[i]);
+  }
+  const auto opening = ValveOpeningsInUse(layout, command, y);
+  const auto gain = ValveGains(c, command, opening);
+  if (layout.conductance_lag) {
+    for (int i = 0; i < kValveCount; ++i) y[layout.conductance_begin + i] = gain[i];
+  }
+  const ChamberPressures<T> chambers = DecodeChambers(c, y);
+  const auto flow = ValveFlows(c, gain, chambers.p1_Pa, chambers.p2_Pa);
+  for (int i = 0; i < 2; ++i) {
+    if (layout.flow_lag) y[layout.flow_begin + i] = flow[i];
+    if (layout.flow_sensor_lag) y[layout.sensor_begin + i] = flow[i];
+  }
+}
+
+// The coefficients seen as a flat array of scalars: every member of
+// ActuatorCoefficients<T> is a T (checked where this is used), so parameter
+// sensitivities can be carried coefficient by coefficient.
+template <typename T>
+inline constexpr int kCoefficientCount = static_cast<int>(sizeof(ActuatorCoefficients<T>) /
+                                                          sizeof(T));
+
+template <typename T>
+T* CoefficientArray(ActuatorCoefficients<T>* c) {
+  static_assert(std::is_standard_layout_v<ActuatorCoefficients<T>>);
+  static_assert(sizeof(ActuatorCoefficients<T>) % sizeof(T) == 0);
+  static_assert(kCoefficientCount<T> == kCoefficientCount<double>);
+  return reinterpret_cast<T*>(c);
+}
 
 }  // namespace pneumaid
