@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "pneumaid/ident/refine.h"
+
 namespace pneumaid::cli {
 
 // Exit statuses of every command (params spec).
@@ -27,10 +29,15 @@ std::map<std::string, double> ParseAssignments(
     const std::vector<std::string>& items, const std::string& option, const std::string& expected,
     const std::function<bool(const std::string&)>& key_allowed = {});
 
+// Prints a refinement's report and writes its parameter set; the exit status
+// says whether it converged (refine, identify --refine).
+int ReportAndSave(const RefineResult& result, const std::string& out_path);
+
 CommandRunner AddSimulateCommand(CLI::App* app);
 CommandRunner AddSynthCommand(CLI::App* app);
 CommandRunner AddCheckCommand(CLI::App* app);
 CommandRunner AddValidateCommand(CLI::App* app);
 CommandRunner AddIdentifyCommand(CLI::App* app);
+CommandRunner AddRefineCommand(CLI::App* app);
 
 }  // namespace pneumaid::cli

@@ -17,6 +17,9 @@ struct IdentifyArgs {
   std::string only;  // "valve,pipeline"
   std::string prior_path = PNEUMAID_DEFAULT_PRIOR;
   std::string out_path;
+  bool refine = false;
+  std::string spec_path = PNEUMAID_DEFAULT_FIT_SPEC;
+  int threads = 1;
 };
 
 std::string UtcNow() {
@@ -56,6 +59,12 @@ int RunIdentify(const IdentifyArgs& args) {
   IdentifyReport report;
   const Parameters identified = Identify(unit, prior, options, &report);
   std::cout << report.BriefReport();
+  if (args.refine) {
+    RefineOptions refine;
+    refine.threads = args.threads;
+    return ReportAndSave(Refine(identified, unit, LoadFitSpec(args.spec_path), refine),
+                         args.out_path);
+  }
   SaveParams(identified, args.out_path);
   std::cout << "wrote " << args.out_path << "\n";
   return kSuccess;
@@ -71,6 +80,11 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
   app->add_option("--prior", args->prior_path, "parameter set for what is not fitted")
       ->capture_default_str();
   app->add_option("--out", args->out_path, "identified parameter set (params-v1)")->required();
+  app->add_flag("--refine", args->refine,
+                "after the component fits, refine through the simulator (see --spec)");
+  app->add_option("--spec", args->spec_path, "fit spec for --refine")->capture_default_str();
+  app->add_option("--threads", args->threads, "--refine: experiments simulated in parallel")
+      ->check(CLI::Range(1, 256));
   return [args]() { return RunIdentify(*args); };
 }
 

@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   runners[check] = AddCheckCommand(check);
   CLI::App* identify = app.add_subcommand("identify", "fit a parameter set to a unit's logs");
   runners[identify] = AddIdentifyCommand(identify);
+  CLI::App* refine = app.add_subcommand(
+      "refine", "refit chosen parameters through the simulator on several experiments");
+  runners[refine] = AddRefineCommand(refine);
   CLI::App* validate =
       app.add_subcommand("validate", "simulate a unit's validation runs and compare");
   runners[validate] = AddValidateCommand(validate);

@@ -76,48 +76,6 @@ class ProtocolReader : internal::YamlReader {
     return p;
   }
 
-  std::string Text(const YAML::Node& node) const { return Scalar(node, "value"); }
-
-  double Number(const YAML::Node& node, const std::string& path) const {
-    const std::string text = Text(node);
-    char* end = nullptr;
-    const double value = std::strtod(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || !std::isfinite(value)) {
-      Fail(node, path + ": expected a finite number in SI units");
-    }
-    return value;
-  }
-
-  double Positive(const YAML::Node& node, const std::string& path) const {
-    const double value = Number(node, path);
-    if (!(value > 0)) Fail(node, path + ": expected > 0");
-    return value;
-  }
-
-  bool Flag(const YAML::Node& node) const {
-    const std::string text = Text(node);
-    if (text != "true" && text != "false") Fail(node, "expected true | false");
-    return text == "true";
-  }
-
-  std::vector<double> List(const YAML::Node& node, const std::string& path) const {
-    if (!node || !node.IsSequence() || node.size() == 0) {
-      Fail(node ? node : YAML::Node(), path + ": expected a non-empty list of numbers");
-    }
-    std::vector<double> out;
-    for (const auto& item : node) out.push_back(Positive(item, path));
-    return out;
-  }
-
-  void Keys(const YAML::Node& node, const std::string& prefix,
-            const std::set<std::string>& allowed) const {
-    if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
-    for (const auto& entry : node) {
-      const std::string key = Key(entry.first);
-      if (!allowed.count(key)) Fail(entry.first, "unknown key '" + prefix + key + "'");
-    }
-  }
-
   void ReadUnits(const YAML::Node& units, Protocol* p) const {
     if (!units) return;
     Keys(units, "units.", {"length", "pressure", "flow"});

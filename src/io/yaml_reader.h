@@ -6,7 +6,11 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
+#include <cstdlib>
+#include <set>
 #include <string>
+#include <vector>
 
 #include "pneumaid/io/input_error.h"
 
@@ -44,6 +48,50 @@ class YamlReader {
   std::string Scalar(const YAML::Node& node, const std::string& path) const {
     if (!node.IsScalar()) Fail(node, path + ": expected a scalar value");
     return node.Scalar();
+  }
+
+  std::string Text(const YAML::Node& node) const { return Scalar(node, "value"); }
+
+  double Number(const YAML::Node& node, const std::string& path) const {
+    const std::string text = Text(node);
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || !std::isfinite(value)) {
+      Fail(node, path + ": expected a finite number in SI units");
+    }
+    return value;
+  }
+
+  // Strictly positive.
+  double Positive(const YAML::Node& node, const std::string& path) const {
+    const double value = Number(node, path);
+    if (!(value > 0)) Fail(node, path + ": expected > 0");
+    return value;
+  }
+
+  bool Flag(const YAML::Node& node) const {
+    const std::string text = Text(node);
+    if (text != "true" && text != "false") Fail(node, "expected true | false");
+    return text == "true";
+  }
+
+  std::vector<double> List(const YAML::Node& node, const std::string& path) const {
+    if (!node || !node.IsSequence() || node.size() == 0) {
+      Fail(node ? node : YAML::Node(), path + ": expected a non-empty list of numbers");
+    }
+    std::vector<double> out;
+    for (const auto& item : node) out.push_back(Positive(item, path));
+    return out;
+  }
+
+  // Fails on the first key of `node` not in `allowed`, naming it with `prefix`.
+  void Keys(const YAML::Node& node, const std::string& prefix,
+            const std::set<std::string>& allowed) const {
+    if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
+    for (const auto& entry : node) {
+      const std::string key = Key(entry.first);
+      if (!allowed.count(key)) Fail(entry.first, "unknown key '" + prefix + key + "'");
+    }
   }
 
   // Runs `read`, turning any yaml-cpp exception into an InputError.

@@ -2,11 +2,15 @@
 
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 namespace pneumaid::internal {
 namespace {
+
+// Largest system the dense solver takes (the actuator has at most 14 states).
+constexpr sunindextype kMaxDenseSize = 32;
 
 inline double* Data(N_Vector v) { return NV_DATA_S(v); }
 inline sunindextype Length(N_Vector v) { return NV_LENGTH_S(v); }
@@ -116,9 +120,14 @@ int MatrixScaleAddIdentity(double c, SUNMatrix matrix) {
   return 0;
 }
 
-// Dense LU with partial pivoting, column-major like SUNDIALS' dense matrix.
+// Dense LU with partial pivoting, column-major like SUNDIALS' dense matrix,
+// and the explicit inverse formed from it. CVODE solves with one Newton
+// matrix many times (every Newton iteration, and once per sensitivity with
+// the staggered corrector): for these 4..14 states a row-major matrix-vector
+// product is several times cheaper than forward and back substitution.
 struct DenseLu {
   std::vector<sunindextype> pivots;
+  std::vector<double> inverse;  // row-major n x n
   sunindextype last_flag = 0;
 };
 
@@ -129,6 +138,35 @@ SUNLinearSolver_ID GetId(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
 int Initialize(SUNLinearSolver solver) {
   Content(solver)->last_flag = 0;
   return SUNLS_SUCCESS;
+}
+
+// x = A^-1 b with the LU factors of A (pivots applied first, as LAPACK's
+// getrs does: the row swaps of the factorisation moved whole rows of L).
+void SolveWithFactors(const DenseLu& lu, const double* a, sunindextype n, double* x) {
+  for (sunindextype k = 0; k < n; ++k) {
+    const sunindextype pivot = lu.pivots[k];
+    if (pivot != k) std::swap(x[k], x[pivot]);
+  }
+  for (sunindextype k = 0; k < n; ++k) {  // forward: L y = P b
+    const double* col_k = a + k * n;
+    for (sunindextype i = k + 1; i < n; ++i) x[i] -= col_k[i] * x[k];
+  }
+  for (sunindextype k = n - 1; k >= 0; --k) {  // backward: U x = y
+    const double* col_k = a + k * n;
+    x[k] /= col_k[k];
+    for (sunindextype i = 0; i < k; ++i) x[i] -= col_k[i] * x[k];
+  }
+}
+
+// Column j of the inverse is A^-1 e_j; stored transposed (row-major).
+void FormInverse(DenseLu* lu, const double* a, sunindextype n) {
+  std::vector<double> column(static_cast<size_t>(n));
+  for (sunindextype j = 0; j < n; ++j) {
+    std::fill(column.begin(), column.end(), 0.0);
+    column[j] = 1.0;
+    SolveWithFactors(*lu, a, n, column.data());
+    for (sunindextype i = 0; i < n; ++i) lu->inverse[i * n + j] = column[i];
+  }
 }
 
 int Setup(SUNLinearSolver solver, SUNMatrix matrix) {
@@ -158,32 +196,49 @@ int Setup(SUNLinearSolver solver, SUNMatrix matrix) {
       for (sunindextype i = k + 1; i < n; ++i) col_j[i] -= factor * col_k[i];
     }
   }
+  FormInverse(lu, a, n);
   lu->last_flag = 0;
   return SUNLS_SUCCESS;
+}
+
+// result = inverse b for an n x n row-major inverse; fixed sizes unroll.
+template <int N>
+void MultiplyFixed(const double* inverse, const double* b, double* result) {
+  for (int i = 0; i < N; ++i) {
+    double sum = 0.0;
+    for (int j = 0; j < N; ++j) sum += inverse[i * N + j] * b[j];
+    result[i] = sum;
+  }
+}
+
+void Multiply(const double* inverse, sunindextype n, const double* b, double* result) {
+  switch (n) {  // the actuator's layouts: 4 states plus optional groups
+    case 4:
+      return MultiplyFixed<4>(inverse, b, result);
+    case 6:
+      return MultiplyFixed<6>(inverse, b, result);
+    case 8:
+      return MultiplyFixed<8>(inverse, b, result);
+    case 10:
+      return MultiplyFixed<10>(inverse, b, result);
+    case 12:
+      return MultiplyFixed<12>(inverse, b, result);
+    default:
+      for (sunindextype i = 0; i < n; ++i) {
+        double sum = 0.0;
+        for (sunindextype j = 0; j < n; ++j) sum += inverse[i * n + j] * b[j];
+        result[i] = sum;
+      }
+  }
 }
 
 int Solve(SUNLinearSolver solver, SUNMatrix matrix, N_Vector x, N_Vector b, double) {
   const DenseLu* lu = Content(solver);
   const sunindextype n = SM_ROWS_D(matrix);
-  const double* a = SM_DATA_D(matrix);
+  double result[kMaxDenseSize];
+  Multiply(lu->inverse.data(), n, Data(b), result);
   double* xd = Data(x);
-  const double* bd = Data(b);
-  for (sunindextype i = 0; i < n; ++i) xd[i] = bd[i];
-  // The row swaps of the factorisation moved whole rows of L, so apply them
-  // all before the forward substitution (as LAPACK's getrs does).
-  for (sunindextype k = 0; k < n; ++k) {
-    const sunindextype pivot = lu->pivots[k];
-    if (pivot != k) std::swap(xd[k], xd[pivot]);
-  }
-  for (sunindextype k = 0; k < n; ++k) {  // forward: L y = P b
-    const double* col_k = a + k * n;
-    for (sunindextype i = k + 1; i < n; ++i) xd[i] -= col_k[i] * xd[k];
-  }
-  for (sunindextype k = n - 1; k >= 0; --k) {  // backward: U x = y
-    const double* col_k = a + k * n;
-    xd[k] /= col_k[k];
-    for (sunindextype i = 0; i < k; ++i) xd[i] -= col_k[i] * xd[k];
-  }
+  for (sunindextype i = 0; i < n; ++i) xd[i] = result[i];  // x may alias b
   Content(solver)->last_flag = 0;
   return SUNLS_SUCCESS;
 }
@@ -232,8 +287,13 @@ SUNLinearSolver NewFastDenseSolver(sunindextype n, SUNContext context) {
   solver->ops->solve = Solve;
   solver->ops->lastflag = LastFlag;
   solver->ops->free = Free;
+  if (n > kMaxDenseSize) {
+    SUNLinSolFreeEmpty(solver);
+    return nullptr;
+  }
   auto* content = new DenseLu;
   content->pivots.assign(static_cast<size_t>(n), 0);
+  content->inverse.assign(static_cast<size_t>(n * n), 0.0);
   solver->content = content;
   return solver;
 }

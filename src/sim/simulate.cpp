@@ -207,6 +207,8 @@ class Integrator {
     CheckFlag(SUNContext_Create(nullptr, &raw_context), "SUNContext_Create");
     context_.reset(raw_context);
     state_.reset(CheckAllocated(N_VNew_Serial(size_, context_.get()), "N_VNew_Serial"));
+    // Fused and vector-array operations: the sensitivities use them heavily.
+    CheckFlag(N_VEnableFusedOps_Serial(state_.get(), SUNTRUE), "N_VEnableFusedOps_Serial");
     internal::InstallFastVectorKernels(state_.get());
     tolerances_.reset(CheckAllocated(N_VClone(state_.get()), "N_VClone"));
     for (int i = 0; i < size_; ++i) N_VGetArrayPointer(state_.get())[i] = y0[i];
@@ -218,6 +220,7 @@ class Integrator {
     CheckFlag(CVodeSetErrHandlerFn(mem, CaptureSolverMessage, data_), "CVodeSetErrHandlerFn");
     CheckFlag(CVodeSVtolerances(mem, options.relative_tolerance, tolerances_.get()),
               "CVodeSVtolerances");
+    relative_tolerance_ = options.relative_tolerance;
     matrix_.reset(CheckAllocated(SUNDenseMatrix(size_, size_, context_.get()), "SUNDenseMatrix"));
     internal::InstallFastMatrixKernels(matrix_.get());
     solver_.reset(
@@ -251,12 +254,28 @@ class Integrator {
               "CVodeSensInit");
     std::vector<double> scales = options.parameter_scales;
     CheckFlag(CVodeSetSensParams(mem, nullptr, scales.data(), nullptr), "CVodeSetSensParams");
-    CheckFlag(CVodeSensEEtolerances(mem), "CVodeSensEEtolerances");
+    if (options.tolerance_factor == 1.0) {
+      CheckFlag(CVodeSensEEtolerances(mem), "CVodeSensEEtolerances");
+    } else {
+      // The state's tolerances per unit of each parameter's scale, widened.
+      internal::VectorArray absolute(
+          CheckAllocated(N_VCloneVectorArray(count, state_.get()), "N_VCloneVectorArray"), count);
+      for (int j = 0; j < count; ++j) {
+        N_VScale(options.tolerance_factor / options.parameter_scales[j], tolerances_.get(),
+                 absolute.get()[j]);
+      }
+      CheckFlag(CVodeSensSVtolerances(mem, options.tolerance_factor * relative_tolerance_,
+                                      absolute.get()),
+                "CVodeSensSVtolerances");
+    }
     CheckFlag(CVodeSetSensErrCon(mem, options.error_control ? SUNTRUE : SUNFALSE),
               "CVodeSetSensErrCon");
+    sensitivities_current_ = true;  // they are the initial values until CVODE steps
   }
 
   // dy/dp_j at the time CVODE last returned (nullptr without sensitivities).
+  // Before the first step after a (re)start the vectors hold the values given
+  // to CVODES (CVodeGetSens would divide by the step size, still zero).
   const N_Vector* Sensitivities() {
     if (sensitivities_ == nullptr) return nullptr;
     if (!sensitivities_current_) {
@@ -296,7 +315,7 @@ class Integrator {
     if (flag >= 0 && sensitivities != nullptr) {
       flag = CVodeSensReInit(memory_.get(), CV_STAGGERED, sensitivities_);
     }
-    sensitivities_current_ = false;
+    sensitivities_current_ = sensitivities != nullptr;  // the restart values
     return flag;
   }
 
@@ -428,6 +447,7 @@ class Integrator {
   internal::CvodePtr memory_;
   N_Vector* sensitivities_ = nullptr;  // sensitivity_storage_'s vectors, or null
   bool sensitivities_current_ = false;
+  double relative_tolerance_ = 0;
   SimulationSummary banked_;
   long restarts_ = 0;
   long events_ = 0;

@@ -78,29 +78,6 @@ std::vector<std::string> MissedThresholds(const std::map<std::string, ChannelMet
   return missed;
 }
 
-// The state a run starts from: the mean of its leading samples while the
-// command has not yet changed (at most 50), so that one noisy first sample
-// does not set the start. A log that starts moving gets its first sample.
-InitialState InitialStateOf(const Trajectory& m) {
-  std::size_t n = 1;
-  while (n < m.size() && n < 50 && m.u_V[n] == m.u_V[0]) ++n;
-  const auto mean = [n](const std::vector<double>& v) {
-    return std::accumulate(v.begin(), v.begin() + static_cast<long>(n), 0.0) /
-           static_cast<double>(n);
-  };
-  InitialState initial;
-  initial.position_m = mean(m.x_m);
-  initial.p1_Pa = mean(m.p1_Pa);
-  initial.p2_Pa = mean(m.p2_Pa);
-  const double moved = std::fabs(m.x_m[n - 1] - m.x_m[0]);
-  if (moved > 1e-4) {  // not at rest: averaging would blur a moving start
-    initial.position_m = m.x_m.front();
-    initial.p1_Pa = m.p1_Pa.front();
-    initial.p2_Pa = m.p2_Pa.front();
-  }
-  return initial;
-}
-
 ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& unit,
                                         const Experiment& experiment,
                                         const ValidationOptions& options) {
@@ -108,7 +85,7 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
   out.id = experiment.entry.id;
   out.measured = experiment.AsTrajectory();
   const Trajectory& m = out.measured;
-  const InitialState initial = InitialStateOf(m);
+  const InitialState initial = LoggedInitialState(m, 0.5 * params.cylinder.stroke_m);
   out.simulation = Simulate(params, SampledCommand(m.t_s, m.u_V), initial, m.t_s,
                             options.simulation, &out.simulated);
   if (!out.simulation.ok()) return out;
@@ -182,6 +159,31 @@ std::string ValidationReport::BriefReport() const {
           : thresholds_met()  ? "all thresholds met\n"
                               : "thresholds missed\n");
   return out.str();
+}
+
+// The state a run starts from: the mean of its leading samples while the
+// command has not yet changed (at most 50), so that one noisy first sample
+// does not set the start. A log that starts moving gets its first sample.
+InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m) {
+  std::size_t n = 1;
+  while (n < m.size() && n < 50 && m.u_V[n] == m.u_V[0]) ++n;
+  const auto mean = [n](const std::vector<double>& v) {
+    return std::accumulate(v.begin(), v.begin() + static_cast<long>(n), 0.0) /
+           static_cast<double>(n);
+  };
+  InitialState initial;
+  initial.position_m = mean(m.x_m);
+  initial.p1_Pa = mean(m.p1_Pa);
+  initial.p2_Pa = mean(m.p2_Pa);
+  const double moved = std::fabs(m.x_m[n - 1] - m.x_m[0]);
+  if (moved > 1e-4) {  // not at rest: averaging would blur a moving start
+    initial.position_m = m.x_m.front();
+    initial.p1_Pa = m.p1_Pa.front();
+    initial.p2_Pa = m.p2_Pa.front();
+  }
+  // A rod resting on an end stop reads up to a few noise sigmas beyond it.
+  initial.position_m = std::clamp(initial.position_m, -half_stroke_m, half_stroke_m);
+  return initial;
 }
 
 Parameters WithRigConditions(const Parameters& params, const Unit& unit) {

@@ -136,6 +136,11 @@ double WorstError(const Case& c, const Trajectory& run, const TrajectorySensitiv
       for (Eigen::Index i = 0; i < fd.size(); ++i) {
         const double error = std::fabs(exact(i, static_cast<Eigen::Index>(j)) - fd[i]) * unit;
         const double bound = std::fabs(fd[i]) * unit + 1.0;
+        if (!std::isfinite(error)) {
+          ADD_FAILURE() << channel.name << " / " << c.sensitivity.parameter_paths[j] << " at t "
+                        << run.t_s[static_cast<size_t>(i)] << ": not finite";
+          return INFINITY;
+        }
         if (error / bound > worst) {
           worst = error / bound;
           if (worst > allowed) {

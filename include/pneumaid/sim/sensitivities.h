@@ -37,6 +37,10 @@ struct SensitivityOptions {
   // Include the sensitivities in CVODE's local error test: more accurate, more
   // steps. Off is the usual choice for fitting (staggered corrector only).
   bool error_control = false;
+  // Sensitivity tolerances relative to the state's (CVODES' estimated ones
+  // when 1). Larger values let the staggered corrector stop sooner; the
+  // Jacobian of a fit needs far fewer digits than the trajectory.
+  double tolerance_factor = 1.0;
 
   bool IsValid(const Parameters& params, std::string* error) const;
 };

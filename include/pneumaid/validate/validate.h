@@ -53,6 +53,12 @@ struct ValidationReport {
 // InputError naming the manifest.
 Parameters WithRigConditions(const Parameters& params, const Unit& unit);
 
+// The state a logged run starts from: the mean of its leading samples while
+// the command has not yet changed (at most 50); its first sample when the rod
+// already moves. The position is clamped to the stroke (+-half_stroke_m): a rod
+// resting on an end stop reads up to a few noise sigmas beyond it.
+InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m);
+
 // Throws InputError for an unknown experiment id or a unit without validation
 // runs; numerical failures are reported in the result.
 ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,

@@ -1,0 +1,85 @@
+// Whole-system refinement: output-error fitting of chosen parameters through
+// the simulator, on several logged experiments at once.
+//
+// One Ceres residual block per experiment (its weighted residuals over every
+// sample and channel); the Jacobian comes from the CVODES forward
+// sensitivities of sensitivities.h, with the event jump conditions.
+// Levenberg-Marquardt, bounds, optional Latin-hypercube multistart. A library
+// call with no global state: safe to run for many units in parallel.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "pneumaid/ident/fit_spec.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/parameters.h"
+#include "pneumaid/sim/simulate.h"
+#include "pneumaid/validate/validate.h"
+
+namespace pneumaid {
+
+struct RefineOptions {
+  // How every experiment is simulated during the fit (and validated).
+  SimulationOptions simulation;
+  // Threads for evaluating experiments in parallel (Ceres num_threads).
+  int threads = 1;
+  // Relative change of the cost below which a start has converged.
+  double function_tolerance = 1e-6;
+  // A start has converged when its best cost improved by less than
+  // stall_tolerance (relative) over the last stall_iterations iterations:
+  // the cost of the event-driven model jitters at about that level
+  // (docs/refinement.md).
+  int stall_iterations = 3;
+  double stall_tolerance = 1e-3;
+  // Pairs of free parameters whose correlation exceeds this are flagged.
+  double correlation_flag = 0.95;
+  // Print Ceres' per-iteration progress to stdout.
+  bool verbose = false;
+
+  bool IsValid(std::string* error) const;
+};
+
+struct ExperimentCost {
+  std::string id;
+  double before = 0;  // 0.5 sum of squared weighted residuals at the start
+  double after = 0;   // ... at the refined parameters
+  long residuals = 0;
+};
+
+struct RefinedParameter {
+  std::string path;
+  double start = 0;
+  double value = 0;
+  double standard_error = 0;  // 0 when the covariance was not available
+  bool at_bound = false;
+};
+
+struct RefineResult {
+  bool converged = false;  // a start ended with Ceres' convergence
+  std::string message;     // why not, when not
+  Parameters params;       // the refined set (start values elsewhere), with uncertainty
+  std::vector<RefinedParameter> parameters;
+  Eigen::MatrixXd correlation;  // of the free parameters, in the order above
+  std::vector<std::pair<std::string, std::string>> poorly_separable;
+  std::vector<double> poorly_separable_correlation;
+  std::vector<ExperimentCost> fitted;
+  double cost_before = 0, cost_after = 0;
+  int starts = 0, best_start = 0, iterations = 0;
+  double wall_time_s = 0;
+  // Held-out experiments, validated with the start and the refined set.
+  ValidationReport held_out_before, held_out_after;
+
+  std::string BriefReport() const;
+};
+
+// Refines the free parameters of `spec` from `start` on `unit`'s logs. Throws
+// InputError for a spec that does not fit the unit (unknown experiments, a
+// parameter the set lacks, a start outside the bounds). Solver trouble is
+// reported in the result (converged false), never thrown.
+RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options);
+
+}  // namespace pneumaid

@@ -1,0 +1,62 @@
+#include <iostream>
+#include <string>
+
+#include "commands.h"
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_data.h"
+
+namespace pneumaid::cli {
+namespace {
+
+struct RefineArgs {
+  std::string params_path;
+  std::string unit_dir;
+  std::string spec_path = PNEUMAID_DEFAULT_FIT_SPEC;
+  std::string out_path;
+  int threads = 1;
+  bool verbose = false;
+};
+
+int RunRefine(const RefineArgs& args) {
+  const Parameters start = LoadParams(args.params_path);
+  const Unit unit = ReadUnit(args.unit_dir);
+  const FitSpec spec = LoadFitSpec(args.spec_path);
+  RefineOptions options;
+  options.threads = args.threads;
+  options.verbose = args.verbose;
+  const RefineResult result = Refine(start, unit, spec, options);
+  return ReportAndSave(result, args.out_path);
+}
+
+}  // namespace
+
+int ReportAndSave(const RefineResult& result, const std::string& out_path) {
+  std::cout << result.BriefReport();
+  if (result.parameters.empty()) {
+    std::cerr << "error: refinement failed: " << result.message << " (nothing written)\n";
+    return kNumericalFailure;
+  }
+  SaveParams(result.params, out_path);
+  std::cout << "wrote " << out_path << "\n";
+  if (!result.converged) {
+    std::cerr << "warning: the refinement did not converge (" << result.message
+              << "); the parameters written are its best point\n";
+    return kNumericalFailure;
+  }
+  return kSuccess;
+}
+
+CommandRunner AddRefineCommand(CLI::App* app) {
+  auto args = std::make_shared<RefineArgs>();
+  app->add_option("unit", args->unit_dir, "unit directory")->required();
+  app->add_option("--params", args->params_path, "starting parameter set (params-v1)")->required();
+  app->add_option("--spec", args->spec_path, "fit spec (pneumaid-fit/1)")->capture_default_str();
+  app->add_option("--out", args->out_path, "refined parameter set (params-v1)")->required();
+  app->add_option("--threads", args->threads, "experiments simulated in parallel")
+      ->check(CLI::Range(1, 256));
+  app->add_flag("--verbose", args->verbose, "print the solver's progress");
+  return [args]() { return RunRefine(*args); };
+}
+
+}  // namespace pneumaid::cli

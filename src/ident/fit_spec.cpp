@@ -1,0 +1,138 @@
+#include "pneumaid/ident/fit_spec.h"
+
+#include "../io/yaml_reader.h"
+#include "pneumaid/io/files.h"
+#include "pneumaid/model/parameter_table.h"
+#include "pneumaid/sim/sensitivities.h"
+
+namespace pneumaid {
+namespace {
+
+const char* const kChannels[] = {"x", "p1", "p2", "q1", "q2"};
+
+class FitSpecReader : internal::YamlReader {
+ public:
+  explicit FitSpecReader(std::string source) : YamlReader(std::move(source)) {}
+
+  FitSpec Read(const std::string& text) {
+    return Guarded([&] { return ReadDocument(text); });
+  }
+
+ private:
+  FitSpec ReadDocument(const std::string& text) {
+    const YAML::Node root = LoadMapping(
+        text, std::string("expected a mapping starting with format: ") + kFitSpecFormat);
+    Keys(root, "",
+         {"format", "parameters", "channels", "experiments", "multistart", "seed",
+          "max_iterations"});
+    if (!root["format"] || Text(root["format"]) != kFitSpecFormat) {
+      Fail(root, std::string("expected format: ") + kFitSpecFormat);
+    }
+    FitSpec spec;
+    spec.source = source_;
+    ReadParameters(root["parameters"], &spec);
+    ReadChannels(root["channels"], &spec);
+    if (const YAML::Node experiments = root["experiments"]) {
+      Keys(experiments, "experiments.", {"fit", "hold_out"});
+      if (experiments["fit"]) spec.fit = Names(experiments["fit"], "experiments.fit");
+      if (experiments["hold_out"]) {
+        spec.hold_out = Names(experiments["hold_out"], "experiments.hold_out");
+      }
+      if (spec.fit.empty()) Fail(experiments, "experiments.fit: expected at least one experiment");
+    }
+    spec.multistart = Count(root["multistart"], "multistart", 0, 1000, spec.multistart);
+    spec.seed = static_cast<std::uint64_t>(Count(root["seed"], "seed", 0, 1e15, 1));
+    spec.max_iterations = Count(root["max_iterations"], "max_iterations", 1, 10000, 50);
+    return spec;
+  }
+
+  void ReadParameters(const YAML::Node& node, FitSpec* spec) const {
+    if (!node || !node.IsMap() || node.size() == 0) {
+      Fail(node ? node : YAML::Node(), "parameters: expected a mapping of free parameters");
+    }
+    if (node.size() > static_cast<size_t>(kMaxSensitivityParameters)) {
+      Fail(node, "parameters: at most " + std::to_string(kMaxSensitivityParameters) + " free");
+    }
+    for (const auto& entry : node) {
+      FreeParameter p;
+      p.path = Key(entry.first);
+      const ScalarParameterInfo* info = FindScalarParameter(p.path);
+      const bool effect = p.path.rfind("effects.", 0) == 0;
+      if (info == nullptr && !effect) Fail(entry.first, "unknown parameter '" + p.path + "'");
+      const YAML::Node bounds = entry.second;
+      const std::string where = "parameters." + p.path;
+      Keys(bounds, where + ".", {"min", "max", "scale"});
+      if (!bounds["min"] || !bounds["max"]) Fail(bounds, where + ": expected min and max");
+      p.lower = Number(bounds["min"], where + ".min");
+      p.upper = Number(bounds["max"], where + ".max");
+      if (!(p.lower < p.upper)) Fail(bounds, where + ": expected min < max");
+      if (info != nullptr && (!info->range.Contains(p.lower) || !info->range.Contains(p.upper))) {
+        Fail(bounds, where + ": bounds must lie " + info->range.Describe());
+      }
+      if (const YAML::Node scale = bounds["scale"]) {
+        const std::string name = Text(scale);
+        if (name != "linear" && name != "log") Fail(scale, where + ".scale: expected linear | log");
+        p.scale = name == "log" ? ParameterScale::kLog : ParameterScale::kLinear;
+        if (p.scale == ParameterScale::kLog && !(p.lower > 0)) {
+          Fail(bounds, where + ": a log scale needs min > 0");
+        }
+      }
+      spec->parameters.push_back(p);
+    }
+  }
+
+  void ReadChannels(const YAML::Node& node, FitSpec* spec) const {
+    if (!node) {
+      for (const char* c : {"x", "p1", "p2"}) spec->channels[c] = ChannelWeight{};
+      return;
+    }
+    Keys(node, "channels.", {kChannels[0], kChannels[1], kChannels[2], kChannels[3], kChannels[4]});
+    for (const auto& entry : node) {
+      const std::string name = Key(entry.first);
+      ChannelWeight w;
+      if (entry.second.IsMap()) {
+        Keys(entry.second, "channels." + name + ".", {"sigma", "weight"});
+        if (entry.second["sigma"]) {
+          w.sigma = Positive(entry.second["sigma"], "channels." + name + ".sigma");
+        }
+        if (entry.second["weight"]) {
+          w.weight = Positive(entry.second["weight"], "channels." + name + ".weight");
+        }
+      } else if (!entry.second.IsNull()) {
+        Fail(entry.second, "channels." + name + ": expected {sigma: S, weight: W} or {}");
+      }
+      spec->channels[name] = w;
+    }
+    if (spec->channels.empty()) Fail(node, "channels: expected at least one channel");
+  }
+
+  std::vector<std::string> Names(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsSequence()) Fail(node, path + ": expected a list of experiment ids or kinds");
+    std::vector<std::string> names;
+    for (const auto& item : node) names.push_back(Text(item));
+    return names;
+  }
+
+  int Count(const YAML::Node& node, const std::string& path, double lowest, double highest,
+            int fallback) const {
+    if (!node) return fallback;
+    const double value = Number(node, path);
+    if (value != std::floor(value) || value < lowest || value > highest) {
+      Fail(node, path + ": expected a whole number from " + std::to_string(int(lowest)) + " to " +
+                     std::to_string(static_cast<long long>(highest)));
+    }
+    return static_cast<int>(value);
+  }
+};
+
+}  // namespace
+
+FitSpec ParseFitSpec(const std::string& text, const std::string& source) {
+  return FitSpecReader(source).Read(text);
+}
+
+FitSpec LoadFitSpec(const std::string& path) {
+  return ParseFitSpec(ReadTextFile(path, "fit spec"), path);
+}
+
+}  // namespace pneumaid

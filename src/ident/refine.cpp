@@ -1,0 +1,605 @@
+#include "pneumaid/ident/refine.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include "pneumaid/eval/metrics.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/model/parameter_table.h"
+#include "pneumaid/sim/sensitivities.h"
+
+namespace pneumaid {
+namespace {
+
+std::string ManifestPath(const Unit& unit) { return unit.directory + "/unit.yaml"; }
+
+// ---------------------------------------------------------------- parameters
+
+// The solver's coordinates theta for the free parameters: p = s theta
+// (linear, s = |start|) or p = exp(theta) (log).
+struct ParameterMap {
+  std::vector<FreeParameter> free;
+  std::vector<double> scale;  // linear: s; log: unused
+
+  double ToValue(int j, double theta) const {
+    return free[j].scale == ParameterScale::kLog ? std::exp(theta) : scale[j] * theta;
+  }
+  double ToTheta(int j, double value) const {
+    return free[j].scale == ParameterScale::kLog ? std::log(value) : value / scale[j];
+  }
+  double Derivative(int j, double theta) const {  // dp/dtheta
+    return free[j].scale == ParameterScale::kLog ? std::exp(theta) : scale[j];
+  }
+  int size() const { return static_cast<int>(free.size()); }
+};
+
+ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec) {
+  ParameterMap map;
+  map.free = spec.parameters;
+  for (const FreeParameter& p : spec.parameters) {
+    double value = 0;
+    if (!GetParameter(start, p.path, &value)) {
+      throw InputError(spec.source, 0, 0,
+                       "parameter " + p.path + " is not in the starting parameter set");
+    }
+    if (!(value >= p.lower && value <= p.upper)) {
+      throw InputError(spec.source, 0, 0,
+                       "the start value of " + p.path + " (" + std::to_string(value) +
+                           ") lies outside its bounds");
+    }
+    const double magnitude = std::max(std::fabs(value), 0.5 * (p.upper - p.lower) * 1e-3);
+    map.scale.push_back(magnitude > 0 ? magnitude : 1.0);
+  }
+  return map;
+}
+
+Parameters WithValues(const Parameters& base, const ParameterMap& map, const double* theta) {
+  Parameters p = base;
+  for (int j = 0; j < map.size(); ++j) SetParameter(&p, map.free[j].path, map.ToValue(j, theta[j]));
+  return p;
+}
+
+// --------------------------------------------------------------- experiments
+
+struct Channel {
+  std::string name;
+  std::vector<double> Trajectory::*values;
+  Eigen::MatrixXd TrajectorySensitivities::*derivatives;
+  double factor;       // weight / sigma
+  double meter_tau_s;  // flows: the declared meter lag, 0 when none
+};
+
+struct FitExperiment {
+  std::string id;
+  Trajectory measured;
+  CommandSignal command;
+  InitialState initial;
+  std::vector<Channel> channels;
+  long residuals() const { return static_cast<long>(measured.size() * channels.size()); }
+};
+
+const Channel kChannelTable[] = {
+    {"x", &Trajectory::x_m, &TrajectorySensitivities::x, 0, 0},
+    {"p1", &Trajectory::p1_Pa, &TrajectorySensitivities::p1, 0, 0},
+    {"p2", &Trajectory::p2_Pa, &TrajectorySensitivities::p2, 0, 0},
+    {"q1", &Trajectory::q1_kg_per_s, &TrajectorySensitivities::q1, 0, 0},
+    {"q2", &Trajectory::q2_kg_per_s, &TrajectorySensitivities::q2, 0, 0}};
+
+bool IsSimulable(const Experiment& e) {
+  return e.entry.kind == ExperimentKind::kStroke || e.entry.kind == ExperimentKind::kValidation;
+}
+
+// Experiments named by id or kind; InputError for a name that matches none.
+std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
+                                      const FitSpec& spec, bool must_match) {
+  std::vector<const Experiment*> chosen;
+  for (const std::string& name : names) {
+    bool matched = false;
+    for (const Experiment& e : unit.experiments) {
+      const bool by_kind = name == ToString(e.entry.kind);
+      if (!by_kind && e.entry.id != name) continue;
+      matched = true;
+      if (!IsSimulable(e)) {
+        if (by_kind) continue;
+        throw InputError(spec.source, 0, 0,
+                         "experiment '" + name + "' is a " + ToString(e.entry.kind) +
+                             " log; only stroke and validation runs can be refined on");
+      }
+      if (std::find(chosen.begin(), chosen.end(), &e) == chosen.end()) chosen.push_back(&e);
+    }
+    const bool is_kind = name == "stroke" || name == "validation";
+    if (!matched && (must_match || !is_kind)) {
+      throw InputError(spec.source, 0, 0,
+                       "no experiment or kind '" + name + "' in " + ManifestPath(unit));
+    }
+  }
+  return chosen;
+}
+
+FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
+                      double half_stroke_m) {
+  FitExperiment out;
+  out.id = e.entry.id;
+  out.measured = e.AsTrajectory();
+  out.command = SampledCommand(out.measured.t_s, out.measured.u_V);
+  out.initial = LoggedInitialState(out.measured, half_stroke_m);
+  for (const Channel& row : kChannelTable) {
+    const auto wanted = spec.channels.find(row.name);
+    if (wanted == spec.channels.end() || (out.measured.*row.values).empty()) continue;
+    const double sigma = wanted->second.sigma > 0 ? wanted->second.sigma
+                                                  : unit.manifest.DeclaredSigma(row.name, 0.0);
+    if (!(sigma > 0)) {
+      throw InputError(spec.source, 0, 0,
+                       "channel " + row.name +
+                           ": no sigma given and none declared under sensors "
+                           "in " +
+                           ManifestPath(unit));
+    }
+    Channel c = row;
+    c.factor = wanted->second.weight / sigma;
+    c.meter_tau_s = row.name[0] == 'q' ? unit.manifest.DeclaredTau(row.name, 0.0) : 0.0;
+    out.channels.push_back(c);
+  }
+  if (out.channels.empty()) {
+    throw InputError(spec.source, 0, 0, "experiment '" + out.id + "' logs none of the channels");
+  }
+  return out;
+}
+
+// ------------------------------------------------------------------ residuals
+
+// Sensitivity tolerances 100 x the state's during fitting: the Jacobian needs
+// a few digits, and the staggered corrector then stops sooner (22 % fewer
+// instructions per sensitivity run on the benchmark's logs).
+constexpr double kSensitivityToleranceFactor = 100.0;
+
+// The last evaluation of a residual block, kept so that the covariance and
+// the final costs need no extra simulation.
+struct EvaluationCache {
+  std::vector<double> theta;
+  Eigen::VectorXd residuals;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jacobian;
+};
+
+// All weighted residuals of one experiment, (sim - measured) factor, channel
+// after channel; the Jacobian from the forward sensitivities. Returns false
+// (Ceres rejects the step) when the simulation fails or a parameter leaves its
+// bounds; never throws. Bounds are enforced by rejection rather than by
+// Ceres' bound constraints, whose projected line search evaluates a Jacobian
+// (a sensitivity simulation) at every trial point.
+class ExperimentResidual final : public ceres::CostFunction {
+ public:
+  ExperimentResidual(const Parameters* base, const ParameterMap* map,
+                     const FitExperiment* experiment, const SimulationOptions* simulation)
+      : base_(base), map_(map), experiment_(experiment), simulation_(simulation) {
+    set_num_residuals(static_cast<int>(experiment->residuals()));
+    mutable_parameter_block_sizes()->push_back(map->size());
+  }
+
+  bool Evaluate(double const* const* theta, double* residuals, double** jacobians) const override {
+    try {
+      const bool ok = EvaluateOrFail(theta[0], residuals, jacobians ? jacobians[0] : nullptr);
+      if (ok && jacobians != nullptr) Remember(theta[0], residuals, jacobians[0]);
+      return ok;
+    } catch (...) {
+      return false;  // never throw through Ceres
+    }
+  }
+
+  // The residuals and Jacobian at theta, from the cache of the last Jacobian
+  // evaluation when it was at theta (Ceres evaluates one at every accepted
+  // point, so the optimum's usually is).
+  bool ResidualsAndJacobian(const std::vector<double>& theta, const EvaluationCache** out) const {
+    if (cache_.theta != theta || cache_.jacobian.size() == 0) {
+      std::vector<double> r(static_cast<size_t>(num_residuals()));
+      std::vector<double> j(r.size() * static_cast<size_t>(map_->size()));
+      double* jacobians[] = {j.data()};
+      const double* blocks[] = {theta.data()};
+      if (!Evaluate(blocks, r.data(), jacobians)) return false;
+    }
+    *out = &cache_;
+    return true;
+  }
+
+ private:
+  void Remember(const double* theta, const double* residuals, const double* jacobian) const {
+    const int m = map_->size();
+    const int n = num_residuals();
+    cache_.theta.assign(theta, theta + m);
+    cache_.residuals = Eigen::Map<const Eigen::VectorXd>(residuals, n);
+    cache_.jacobian =
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            jacobian, n, m);
+  }
+
+  bool InsideBounds(const double* theta) const {
+    for (int j = 0; j < map_->size(); ++j) {
+      const double value = map_->ToValue(j, theta[j]);
+      if (!(value >= map_->free[j].lower && value <= map_->free[j].upper)) return false;
+    }
+    return true;
+  }
+
+  bool EvaluateOrFail(const double* theta, double* residuals, double* jacobian) const {
+    if (!InsideBounds(theta)) return false;
+    const Parameters params = WithValues(*base_, *map_, theta);
+    if (!Validate(params).empty()) return false;
+    const FitExperiment& e = *experiment_;
+    Trajectory sim;
+    TrajectorySensitivities sens;
+    SimulationSummary summary;
+    if (jacobian != nullptr) {
+      SensitivityOptions s;
+      for (int j = 0; j < map_->size(); ++j) {
+        s.parameter_paths.push_back(map_->free[j].path);
+        s.parameter_scales.push_back(std::fabs(map_->Derivative(j, theta[j])));
+      }
+      s.tolerance_factor = kSensitivityToleranceFactor;
+      summary = SimulateWithSensitivities(params, e.command, e.initial, e.measured.t_s,
+                                          *simulation_, s, &sim, &sens);
+    } else {
+      summary = Simulate(params, e.command, e.initial, e.measured.t_s, *simulation_, &sim);
+    }
+    if (!summary.ok() || sim.size() != e.measured.size()) return false;
+    const long n = static_cast<long>(e.measured.size());
+    long row = 0;
+    for (const Channel& c : e.channels) {
+      std::vector<double> simulated = sim.*c.values;
+      if (c.meter_tau_s > 0) simulated = FirstOrderLag(sim.t_s, simulated, c.meter_tau_s);
+      const std::vector<double>& measured = e.measured.*c.values;
+      for (long i = 0; i < n; ++i) residuals[row + i] = c.factor * (simulated[i] - measured[i]);
+      if (jacobian != nullptr) FillJacobian(c, sim.t_s, sens, theta, row, jacobian);
+      row += n;
+    }
+    for (long k = 0; k < row; ++k) {
+      if (!std::isfinite(residuals[k])) return false;
+    }
+    if (jacobian != nullptr) {
+      for (long k = 0; k < row * map_->size(); ++k) {
+        if (!std::isfinite(jacobian[k])) return false;
+      }
+    }
+    return true;
+  }
+
+  // Rows [row, row + n) of the row-major Jacobian d residual / d theta.
+  void FillJacobian(const Channel& c, const std::vector<double>& t_s,
+                    const TrajectorySensitivities& sens, const double* theta, long row,
+                    double* jacobian) const {
+    const int m = map_->size();
+    const Eigen::MatrixXd& d = sens.*c.derivatives;
+    for (int j = 0; j < m; ++j) {
+      std::vector<double> column(d.col(j).data(), d.col(j).data() + d.rows());
+      // The meter lag is linear: the lagged sensitivity is the sensitivity lagged.
+      if (c.meter_tau_s > 0) column = FirstOrderLag(t_s, column, c.meter_tau_s);
+      const double chain = c.factor * map_->Derivative(j, theta[j]);
+      for (long i = 0; i < static_cast<long>(column.size()); ++i) {
+        jacobian[(row + i) * m + j] = chain * column[i];
+      }
+    }
+  }
+
+  const Parameters* base_;
+  const ParameterMap* map_;
+  const FitExperiment* experiment_;
+  const SimulationOptions* simulation_;
+  // Ceres never evaluates one block from two threads at once.
+  mutable EvaluationCache cache_;
+};
+
+// ------------------------------------------------------------------- solving
+
+// Latin-hypercube points in theta inside the bounds: each parameter's range
+// cut into `count` strata, one point per stratum, strata shuffled per axis.
+std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int count,
+                                                std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<std::vector<double>> points(count, std::vector<double>(map.size()));
+  for (int j = 0; j < map.size(); ++j) {
+    std::vector<int> strata(count);
+    std::iota(strata.begin(), strata.end(), 0);
+    std::shuffle(strata.begin(), strata.end(), random);
+    const double lo = map.ToTheta(j, map.free[j].lower), hi = map.ToTheta(j, map.free[j].upper);
+    for (int k = 0; k < count; ++k) {
+      points[k][j] = lo + (hi - lo) * (strata[k] + unit(random)) / count;
+    }
+  }
+  return points;
+}
+
+struct Problem {
+  ceres::Problem problem;
+  std::vector<double> theta;
+  std::vector<const ExperimentResidual*> blocks;  // owned by problem
+};
+
+// 0.5 |r|^2 of one experiment at theta (NaN when it cannot be simulated).
+double BlockCost(const ExperimentResidual& block, const std::vector<double>& theta) {
+  std::vector<double> r(static_cast<size_t>(block.num_residuals()));
+  const double* blocks[] = {theta.data()};
+  if (!block.Evaluate(blocks, r.data(), nullptr)) return NAN;
+  return 0.5 * Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()))
+                   .squaredNorm();
+}
+
+// Stops a start once the best cost has improved by less than
+// stall_tolerance (relative) over the last stall_iterations iterations. The
+// cost of an event-driven model is rough at about 1e-3 relative: each
+// stick/slip switch is located to the integrator's tolerance, so the
+// trajectories (and the cost) jitter at that level, far inside the
+// parameters' confidence region. Levenberg-Marquardt otherwise keeps trying
+// steps against that jitter until its radius collapses.
+class StallCallback final : public ceres::IterationCallback {
+ public:
+  StallCallback(int iterations, double tolerance) : window_(iterations), tolerance_(tolerance) {}
+
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    best_.push_back(std::min(best_.empty() ? summary.cost : best_.back(), summary.cost));
+    const size_t n = best_.size();
+    if (n > static_cast<size_t>(window_)) {
+      const double before = best_[n - 1 - static_cast<size_t>(window_)];
+      if (before - best_.back() < tolerance_ * before) {
+        return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+      }
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  int window_;
+  double tolerance_;
+  std::vector<double> best_;  // best cost after each iteration
+};
+
+ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& options) {
+  ceres::Solver::Options s;
+  s.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  s.linear_solver_type = ceres::DENSE_QR;
+  s.max_num_iterations = spec.max_iterations;
+  s.num_threads = options.threads;
+  s.function_tolerance = options.function_tolerance;
+  s.minimizer_progress_to_stdout = options.verbose;
+  s.logging_type = options.verbose ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  return s;
+}
+
+// Covariance of the free parameters at the optimum, in their SI units, from
+// the Gauss-Newton approximation (J^T J)^-1 (a pseudo-inverse: a direction
+// the data do not determine gets no finite variance but no crash either),
+// inflated by the reduced chi-square when the model misses the data by more
+// than the declared noise (the honest reading of a misfit). Empty on failure.
+Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
+                                    const std::vector<double>& theta, double cost, long residuals) {
+  const int m = map.size();
+  if (normal.rows() != m) return {};
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
+  if (eigen.info() != Eigen::Success) return {};
+  const Eigen::VectorXd values = eigen.eigenvalues();
+  Eigen::VectorXd inverse = Eigen::VectorXd::Zero(m);
+  const double floor = 1e-14 * values.maxCoeff();
+  for (int i = 0; i < m; ++i) inverse[i] = values[i] > floor ? 1.0 / values[i] : 0.0;
+  const Eigen::MatrixXd theta_cov =
+      eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
+  const double dof = std::max(1.0, static_cast<double>(residuals - m));
+  const double inflation = std::max(1.0, 2.0 * cost / dof);
+  Eigen::VectorXd d(m);
+  for (int j = 0; j < m; ++j) d[j] = map.Derivative(j, theta[j]);
+  return inflation * (d.asDiagonal() * theta_cov * d.asDiagonal());
+}
+
+void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const RefineOptions& options,
+               RefineResult* r) {
+  const int m = map.size();
+  if (cov.rows() != m) return;
+  r->correlation = Eigen::MatrixXd::Identity(m, m);
+  for (int i = 0; i < m; ++i) {
+    r->parameters[i].standard_error = std::sqrt(std::max(0.0, cov(i, i)));
+    r->params.uncertainty[map.free[i].path] = r->parameters[i].standard_error;
+    for (int j = 0; j < i; ++j) {
+      const double denominator = std::sqrt(cov(i, i) * cov(j, j));
+      const double rho = denominator > 0 ? cov(i, j) / denominator : 0.0;
+      r->correlation(i, j) = r->correlation(j, i) = rho;
+      if (std::fabs(rho) > options.correlation_flag) {
+        r->poorly_separable.emplace_back(map.free[j].path, map.free[i].path);
+        r->poorly_separable_correlation.push_back(rho);
+      }
+    }
+  }
+}
+
+ValidationReport HeldOut(const Parameters& params, const Unit& unit,
+                         const std::vector<const Experiment*>& held_out,
+                         const RefineOptions& options) {
+  if (held_out.empty()) return {};
+  ValidationOptions v;
+  v.simulation = options.simulation;
+  for (const Experiment* e : held_out) v.experiment_ids.push_back(e->entry.id);
+  return ValidateUnit(params, unit, v);
+}
+
+std::string AppendProvenance(const std::string& provenance, const RefineResult& r,
+                             const FitSpec& spec) {
+  std::ostringstream entry;
+  entry << "refine: {spec: \"" << spec.source << "\", cost_before: " << r.cost_before
+        << ", cost_after: " << r.cost_after << ", iterations: " << r.iterations
+        << ", starts: " << r.starts << ", experiments: " << r.fitted.size() << "}";
+  const std::size_t close = provenance.rfind('}');
+  if (provenance.empty() || close == std::string::npos) return "{" + entry.str() + "}";
+  const bool empty = provenance.find_first_not_of("{} \n") == std::string::npos;
+  return provenance.substr(0, close) + (empty ? "" : ", ") + entry.str() + "}";
+}
+
+}  // namespace
+
+bool RefineOptions::IsValid(std::string* error) const {
+  const auto fail = [error](const char* what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (threads < 1) return fail("threads must be >= 1");
+  if (!(function_tolerance > 0)) return fail("function_tolerance must be > 0");
+  if (stall_iterations < 1) return fail("stall_iterations must be >= 1");
+  if (!(stall_tolerance >= 0)) return fail("stall_tolerance must be >= 0");
+  if (!(correlation_flag > 0 && correlation_flag < 1)) {
+    return fail("correlation_flag must be in (0, 1)");
+  }
+  return simulation.IsValid(error);
+}
+
+RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options) {
+  const auto clock = std::chrono::steady_clock::now();
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
+  const Parameters conditioned = WithRigConditions(start, unit);
+  const ParameterMap map = MakeParameterMap(conditioned, spec);
+  const auto fitted = Select(unit, spec.fit, spec, true);
+  const auto held_out = Select(unit, spec.hold_out, spec, false);
+  for (const Experiment* e : held_out) {
+    if (std::count(fitted.begin(), fitted.end(), e)) {
+      throw InputError(spec.source, 0, 0,
+                       "experiment '" + e->entry.id + "' is both fitted and held out");
+    }
+  }
+  if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
+  std::vector<FitExperiment> experiments;
+  for (const Experiment* e : fitted)
+    experiments.push_back(Prepare(*e, unit, spec, 0.5 * conditioned.cylinder.stroke_m));
+
+  Problem p;
+  for (int j = 0; j < map.size(); ++j) {
+    double value = 0;
+    GetParameter(conditioned, map.free[j].path, &value);
+    p.theta.push_back(map.ToTheta(j, value));
+  }
+  long residuals = 0;
+  for (const FitExperiment& e : experiments) {
+    auto* block = new ExperimentResidual(&conditioned, &map, &e, &options.simulation);
+    p.problem.AddResidualBlock(block, nullptr, p.theta.data());
+    p.blocks.push_back(block);
+    residuals += e.residuals();
+  }
+
+  RefineResult r;
+  const std::vector<double> start_theta = p.theta;
+  for (size_t k = 0; k < experiments.size(); ++k) {
+    r.fitted.push_back(
+        {experiments[k].id, BlockCost(*p.blocks[k], start_theta), 0, experiments[k].residuals()});
+    r.cost_before += r.fitted.back().before;
+  }
+  std::vector<std::vector<double>> starts = {start_theta};
+  for (auto& point : LatinHypercube(map, spec.multistart, spec.seed)) starts.push_back(point);
+
+  const ceres::Solver::Options solver = SolverOptions(spec, options);
+  double best_cost = INFINITY;
+  std::vector<double> best_theta = start_theta;
+  for (size_t s = 0; s < starts.size(); ++s) {
+    p.theta = starts[s];
+    StallCallback stall(options.stall_iterations, options.stall_tolerance);
+    ceres::Solver::Options start_options = solver;
+    start_options.callbacks.push_back(&stall);
+    ceres::Solver::Summary summary;
+    ceres::Solve(start_options, &p.problem, &summary);
+    if (options.verbose) std::cout << summary.FullReport() << "\n";
+    r.iterations += static_cast<int>(summary.iterations.size());
+    if (summary.IsSolutionUsable() && summary.final_cost < best_cost) {
+      best_cost = summary.final_cost;
+      best_theta = p.theta;
+      r.best_start = static_cast<int>(s);
+      r.converged = summary.termination_type == ceres::CONVERGENCE ||
+                    summary.termination_type == ceres::USER_SUCCESS;
+      r.message = summary.message;
+    } else if (!std::isfinite(best_cost)) {
+      r.message = summary.message;
+    }
+  }
+  r.starts = static_cast<int>(starts.size());
+  p.theta = best_theta;
+  if (!std::isfinite(best_cost)) {
+    r.converged = false;
+    r.params = start;
+    r.message = "no start gave a usable solution: " + r.message;
+  } else {
+    r.params = WithValues(conditioned, map, p.theta.data());
+    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
+    for (size_t k = 0; k < experiments.size(); ++k) {
+      const EvaluationCache* at_best = nullptr;
+      if (!p.blocks[k]->ResidualsAndJacobian(p.theta, &at_best)) {
+        normal.resize(0, 0);
+        r.fitted[k].after = NAN;
+        continue;
+      }
+      r.fitted[k].after = 0.5 * at_best->residuals.squaredNorm();
+      r.cost_after += r.fitted[k].after;
+      if (normal.size() > 0) normal += at_best->jacobian.transpose() * at_best->jacobian;
+    }
+    for (int j = 0; j < map.size(); ++j) {
+      RefinedParameter rp;
+      rp.path = map.free[j].path;
+      GetParameter(conditioned, rp.path, &rp.start);
+      rp.value = map.ToValue(j, p.theta[j]);
+      const double span = map.free[j].upper - map.free[j].lower;
+      rp.at_bound =
+          std::min(rp.value - map.free[j].lower, map.free[j].upper - rp.value) < 1e-6 * span;
+      r.parameters.push_back(rp);
+    }
+    Summarise(ParameterCovariance(normal, map, p.theta, r.cost_after, residuals), map, options, &r);
+    r.params.provenance_yaml = AppendProvenance(r.params.provenance_yaml, r, spec);
+  }
+  r.held_out_before = HeldOut(conditioned, unit, held_out, options);
+  r.held_out_after = HeldOut(r.params, unit, held_out, options);
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+  return r;
+}
+
+std::string RefineResult::BriefReport() const {
+  std::ostringstream out;
+  char line[256];
+  std::snprintf(line, sizeof(line),
+                "Refinement: %s, cost %.6g -> %.6g, %d iterations over %d start(s) (best: %d), "
+                "%.2f s\n",
+                converged ? "converged" : "NOT converged", cost_before, cost_after, iterations,
+                starts, best_start, wall_time_s);
+  out << line;
+  if (!converged && !message.empty()) out << "  " << message << "\n";
+  for (const RefinedParameter& p : parameters) {
+    std::snprintf(line, sizeof(line), "  %-28s %12.6g -> %12.6g +- %.3g%s\n", p.path.c_str(),
+                  p.start, p.value, p.standard_error, p.at_bound ? "  (at a bound)" : "");
+    out << line;
+  }
+  for (size_t i = 0; i < poorly_separable.size(); ++i) {
+    out << "  poorly separable: " << poorly_separable[i].first << ", " << poorly_separable[i].second
+        << " correlation " << poorly_separable_correlation[i] << "\n";
+  }
+  for (const ExperimentCost& e : fitted) {
+    std::snprintf(line, sizeof(line), "  fitted   %-16s cost %.6g -> %.6g (%ld residuals)\n",
+                  e.id.c_str(), e.before, e.after, e.residuals);
+    out << line;
+  }
+  for (size_t i = 0; i < held_out_after.experiments.size(); ++i) {
+    const auto& before = held_out_before.experiments[i];
+    const auto& after = held_out_after.experiments[i];
+    const auto rmse = [](const ExperimentValidation& e, const char* channel) {
+      const auto found = e.channels.find(channel);
+      return found == e.channels.end() ? NAN : found->second.rmse;
+    };
+    std::snprintf(line, sizeof(line),
+                  "  held out %-16s x RMSE %.4g -> %.4g mm, p1 RMSE %.4g -> %.4g bar\n",
+                  after.id.c_str(), rmse(before, "x") * 1e3, rmse(after, "x") * 1e3,
+                  rmse(before, "p1") * 1e-5, rmse(after, "p1") * 1e-5);
+    out << line;
+  }
+  return out.str();
+}
+
+}  // namespace pneumaid
