@@ -23,7 +23,7 @@ class FitSpecReader : internal::YamlReader {
     const YAML::Node root = LoadMapping(
         text, std::string("expected a mapping starting with format: ") + kFitSpecFormat);
     Keys(root, "",
-         {"format", "parameters", "channels", "experiments", "multistart", "seed",
+         {"format", "parameters", "channels", "experiments", "stages", "multistart", "seed",
           "max_iterations"});
     if (!root["format"] || Text(root["format"]) != kFitSpecFormat) {
       Fail(root, std::string("expected format: ") + kFitSpecFormat);
@@ -40,6 +40,7 @@ class FitSpecReader : internal::YamlReader {
       }
       if (spec.fit.empty()) Fail(experiments, "experiments.fit: expected at least one experiment");
     }
+    ReadStages(root["stages"], &spec);
     spec.multistart = Count(root["multistart"], "multistart", 0, 1000, spec.multistart);
     spec.seed = static_cast<std::uint64_t>(Count(root["seed"], "seed", 0, 1e15, 1));
     spec.max_iterations = Count(root["max_iterations"], "max_iterations", 1, 10000, 50);
@@ -104,6 +105,29 @@ class FitSpecReader : internal::YamlReader {
       spec->channels[name] = w;
     }
     if (spec->channels.empty()) Fail(node, "channels: expected at least one channel");
+  }
+
+  // stages: [[path, ...], all]
+  void ReadStages(const YAML::Node& node, FitSpec* spec) const {
+    if (!node) return;
+    if (!node.IsSequence() || node.size() == 0) {
+      Fail(node, "stages: expected a list of stages, each a list of parameters or all");
+    }
+    for (const auto& stage : node) {
+      if (stage.IsScalar()) {
+        if (stage.Scalar() != "all") Fail(stage, "stages: expected a list of parameters or all");
+        spec->stages.emplace_back();
+        continue;
+      }
+      std::vector<std::string> paths = Names(stage, "stages");
+      for (size_t i = 0; i < paths.size(); ++i) {
+        bool free = false;
+        for (const FreeParameter& p : spec->parameters) free = free || p.path == paths[i];
+        if (!free) Fail(stage[i], "stages: '" + paths[i] + "' is not under parameters");
+      }
+      if (paths.empty()) Fail(stage, "stages: an empty stage");
+      spec->stages.push_back(paths);
+    }
   }
 
   std::vector<std::string> Names(const YAML::Node& node, const std::string& path) const {

@@ -24,20 +24,36 @@ std::string ManifestPath(const Unit& unit) { return unit.directory + "/unit.yaml
 
 // ---------------------------------------------------------------- parameters
 
-// The solver's coordinates theta for the free parameters: p = s theta
-// (linear, s = |start|) or p = exp(theta) (log).
+// The solver's coordinates theta for the free parameters. Each parameter's
+// scale coordinate w (w = p for a linear scale, w = ln p for a log scale) is
+// mapped onto its bounds by a logistic function,
+//   w = w_lo + (w_hi - w_lo) / (1 + exp(-theta)),
+// so the problem Ceres sees is unconstrained: no step is ever rejected for
+// leaving the bounds, and no projected line search (which would evaluate a
+// Jacobian, a sensitivity run, at every trial point) is needed. Near a lower
+// bound of 0 a linear parameter moves multiplicatively, like a log scale.
 struct ParameterMap {
   std::vector<FreeParameter> free;
-  std::vector<double> scale;  // linear: s; log: unused
+
+  bool IsLog(int j) const { return free[j].scale == ParameterScale::kLog; }
+  double Low(int j) const { return IsLog(j) ? std::log(free[j].lower) : free[j].lower; }
+  double Span(int j) const { return (IsLog(j) ? std::log(free[j].upper) : free[j].upper) - Low(j); }
+  static double Logistic(double theta) { return 1.0 / (1.0 + std::exp(-theta)); }
 
   double ToValue(int j, double theta) const {
-    return free[j].scale == ParameterScale::kLog ? std::exp(theta) : scale[j] * theta;
+    const double w = Low(j) + Span(j) * Logistic(theta);
+    return IsLog(j) ? std::exp(w) : w;
   }
   double ToTheta(int j, double value) const {
-    return free[j].scale == ParameterScale::kLog ? std::log(value) : value / scale[j];
+    const double w = IsLog(j) ? std::log(value) : value;
+    // A start on a bound is moved just inside (theta would be infinite).
+    const double f = std::clamp((w - Low(j)) / Span(j), 1e-9, 1.0 - 1e-9);
+    return std::log(f / (1.0 - f));
   }
   double Derivative(int j, double theta) const {  // dp/dtheta
-    return free[j].scale == ParameterScale::kLog ? std::exp(theta) : scale[j];
+    const double s = Logistic(theta);
+    const double dw = Span(j) * s * (1.0 - s);
+    return IsLog(j) ? ToValue(j, theta) * dw : dw;
   }
   int size() const { return static_cast<int>(free.size()); }
 };
@@ -56,8 +72,6 @@ ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec) {
                        "the start value of " + p.path + " (" + std::to_string(value) +
                            ") lies outside its bounds");
     }
-    const double magnitude = std::max(std::fabs(value), 0.5 * (p.upper - p.lower) * 1e-3);
-    map.scale.push_back(magnitude > 0 ? magnitude : 1.0);
   }
   return map;
 }
@@ -172,10 +186,9 @@ struct EvaluationCache {
 
 // All weighted residuals of one experiment, (sim - measured) factor, channel
 // after channel; the Jacobian from the forward sensitivities. Returns false
-// (Ceres rejects the step) when the simulation fails or a parameter leaves its
-// bounds; never throws. Bounds are enforced by rejection rather than by
-// Ceres' bound constraints, whose projected line search evaluates a Jacobian
-// (a sensitivity simulation) at every trial point.
+// (Ceres rejects the step) when the simulation fails or the parameter set is
+// not physical; never throws. The bounds are built into the coordinates
+// (ParameterMap).
 class ExperimentResidual final : public ceres::CostFunction {
  public:
   ExperimentResidual(const Parameters* base, const ParameterMap* map,
@@ -221,16 +234,7 @@ class ExperimentResidual final : public ceres::CostFunction {
             jacobian, n, m);
   }
 
-  bool InsideBounds(const double* theta) const {
-    for (int j = 0; j < map_->size(); ++j) {
-      const double value = map_->ToValue(j, theta[j]);
-      if (!(value >= map_->free[j].lower && value <= map_->free[j].upper)) return false;
-    }
-    return true;
-  }
-
   bool EvaluateOrFail(const double* theta, double* residuals, double* jacobian) const {
-    if (!InsideBounds(theta)) return false;
     const Parameters params = WithValues(*base_, *map_, theta);
     if (!Validate(params).empty()) return false;
     const FitExperiment& e = *experiment_;
@@ -241,7 +245,11 @@ class ExperimentResidual final : public ceres::CostFunction {
       SensitivityOptions s;
       for (int j = 0; j < map_->size(); ++j) {
         s.parameter_paths.push_back(map_->free[j].path);
-        s.parameter_scales.push_back(std::fabs(map_->Derivative(j, theta[j])));
+        // Typical magnitude for the sensitivity tolerances: the value itself
+        // (a parameter near 0 takes a small fraction of its range).
+        const FreeParameter& free = map_->free[j];
+        s.parameter_scales.push_back(
+            std::max(std::fabs(map_->ToValue(j, theta[j])), 1e-6 * (free.upper - free.lower)));
       }
       s.tolerance_factor = kSensitivityToleranceFactor;
       summary = SimulateWithSensitivities(params, e.command, e.initial, e.measured.t_s,
@@ -298,8 +306,9 @@ class ExperimentResidual final : public ceres::CostFunction {
 
 // ------------------------------------------------------------------- solving
 
-// Latin-hypercube points in theta inside the bounds: each parameter's range
-// cut into `count` strata, one point per stratum, strata shuffled per axis.
+// Latin-hypercube points inside the bounds: each parameter's range (in its
+// scale coordinate) cut into `count` strata, one point per stratum, strata
+// shuffled per axis.
 std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int count,
                                                 std::uint64_t seed) {
   std::mt19937_64 random(seed);
@@ -309,9 +318,11 @@ std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int cou
     std::vector<int> strata(count);
     std::iota(strata.begin(), strata.end(), 0);
     std::shuffle(strata.begin(), strata.end(), random);
-    const double lo = map.ToTheta(j, map.free[j].lower), hi = map.ToTheta(j, map.free[j].upper);
     for (int k = 0; k < count; ++k) {
-      points[k][j] = lo + (hi - lo) * (strata[k] + unit(random)) / count;
+      // Uniform in the scale coordinate (p, or ln p), not in theta.
+      const double fraction = (strata[k] + unit(random)) / count;
+      const double w = map.Low(j) + map.Span(j) * fraction;
+      points[k][j] = map.ToTheta(j, map.IsLog(j) ? std::exp(w) : w);
     }
   }
   return points;
@@ -345,8 +356,11 @@ class StallCallback final : public ceres::IterationCallback {
 
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     best_.push_back(std::min(best_.empty() ? summary.cost : best_.back(), summary.cost));
+    // Far from the optimum the first steps often fail while the trust region
+    // shrinks to a useful size: only a start that has moved can stall.
+    if (summary.iteration > 0 && summary.step_is_successful) moved_ = true;
     const size_t n = best_.size();
-    if (n > static_cast<size_t>(window_)) {
+    if (moved_ && n > static_cast<size_t>(window_)) {
       const double before = best_[n - 1 - static_cast<size_t>(window_)];
       if (before - best_.back() < tolerance_ * before) {
         return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
@@ -358,6 +372,7 @@ class StallCallback final : public ceres::IterationCallback {
  private:
   int window_;
   double tolerance_;
+  bool moved_ = false;
   std::vector<double> best_;  // best cost after each iteration
 };
 
@@ -432,7 +447,9 @@ std::string AppendProvenance(const std::string& provenance, const RefineResult& 
   std::ostringstream entry;
   entry << "refine: {spec: \"" << spec.source << "\", cost_before: " << r.cost_before
         << ", cost_after: " << r.cost_after << ", iterations: " << r.iterations
-        << ", starts: " << r.starts << ", experiments: " << r.fitted.size() << "}";
+        << ", stages: " << r.stages << ", starts: " << r.starts
+        << ", experiments: " << r.fitted.size()
+        << ", converged: " << (r.converged ? "true" : "false") << "}";
   const std::size_t close = provenance.rfind('}');
   if (provenance.empty() || close == std::string::npos) return "{" + entry.str() + "}";
   const bool empty = provenance.find_first_not_of("{} \n") == std::string::npos;
@@ -456,16 +473,16 @@ bool RefineOptions::IsValid(std::string* error) const {
   return simulation.IsValid(error);
 }
 
-RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                    const RefineOptions& options) {
-  const auto clock = std::chrono::steady_clock::now();
-  std::string error;
-  if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
+namespace {
+
+// One Levenberg-Marquardt fit of spec.parameters (all starts); held-out
+// validation and provenance are the caller's.
+RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                         const RefineOptions& options) {
   const Parameters conditioned = WithRigConditions(start, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
   const auto fitted = Select(unit, spec.fit, spec, true);
-  const auto held_out = Select(unit, spec.hold_out, spec, false);
-  for (const Experiment* e : held_out) {
+  for (const Experiment* e : Select(unit, spec.hold_out, spec, false)) {
     if (std::count(fitted.begin(), fitted.end(), e)) {
       throw InputError(spec.source, 0, 0,
                        "experiment '" + e->entry.id + "' is both fitted and held out");
@@ -554,10 +571,64 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       r.parameters.push_back(rp);
     }
     Summarise(ParameterCovariance(normal, map, p.theta, r.cost_after, residuals), map, options, &r);
+  }
+  return r;
+}
+
+// The spec of one stage: its parameters only, in the order of `parameters`.
+FitSpec StageSpec(const FitSpec& spec, const std::vector<std::string>& stage) {
+  FitSpec one = spec;
+  one.stages.clear();
+  if (stage.empty()) return one;  // all
+  one.parameters.clear();
+  for (const FreeParameter& p : spec.parameters) {
+    if (std::find(stage.begin(), stage.end(), p.path) != stage.end()) one.parameters.push_back(p);
+  }
+  return one;
+}
+
+}  // namespace
+
+RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options) {
+  const auto clock = std::chrono::steady_clock::now();
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
+  const std::vector<std::vector<std::string>> stages =
+      spec.stages.empty() ? std::vector<std::vector<std::string>>{{}} : spec.stages;
+  RefineResult r;
+  Parameters current = start;
+  int iterations = 0;
+  std::vector<ExperimentCost> before;
+  double cost_before = 0;
+  for (size_t k = 0; k < stages.size(); ++k) {
+    r = RefineStage(current, unit, StageSpec(spec, stages[k]), options);
+    iterations += r.iterations;
+    if (k == 0) {
+      before = r.fitted;
+      cost_before = r.cost_before;
+    }
+    if (r.parameters.empty()) {
+      r.message = "stage " + std::to_string(k + 1) + ": " + r.message;
+      break;
+    }
+    current = r.params;
+  }
+  r.iterations = iterations;
+  r.cost_before = cost_before;
+  for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
+    r.fitted[k].before = before[k].before;
+  }
+  const Parameters conditioned = WithRigConditions(start, unit);
+  for (RefinedParameter& p : r.parameters) GetParameter(conditioned, p.path, &p.start);
+  if (!r.parameters.empty()) {
     r.params.provenance_yaml = AppendProvenance(r.params.provenance_yaml, r, spec);
   }
+  const auto held_out = Select(unit, spec.hold_out, spec, false);
   r.held_out_before = HeldOut(conditioned, unit, held_out, options);
-  r.held_out_after = HeldOut(r.params, unit, held_out, options);
+  r.held_out_after =
+      HeldOut(r.parameters.empty() ? conditioned : r.params, unit, held_out, options);
+  r.stages = static_cast<int>(stages.size());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;
 }
@@ -566,10 +637,10 @@ std::string RefineResult::BriefReport() const {
   std::ostringstream out;
   char line[256];
   std::snprintf(line, sizeof(line),
-                "Refinement: %s, cost %.6g -> %.6g, %d iterations over %d start(s) (best: %d), "
-                "%.2f s\n",
+                "Refinement: %s, cost %.6g -> %.6g, %d iterations in %d stage(s), %d start(s) "
+                "(best: %d), %.2f s\n",
                 converged ? "converged" : "NOT converged", cost_before, cost_after, iterations,
-                starts, best_start, wall_time_s);
+                stages, starts, best_start, wall_time_s);
   out << line;
   if (!converged && !message.empty()) out << "  " << message << "\n";
   for (const RefinedParameter& p : parameters) {

@@ -41,6 +41,11 @@ struct FitSpec {
   // Extra starting points from a Latin hypercube inside the bounds (0: only
   // the given start).
   int multistart = 0;
+  // Optional: refine in stages, each from the previous one's result, freeing
+  // the listed parameters (an empty list: all of them). Output error from a
+  // poor start has narrow basins in the parameters that set the timing (the
+  // valve gain, the tube lag); fitting those first widens them.
+  std::vector<std::vector<std::string>> stages;
   std::uint64_t seed = 1;
   int max_iterations = 50;
   std::string source;  // the file it came from, for messages and provenance

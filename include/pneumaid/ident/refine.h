@@ -65,9 +65,9 @@ struct RefineResult {
   Eigen::MatrixXd correlation;  // of the free parameters, in the order above
   std::vector<std::pair<std::string, std::string>> poorly_separable;
   std::vector<double> poorly_separable_correlation;
-  std::vector<ExperimentCost> fitted;
+  std::vector<ExperimentCost> fitted;  // before: at the start, after: after the last stage
   double cost_before = 0, cost_after = 0;
-  int starts = 0, best_start = 0, iterations = 0;
+  int stages = 0, starts = 0, best_start = 0, iterations = 0;  // starts, best: last stage
   double wall_time_s = 0;
   // Held-out experiments, validated with the start and the refined set.
   ValidationReport held_out_before, held_out_after;

@@ -1,0 +1,181 @@
+// Refinement on synthetic units with known truth: recovery from trajectories
+// alone, repair of biased component fits, refusal of specs that do not fit the
+// unit, and multistart.
+#include "pneumaid/ident/refine.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "pneumaid/ident/identify.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/model/parameter_table.h"
+#include "refine_test_util.h"
+
+namespace pneumaid {
+namespace {
+
+const std::string kDefaultSpec = std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml";
+
+std::string UnitDir(const std::string& name) {
+  return (std::filesystem::path(::testing::TempDir()) / name).string();
+}
+
+double Value(const Parameters& p, const std::string& path) {
+  double value = NAN;
+  EXPECT_TRUE(GetParameter(p, path, &value)) << path;
+  return value;
+}
+
+// The issue's tolerances: Fs, Fd 5 % or 0.1 N; b 15 % or 0.5 N s/m; vs 25 %
+// or 1 mm/s; delta and q_max 5 %.
+double Tolerance(const std::string& path, double truth) {
+  const auto ends = [&path](const char* suffix) {
+    return path.size() >= std::strlen(suffix) &&
+           path.compare(path.size() - std::strlen(suffix), std::string::npos, suffix) == 0;
+  };
+  if (ends(".Fs") || ends(".Fd")) return std::max(0.05 * truth, 0.1);
+  if (ends(".b")) return std::max(0.15 * truth, 0.5);
+  if (ends(".vs")) return std::max(0.25 * truth, 1e-3);
+  return 0.05 * truth;
+}
+
+// From the component fits (valve and tube bench logs, friction from the
+// stroke logs) the refinement recovers the ten parameters of fit-default.yaml
+// from the stroke trajectories. (From a start 30 % off on all ten at once it
+// does not: issue 5 keeps that point open, docs/refinement.md.)
+TEST(RefineTest, RecoversTheTenDefaultParametersFromTheComponentFits) {
+  const Parameters truth;
+  const Unit unit = testing::WriteAndRead(
+      Synthesize(truth, testing::RefinementProtocol({0.6, 0.8, 1.0}, true), 31, "R"),
+      UnitDir("refine_recovery"));
+  IdentifyReport report;
+  const Parameters start = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineResult result = Refine(start, unit, spec, RefineOptions{});
+  std::cout << result.BriefReport();
+  ASSERT_TRUE(result.converged) << result.message;
+  for (const FreeParameter& free : spec.parameters) {
+    const double exact = Value(truth, free.path);
+    EXPECT_NEAR(Value(result.params, free.path), exact, Tolerance(free.path, exact)) << free.path;
+    EXPECT_GT(result.params.uncertainty.count(free.path), 0u) << free.path;
+  }
+  // Near the noise floor: chi^2 per residual below 2 (the position sensor's
+  // 10 um quantisation adds a third to its declared 5 um noise).
+  long residuals = 0;
+  for (const ExperimentCost& e : result.fitted) residuals += e.residuals;
+  EXPECT_LT(2.0 * result.cost_after, 2.0 * static_cast<double>(residuals));
+  ASSERT_EQ(result.held_out_after.experiments.size(), 2u);  // step-1, profile-1
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_LT(result.held_out_after.experiments[i].channels.at("x").rmse, 50e-6);
+  }
+}
+
+// Component fits made blind to the flow meters' 30 ms lag (not declared in the
+// manifest) and to most of the position accuracy (50 um noise): the held-out
+// position error after refinement is at most half of that before.
+TEST(RefineTest, HalvesTheHeldOutPositionErrorOfBiasedComponentFits) {
+  const Parameters truth;
+  Protocol protocol = testing::RefinementProtocol({0.6, 0.8, 1.0}, true);
+  for (const char* flow : {"q", "q_in", "q_out", "q1", "q2"})
+    protocol.sensors[flow].declared = false;
+  protocol.sensors["x"].sigma = 50e-6;
+  const Unit unit =
+      testing::WriteAndRead(Synthesize(truth, protocol, 32, "B"), UnitDir("refine_biased"));
+  IdentifyReport report;
+  const Parameters identified = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
+  const RefineResult result = Refine(identified, unit, LoadFitSpec(kDefaultSpec), RefineOptions{});
+  std::cout << report.BriefReport() << result.BriefReport();
+  ASSERT_TRUE(result.converged) << result.message;
+  ASSERT_EQ(result.held_out_before.experiments.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const double before = result.held_out_before.experiments[i].channels.at("x").rmse;
+    const double after = result.held_out_after.experiments[i].channels.at("x").rmse;
+    EXPECT_LE(after, 0.5 * before) << result.held_out_after.experiments[i].id;
+  }
+}
+
+class RefineSpecTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    unit_ = new Unit(testing::WriteAndRead(
+        Synthesize(Parameters{}, testing::RefinementProtocol({1.0}, false), 33, "S"),
+        UnitDir("refine_spec")));
+  }
+  static void TearDownTestSuite() { delete unit_; }
+
+  // Two free parameters on the one stroke log: a small, fast problem.
+  static FitSpec TwoParameters() {
+    return ParseFitSpec(R"(format: pneumaid-fit/1
+parameters:
+  friction.positive.Fd: {min: 0.05, max: 5}
+  friction.negative.Fd: {min: 0.5, max: 20}
+experiments: {fit: [stroke-100], hold_out: []}
+)",
+                        "two.yaml");
+  }
+
+  static Unit* unit_;
+};
+Unit* RefineSpecTest::unit_ = nullptr;
+
+TEST_F(RefineSpecTest, MultistartKeepsTheBestOfItsSeededLatinHypercubeStarts) {
+  Parameters start;
+  start.friction.positive.dynamic_force_N *= 1.05;
+  start.friction.negative.dynamic_force_N *= 0.95;
+  const RefineResult single = Refine(start, *unit_, TwoParameters(), RefineOptions{});
+  FitSpec spec = TwoParameters();
+  spec.multistart = 3;
+  spec.max_iterations = 12;  // per start: enough to tell the starts apart
+  const RefineResult multi = Refine(start, *unit_, spec, RefineOptions{});
+  const RefineResult again = Refine(start, *unit_, spec, RefineOptions{});
+  std::cout << single.BriefReport() << multi.BriefReport();
+  EXPECT_EQ(single.starts, 1);
+  EXPECT_EQ(multi.starts, 4);
+  ASSERT_TRUE(multi.converged) << multi.message;
+  EXPECT_LE(multi.cost_after, single.cost_after * (1 + 1e-9));
+  EXPECT_EQ(multi.best_start, again.best_start);  // seeded: the same starts
+  EXPECT_EQ(multi.params.friction.negative.dynamic_force_N,
+            again.params.friction.negative.dynamic_force_N);
+  EXPECT_NEAR(single.params.friction.positive.dynamic_force_N, 0.5, 0.1);
+  EXPECT_NEAR(single.params.friction.negative.dynamic_force_N, 5.0, 0.25);
+  for (const RefinedParameter& p : multi.parameters) EXPECT_GT(p.standard_error, 0) << p.path;
+}
+
+TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
+  FitSpec spec = TwoParameters();
+  spec.fit = {"stroke-999"};
+  EXPECT_THROW(Refine(Parameters{}, *unit_, spec, RefineOptions{}), InputError);
+  spec = TwoParameters();
+  spec.fit = {"valve"};  // not simulable, and not present
+  EXPECT_THROW(Refine(Parameters{}, *unit_, spec, RefineOptions{}), InputError);
+  spec = TwoParameters();
+  spec.hold_out = {"stroke-100"};  // both fitted and held out
+  EXPECT_THROW(Refine(Parameters{}, *unit_, spec, RefineOptions{}), InputError);
+  spec = TwoParameters();
+  Parameters outside;
+  outside.friction.negative.dynamic_force_N = 30;  // above its max of 20
+  try {
+    Refine(outside, *unit_, spec, RefineOptions{});
+    ADD_FAILURE() << "a start outside the bounds was accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("friction.negative.Fd"), std::string::npos)
+        << error.what();
+  }
+}
+
+TEST(RefineOptionsTest, IsValidNamesTheBadField) {
+  RefineOptions options;
+  std::string error;
+  EXPECT_TRUE(options.IsValid(&error)) << error;
+  options.threads = 0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("threads"), std::string::npos);
+  options = RefineOptions{};
+  options.correlation_flag = 1.5;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("correlation_flag"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pneumaid
