@@ -192,8 +192,9 @@ struct EvaluationCache {
 class ExperimentResidual final : public ceres::CostFunction {
  public:
   ExperimentResidual(const Parameters* base, const ParameterMap* map,
-                     const FitExperiment* experiment, const SimulationOptions* simulation)
-      : base_(base), map_(map), experiment_(experiment), simulation_(simulation) {
+                     const FitExperiment* experiment, const SimulationOptions* simulation,
+                     JacobianMethod method)
+      : base_(base), map_(map), experiment_(experiment), simulation_(simulation), method_(method) {
     set_num_residuals(static_cast<int>(experiment->residuals()));
     mutable_parameter_block_sizes()->push_back(map->size());
   }
@@ -223,10 +224,16 @@ class ExperimentResidual final : public ceres::CostFunction {
     return true;
   }
 
+  // 0.5 |r|^2 at the first Jacobian evaluation (NaN before one).
+  double FirstCost() const { return first_cost_; }
+
  private:
   void Remember(const double* theta, const double* residuals, const double* jacobian) const {
     const int m = map_->size();
     const int n = num_residuals();
+    if (std::isnan(first_cost_)) {
+      first_cost_ = 0.5 * Eigen::Map<const Eigen::VectorXd>(residuals, n).squaredNorm();
+    }
     cache_.theta.assign(theta, theta + m);
     cache_.residuals = Eigen::Map<const Eigen::VectorXd>(residuals, n);
     cache_.jacobian =
@@ -235,13 +242,21 @@ class ExperimentResidual final : public ceres::CostFunction {
   }
 
   bool EvaluateOrFail(const double* theta, double* residuals, double* jacobian) const {
+    if (jacobian != nullptr && method_ == JacobianMethod::kCentralDifferences) {
+      return EvaluateOrFail(theta, residuals, nullptr) && CentralDifferences(theta, jacobian);
+    }
     const Parameters params = WithValues(*base_, *map_, theta);
     if (!Validate(params).empty()) return false;
     const FitExperiment& e = *experiment_;
+    // The residuals always come from the plain simulation: the run with
+    // sensitivities takes slightly different steps, and with stick-slip its
+    // trajectory differs by more than Levenberg-Marquardt's cost comparisons
+    // between trial points (residuals only) and accepted points tolerate.
     Trajectory sim;
+    SimulationSummary summary =
+        Simulate(params, e.command, e.initial, e.measured.t_s, *simulation_, &sim);
     TrajectorySensitivities sens;
-    SimulationSummary summary;
-    if (jacobian != nullptr) {
+    if (summary.ok() && jacobian != nullptr) {
       SensitivityOptions s;
       for (int j = 0; j < map_->size(); ++j) {
         s.parameter_paths.push_back(map_->free[j].path);
@@ -252,10 +267,9 @@ class ExperimentResidual final : public ceres::CostFunction {
             std::max(std::fabs(map_->ToValue(j, theta[j])), 1e-6 * (free.upper - free.lower)));
       }
       s.tolerance_factor = kSensitivityToleranceFactor;
+      Trajectory with_sensitivities;
       summary = SimulateWithSensitivities(params, e.command, e.initial, e.measured.t_s,
-                                          *simulation_, s, &sim, &sens);
-    } else {
-      summary = Simulate(params, e.command, e.initial, e.measured.t_s, *simulation_, &sim);
+                                          *simulation_, s, &with_sensitivities, &sens);
     }
     if (!summary.ok() || sim.size() != e.measured.size()) return false;
     const long n = static_cast<long>(e.measured.size());
@@ -275,6 +289,23 @@ class ExperimentResidual final : public ceres::CostFunction {
       for (long k = 0; k < row * map_->size(); ++k) {
         if (!std::isfinite(jacobian[k])) return false;
       }
+    }
+    return true;
+  }
+
+  // The baseline Jacobian: (r(theta + h e_j) - r(theta - h e_j)) / 2h.
+  bool CentralDifferences(const double* theta, double* jacobian) const {
+    const int m = map_->size();
+    const int n = num_residuals();
+    std::vector<double> shifted(theta, theta + m), up(n), down(n);
+    constexpr double kStep = 1e-5;  // in theta: a relative change of about 1e-5
+    for (int j = 0; j < m; ++j) {
+      shifted[j] = theta[j] + kStep;
+      if (!EvaluateOrFail(shifted.data(), up.data(), nullptr)) return false;
+      shifted[j] = theta[j] - kStep;
+      if (!EvaluateOrFail(shifted.data(), down.data(), nullptr)) return false;
+      shifted[j] = theta[j];
+      for (int i = 0; i < n; ++i) jacobian[i * m + j] = (up[i] - down[i]) / (2 * kStep);
     }
     return true;
   }
@@ -300,8 +331,10 @@ class ExperimentResidual final : public ceres::CostFunction {
   const ParameterMap* map_;
   const FitExperiment* experiment_;
   const SimulationOptions* simulation_;
+  JacobianMethod method_;
   // Ceres never evaluates one block from two threads at once.
   mutable EvaluationCache cache_;
+  mutable double first_cost_ = NAN;
 };
 
 // ------------------------------------------------------------------- solving
@@ -333,15 +366,6 @@ struct Problem {
   std::vector<double> theta;
   std::vector<const ExperimentResidual*> blocks;  // owned by problem
 };
-
-// 0.5 |r|^2 of one experiment at theta (NaN when it cannot be simulated).
-double BlockCost(const ExperimentResidual& block, const std::vector<double>& theta) {
-  std::vector<double> r(static_cast<size_t>(block.num_residuals()));
-  const double* blocks[] = {theta.data()};
-  if (!block.Evaluate(blocks, r.data(), nullptr)) return NAN;
-  return 0.5 * Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()))
-                   .squaredNorm();
-}
 
 // Stops a start once the best cost has improved by less than
 // stall_tolerance (relative) over the last stall_iterations iterations. The
@@ -437,7 +461,7 @@ ValidationReport HeldOut(const Parameters& params, const Unit& unit,
                          const RefineOptions& options) {
   if (held_out.empty()) return {};
   ValidationOptions v;
-  v.simulation = options.simulation;
+  v.simulation = options.validation;
   for (const Experiment* e : held_out) v.experiment_ids.push_back(e->entry.id);
   return ValidateUnit(params, unit, v);
 }
@@ -501,7 +525,8 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   }
   long residuals = 0;
   for (const FitExperiment& e : experiments) {
-    auto* block = new ExperimentResidual(&conditioned, &map, &e, &options.simulation);
+    auto* block =
+        new ExperimentResidual(&conditioned, &map, &e, &options.simulation, options.jacobian);
     p.problem.AddResidualBlock(block, nullptr, p.theta.data());
     p.blocks.push_back(block);
     residuals += e.residuals();
@@ -509,11 +534,6 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
 
   RefineResult r;
   const std::vector<double> start_theta = p.theta;
-  for (size_t k = 0; k < experiments.size(); ++k) {
-    r.fitted.push_back(
-        {experiments[k].id, BlockCost(*p.blocks[k], start_theta), 0, experiments[k].residuals()});
-    r.cost_before += r.fitted.back().before;
-  }
   std::vector<std::vector<double>> starts = {start_theta};
   for (auto& point : LatinHypercube(map, spec.multistart, spec.seed)) starts.push_back(point);
 
@@ -541,6 +561,12 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     }
   }
   r.starts = static_cast<int>(starts.size());
+  for (size_t k = 0; k < experiments.size(); ++k) {
+    // Ceres' first evaluation is at the given start.
+    r.fitted.push_back(
+        {experiments[k].id, p.blocks[k]->FirstCost(), 0, experiments[k].residuals()});
+    r.cost_before += r.fitted.back().before;
+  }
   p.theta = best_theta;
   if (!std::isfinite(best_cost)) {
     r.converged = false;

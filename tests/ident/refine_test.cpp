@@ -67,7 +67,8 @@ TEST(RefineTest, RecoversTheTenDefaultParametersFromTheComponentFits) {
   EXPECT_LT(2.0 * result.cost_after, 2.0 * static_cast<double>(residuals));
   ASSERT_EQ(result.held_out_after.experiments.size(), 2u);  // step-1, profile-1
   for (size_t i = 0; i < 2; ++i) {
-    EXPECT_LT(result.held_out_after.experiments[i].channels.at("x").rmse, 50e-6);
+    EXPECT_LT(result.held_out_after.experiments[i].channels.at("x").rmse,
+              0.5 * result.held_out_before.experiments[i].channels.at("x").rmse);
   }
 }
 

@@ -1,0 +1,56 @@
+// `pneumaid refine` on the bundled unit: a small spec refines and writes a
+// parameter set with uncertainty and provenance; bad input exits 2 and writes
+// nothing.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "cli_test_util.h"
+
+namespace pneumaid {
+namespace {
+
+using RefineCliTest = testing::CliTest;
+
+// One short validation run fitted, the other held out: seconds, not minutes.
+const char* kSmallSpec = R"(format: pneumaid-fit/1
+parameters:
+  friction.positive.Fd: {min: 0.01, max: 20}
+  friction.negative.Fd: {min: 0.01, max: 20}
+experiments: {fit: [step-1], hold_out: [profile-1]}
+max_iterations: 10
+)";
+
+TEST_F(RefineCliTest, RefinesAndWritesUncertaintyAndProvenance) {
+  const std::string spec = Write("small.yaml", kSmallSpec);
+  const std::string out = (dir_ / "refined.yaml").string();
+  ASSERT_EQ(Run("refine " + testing::Source("datasets/paper-rig") + " --params " +
+                testing::Source("configs/paper.yaml") + " --spec " + spec + " --out " + out),
+            0)
+      << Stdout() << Stderr();
+  EXPECT_NE(Stdout().find("held out profile-1"), std::string::npos) << Stdout();
+  const std::string written = Read(out);
+  EXPECT_NE(written.find("friction.negative.Fd"), std::string::npos) << written;  // uncertainty
+  EXPECT_NE(written.find("refine:"), std::string::npos) << written;               // provenance
+  EXPECT_EQ(Run("validate --params " + out + " " + testing::Source("datasets/paper-rig")), 0)
+      << Stdout() << Stderr();
+}
+
+TEST_F(RefineCliTest, BadInputExitsTwoAndWritesNothing) {
+  const std::string out = (dir_ / "refined.yaml").string();
+  const std::string unit = testing::Source("datasets/paper-rig");
+  const std::string params = " --params " + testing::Source("configs/paper.yaml");
+  const std::string typo = Write("typo.yaml", std::string(kSmallSpec) + "multistrat: 2\n");
+  EXPECT_EQ(Run("refine " + unit + params + " --spec " + typo + " --out " + out), 2);
+  EXPECT_NE(Stderr().find("typo.yaml:7"), std::string::npos) << Stderr();
+  EXPECT_NE(Stderr().find("multistrat"), std::string::npos) << Stderr();
+  std::string missing = kSmallSpec;
+  missing.replace(missing.find("step-1"), 6, "step-9");
+  const std::string unknown = Write("unknown.yaml", missing);
+  EXPECT_EQ(Run("refine " + unit + params + " --spec " + unknown + " --out " + out), 2);
+  EXPECT_NE(Stderr().find("step-9"), std::string::npos) << Stderr();
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+}  // namespace
+}  // namespace pneumaid

@@ -1,0 +1,104 @@
+// The fit spec format (pneumaid-fit/1): the shipped specs parse; every kind of
+// mistake is one InputError naming the file, the line and what was expected.
+#include "pneumaid/ident/fit_spec.h"
+
+#include <gtest/gtest.h>
+
+#include "pneumaid/io/input_error.h"
+
+namespace pneumaid {
+namespace {
+
+TEST(FitSpecTest, TheDefaultSpecFreesTenParametersInTwoStages) {
+  const FitSpec spec = LoadFitSpec(std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml");
+  ASSERT_EQ(spec.parameters.size(), 10u);
+  EXPECT_EQ(spec.parameters[0].path, "pipeline.delta");
+  EXPECT_EQ(spec.parameters[0].scale, ParameterScale::kLog);
+  EXPECT_EQ(spec.parameters[2].scale, ParameterScale::kLinear);
+  ASSERT_EQ(spec.stages.size(), 2u);
+  EXPECT_EQ(spec.stages[0].size(), 2u);
+  EXPECT_TRUE(spec.stages[1].empty());  // all
+  EXPECT_EQ(spec.channels.size(), 3u);
+  EXPECT_EQ(spec.fit, std::vector<std::string>{"stroke"});
+  EXPECT_EQ(spec.hold_out, std::vector<std::string>{"validation"});
+}
+
+TEST(FitSpecTest, ChannelsTakeASigmaAndAWeight) {
+  const FitSpec spec = ParseFitSpec(R"(format: pneumaid-fit/1
+parameters: {friction.positive.Fs: {min: 0, max: 50}}
+channels: {x: {sigma: 1.0e-5, weight: 2}, p1: {}}
+multistart: 4
+seed: 9
+)",
+                                    "s.yaml");
+  EXPECT_DOUBLE_EQ(spec.channels.at("x").sigma, 1e-5);
+  EXPECT_DOUBLE_EQ(spec.channels.at("x").weight, 2.0);
+  EXPECT_DOUBLE_EQ(spec.channels.at("p1").sigma, 0.0);  // the manifest's
+  EXPECT_EQ(spec.multistart, 4);
+  EXPECT_EQ(spec.seed, 9u);
+}
+
+struct BadSpec {
+  const char* what;
+  const char* text;
+  int line;
+  const char* mentions;
+};
+
+class FitSpecBadInputTest : public ::testing::TestWithParam<BadSpec> {};
+
+TEST_P(FitSpecBadInputTest, OneMessageNamingFileLineAndExpectation) {
+  const BadSpec& bad = GetParam();
+  try {
+    ParseFitSpec(bad.text, "bad.yaml");
+    ADD_FAILURE() << bad.what << ": accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "bad.yaml") << bad.what;
+    EXPECT_EQ(e.line(), bad.line) << bad.what << ": " << e.message();
+    EXPECT_NE(e.message().find(bad.mentions), std::string::npos) << bad.what << ": " << e.message();
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Mistakes, FitSpecBadInputTest,
+    ::testing::Values(
+        BadSpec{"format", "format: pneumaid-fit/2\nparameters: {}\n", 1, "pneumaid-fit/1"},
+        BadSpec{"unknown key", "format: pneumaid-fit/1\nparameter: {}\n", 2, "unknown key"},
+        BadSpec{"unknown path",
+                "format: pneumaid-fit/1\nparameters:\n  friction.positive.Fz: {min: 0, max: 1}\n",
+                3, "friction.positive.Fz"},
+        BadSpec{"min above max",
+                "format: pneumaid-fit/1\nparameters:\n  pipeline.delta: {min: 9, max: 1}\n", 3,
+                "min < max"},
+        BadSpec{"bound outside the physical range",
+                "format: pneumaid-fit/1\nparameters:\n  friction.positive.Fs: {min: -1, max: 9}\n",
+                3, "bounds must lie"},
+        BadSpec{"log scale through zero",
+                "format: pneumaid-fit/1\nparameters:\n"
+                "  friction.positive.Fd: {min: 0, max: 9, scale: log}\n",
+                3, "min > 0"},
+        BadSpec{"scale name",
+                "format: pneumaid-fit/1\nparameters:\n"
+                "  friction.positive.Fd: {min: 0, max: 9, scale: cubic}\n",
+                3, "linear | log"},
+        BadSpec{"unknown channel",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "channels: {v: {}}\n",
+                3, "unknown key 'channels.v'"},
+        BadSpec{"negative sigma",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "channels:\n  x: {sigma: -1}\n",
+                4, "sigma"},
+        BadSpec{"stage names a parameter that is not free",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "stages:\n  - [valve.increasing.q_max]\n",
+                4, "not under parameters"},
+        BadSpec{"fractional multistart",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "multistart: 1.5\n",
+                3, "whole number"},
+        BadSpec{"syntax", "format: pneumaid-fit/1\nparameters: {pipeline.delta: [\n", 3,
+                "YAML syntax"}));
+
+}  // namespace
+}  // namespace pneumaid
