@@ -41,6 +41,9 @@ class FitSpecReader : internal::YamlReader {
       if (spec.fit.empty()) Fail(experiments, "experiments.fit: expected at least one experiment");
     }
     ReadStages(root["stages"], &spec);
+    if (!spec.stages.empty() && spec.stages.back().friction_replay) {
+      Fail(root["stages"], "stages: the last stage must fit through the simulator");
+    }
     spec.multistart = Count(root["multistart"], "multistart", 0, 1000, spec.multistart);
     spec.seed = static_cast<std::uint64_t>(Count(root["seed"], "seed", 0, 1e15, 1));
     spec.max_iterations = Count(root["max_iterations"], "max_iterations", 1, 10000, 50);
@@ -107,26 +110,47 @@ class FitSpecReader : internal::YamlReader {
     if (spec->channels.empty()) Fail(node, "channels: expected at least one channel");
   }
 
-  // stages: [[path, ...], all]
+  // stages: each a list of paths, `all`, or {parameters: list | all, windows: bool}
   void ReadStages(const YAML::Node& node, FitSpec* spec) const {
     if (!node) return;
     if (!node.IsSequence() || node.size() == 0) {
       Fail(node, "stages: expected a list of stages, each a list of parameters or all");
     }
-    for (const auto& stage : node) {
-      if (stage.IsScalar()) {
-        if (stage.Scalar() != "all") Fail(stage, "stages: expected a list of parameters or all");
-        spec->stages.emplace_back();
+    for (const auto& item : node) {
+      FitStage stage;
+      YAML::Node parameters = item;
+      if (item.IsMap()) {
+        Keys(item, "stages.", {"parameters", "windows", "friction_replay"});
+        if (item["windows"]) stage.windows = Flag(item["windows"]);
+        if (item["friction_replay"]) stage.friction_replay = Flag(item["friction_replay"]);
+        if (stage.friction_replay) {
+          if (item["parameters"] || stage.windows) {
+            Fail(item, "stages: friction_replay stands alone (no parameters, no windows)");
+          }
+          spec->stages.push_back(stage);
+          continue;
+        }
+        parameters = item["parameters"];
+        if (!parameters) Fail(item, "stages: expected parameters: [paths] or parameters: all");
+      }
+      if (parameters.IsScalar()) {
+        if (parameters.Scalar() != "all") {
+          Fail(parameters, "stages: expected a list of parameters or all");
+        }
+        spec->stages.push_back(stage);
         continue;
       }
-      std::vector<std::string> paths = Names(stage, "stages");
-      for (size_t i = 0; i < paths.size(); ++i) {
+      stage.parameters = Names(parameters, "stages");
+      for (size_t i = 0; i < stage.parameters.size(); ++i) {
         bool free = false;
-        for (const FreeParameter& p : spec->parameters) free = free || p.path == paths[i];
-        if (!free) Fail(stage[i], "stages: '" + paths[i] + "' is not under parameters");
+        for (const FreeParameter& p : spec->parameters)
+          free = free || p.path == stage.parameters[i];
+        if (!free) {
+          Fail(parameters[i], "stages: '" + stage.parameters[i] + "' is not under parameters");
+        }
       }
-      if (paths.empty()) Fail(stage, "stages: an empty stage");
-      spec->stages.push_back(paths);
+      if (stage.parameters.empty()) Fail(parameters, "stages: an empty stage");
+      spec->stages.push_back(stage);
     }
   }
 

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "pneumaid/eval/metrics.h"
+#include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/sim/sensitivities.h"
@@ -98,6 +99,7 @@ struct FitExperiment {
   CommandSignal command;
   InitialState initial;
   std::vector<Channel> channels;
+  std::string parent;  // a window's run (multiple shooting); empty for a whole run
   long residuals() const { return static_cast<long>(measured.size() * channels.size()); }
 };
 
@@ -167,6 +169,68 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
     throw InputError(spec.source, 0, 0, "experiment '" + out.id + "' logs none of the channels");
   }
   return out;
+}
+
+// A stuck phase: the logged position stays within the band for at least this
+// many samples; a window is at least this long.
+constexpr std::size_t kMinStuckSamples = 5;
+constexpr std::size_t kMinWindowSamples = 20;
+
+// Samples [begin, end) of a run as a trajectory.
+Trajectory Slice(const Trajectory& run, std::size_t begin, std::size_t end) {
+  Trajectory out;
+  const auto cut = [&](const std::vector<double>& from, std::vector<double>* to) {
+    if (!from.empty()) to->assign(from.begin() + begin, from.begin() + end);
+  };
+  cut(run.t_s, &out.t_s);
+  cut(run.u_V, &out.u_V);
+  cut(run.x_m, &out.x_m);
+  cut(run.v_m_per_s, &out.v_m_per_s);
+  cut(run.p1_Pa, &out.p1_Pa);
+  cut(run.p2_Pa, &out.p2_Pa);
+  cut(run.q1_kg_per_s, &out.q1_kg_per_s);
+  cut(run.q2_kg_per_s, &out.q2_kg_per_s);
+  return out;
+}
+
+// Multiple shooting (FitStage::windows): the run cut where the rod is stuck,
+// each window simulated from its logged state, v = 0, with the command-driven
+// lags replayed from the start of the log. `band_m`: how far a stuck rod's
+// logged position may wander (noise and ADC step).
+std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m) {
+  const std::vector<double>& x = run.measured.x_m;
+  const std::size_t n = x.size();
+  std::vector<std::size_t> starts = {0};
+  std::vector<double> rest_positions = {run.initial.position_m};
+  for (std::size_t i = 1; i < n;) {
+    std::size_t j = i;
+    while (j + 1 < n && std::fabs(x[j + 1] - x[i]) <= band_m) ++j;
+    if (j - i + 1 >= kMinStuckSamples && i - starts.back() >= kMinWindowSamples &&
+        n - i >= kMinWindowSamples) {
+      starts.push_back(i);
+      double sum = 0;
+      for (std::size_t k = i; k < i + kMinStuckSamples; ++k) sum += x[k];
+      rest_positions.push_back(sum / kMinStuckSamples);
+    }
+    i = j + 1;
+  }
+  std::vector<FitExperiment> windows;
+  for (std::size_t w = 0; w < starts.size(); ++w) {
+    const std::size_t begin = starts[w], end = w + 1 < starts.size() ? starts[w + 1] : n;
+    FitExperiment window = run;
+    window.measured = Slice(run.measured, begin, end);
+    window.id = run.id + "@" + std::to_string(run.measured.t_s[begin]);
+    window.parent = run.id;
+    if (begin > 0) {
+      window.initial = InitialState{};
+      window.initial.position_m = std::clamp(rest_positions[w], -half_stroke_m, half_stroke_m);
+      window.initial.p1_Pa = run.measured.p1_Pa[begin];
+      window.initial.p2_Pa = run.measured.p2_Pa[begin];
+      window.initial.lag_history_from_s = run.measured.t_s.front();
+    }
+    windows.push_back(std::move(window));
+  }
+  return windows;
 }
 
 // ------------------------------------------------------------------ residuals
@@ -367,8 +431,9 @@ struct Problem {
   std::vector<const ExperimentResidual*> blocks;  // owned by problem
 };
 
-// Stops a start once the best cost has improved by less than
-// stall_tolerance (relative) over the last stall_iterations iterations. The
+// Stops a start once its cost has improved by less than stall_tolerance
+// (relative) over its last stall_iterations accepted steps, or after four
+// rejected steps in a row once it has moved. The
 // cost of an event-driven model is rough at about 1e-3 relative: each
 // stick/slip switch is located to the integrator's tolerance, so the
 // trajectories (and the cost) jitter at that level, far inside the
@@ -379,14 +444,23 @@ class StallCallback final : public ceres::IterationCallback {
   StallCallback(int iterations, double tolerance) : window_(iterations), tolerance_(tolerance) {}
 
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
-    best_.push_back(std::min(best_.empty() ? summary.cost : best_.back(), summary.cost));
-    // Far from the optimum the first steps often fail while the trust region
-    // shrinks to a useful size: only a start that has moved can stall.
-    if (summary.iteration > 0 && summary.step_is_successful) moved_ = true;
-    const size_t n = best_.size();
-    if (moved_ && n > static_cast<size_t>(window_)) {
-      const double before = best_[n - 1 - static_cast<size_t>(window_)];
-      if (before - best_.back() < tolerance_ * before) {
+    if (summary.iteration == 0) {
+      accepted_.push_back(summary.cost);
+      return ceres::SOLVER_CONTINUE;
+    }
+    if (!summary.step_is_successful) {
+      // Rejected steps shrink the trust region; once the start has moved, a
+      // run of them means the cost's jitter, not the model, limits progress.
+      return accepted_.size() > 1 && ++rejected_in_a_row_ >= kMaxRejectedInARow
+                 ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                 : ceres::SOLVER_CONTINUE;
+    }
+    rejected_in_a_row_ = 0;
+    accepted_.push_back(summary.cost);
+    const size_t n = accepted_.size();
+    if (n > static_cast<size_t>(window_)) {
+      const double before = accepted_[n - 1 - static_cast<size_t>(window_)];
+      if (before - accepted_.back() < tolerance_ * before) {
         return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
       }
     }
@@ -394,10 +468,11 @@ class StallCallback final : public ceres::IterationCallback {
   }
 
  private:
+  static constexpr int kMaxRejectedInARow = 4;
   int window_;
   double tolerance_;
-  bool moved_ = false;
-  std::vector<double> best_;  // best cost after each iteration
+  int rejected_in_a_row_ = 0;
+  std::vector<double> accepted_;  // cost after each accepted step (and at the start)
 };
 
 ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& options) {
@@ -501,10 +576,9 @@ namespace {
 
 // One Levenberg-Marquardt fit of spec.parameters (all starts); held-out
 // validation and provenance are the caller's.
-RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                         const RefineOptions& options) {
-  const Parameters conditioned = WithRigConditions(start, unit);
-  const ParameterMap map = MakeParameterMap(conditioned, spec);
+// The fitted runs of a spec, whole or cut into windows.
+std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
+                                      const FitSpec& spec, bool windows) {
   const auto fitted = Select(unit, spec.fit, spec, true);
   for (const Experiment* e : Select(unit, spec.hold_out, spec, false)) {
     if (std::count(fitted.begin(), fitted.end(), e)) {
@@ -513,9 +587,67 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     }
   }
   if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
-  std::vector<FitExperiment> experiments;
-  for (const Experiment* e : fitted)
-    experiments.push_back(Prepare(*e, unit, spec, 0.5 * conditioned.cylinder.stroke_m));
+  const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
+  const double band = 4.0 * unit.manifest.DeclaredSigma("x", 5e-6) + 10e-6;
+  std::vector<FitExperiment> runs;
+  for (const Experiment* e : fitted) {
+    FitExperiment run = Prepare(*e, unit, spec, half_stroke);
+    if (!windows) {
+      runs.push_back(std::move(run));
+      continue;
+    }
+    for (FitExperiment& window : Windows(run, band, half_stroke)) runs.push_back(std::move(window));
+  }
+  return runs;
+}
+
+// Windows' costs summed per run, in the order the runs first appear.
+std::vector<ExperimentCost> PerRun(const std::vector<ExperimentCost>& costs,
+                                   const std::vector<FitExperiment>& runs) {
+  std::vector<ExperimentCost> merged;
+  for (size_t k = 0; k < costs.size(); ++k) {
+    const std::string& id = runs[k].parent.empty() ? runs[k].id : runs[k].parent;
+    if (merged.empty() || merged.back().id != id) merged.push_back({id, 0, 0, 0});
+    merged.back().before += costs[k].before;
+    merged.back().after += costs[k].after;
+    merged.back().residuals += costs[k].residuals;
+  }
+  return merged;
+}
+
+// 0.5 |r|^2 of each whole fitted run at `params` (NaN where it cannot be
+// simulated): what a windowed stage's costs are reported as.
+std::vector<ExperimentCost> WholeRunCosts(const Parameters& params, const Unit& unit,
+                                          const FitSpec& spec, const RefineOptions& options) {
+  const Parameters conditioned = WithRigConditions(params, unit);
+  const ParameterMap map = MakeParameterMap(conditioned, spec);
+  std::vector<double> theta;
+  for (int j = 0; j < map.size(); ++j) {
+    double value = 0;
+    GetParameter(conditioned, map.free[j].path, &value);
+    theta.push_back(map.ToTheta(j, value));
+  }
+  std::vector<ExperimentCost> costs;
+  for (const FitExperiment& run : FittedRuns(conditioned, unit, spec, false)) {
+    const ExperimentResidual residual(&conditioned, &map, &run, &options.simulation,
+                                      options.jacobian);
+    std::vector<double> r(static_cast<size_t>(residual.num_residuals()));
+    const double* blocks[] = {theta.data()};
+    const double cost =
+        residual.Evaluate(blocks, r.data(), nullptr)
+            ? 0.5 * Eigen::Map<Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()))
+                        .squaredNorm()
+            : NAN;
+    costs.push_back({run.id, cost, cost, run.residuals()});
+  }
+  return costs;
+}
+
+RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                         bool windows, const RefineOptions& options) {
+  const Parameters conditioned = WithRigConditions(start, unit);
+  const ParameterMap map = MakeParameterMap(conditioned, spec);
+  const std::vector<FitExperiment> experiments = FittedRuns(conditioned, unit, spec, windows);
 
   Problem p;
   for (int j = 0; j < map.size(); ++j) {
@@ -601,14 +733,26 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   return r;
 }
 
+// FitStage::friction_replay: the identification's friction fit on the
+// stroke logs, from the current friction; directions without slides keep it.
+void ReplayFriction(const Unit& unit, Parameters* params, std::string* report) {
+  const FrictionFitResult fit = FitFriction(unit, params->friction, FrictionFitOptions{});
+  *report += fit.BriefReport();
+  if (!fit.fitted) return;
+  if (fit.positive.fitted) params->friction.positive = fit.positive.params;
+  if (fit.negative.fitted) params->friction.negative = fit.negative.params;
+}
+
 // The spec of one stage: its parameters only, in the order of `parameters`.
-FitSpec StageSpec(const FitSpec& spec, const std::vector<std::string>& stage) {
+FitSpec StageSpec(const FitSpec& spec, const FitStage& stage) {
   FitSpec one = spec;
   one.stages.clear();
-  if (stage.empty()) return one;  // all
+  if (stage.parameters.empty()) return one;  // all
   one.parameters.clear();
   for (const FreeParameter& p : spec.parameters) {
-    if (std::find(stage.begin(), stage.end(), p.path) != stage.end()) one.parameters.push_back(p);
+    if (std::count(stage.parameters.begin(), stage.parameters.end(), p.path)) {
+      one.parameters.push_back(p);
+    }
   }
   return one;
 }
@@ -620,19 +764,27 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const auto clock = std::chrono::steady_clock::now();
   std::string error;
   if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
-  const std::vector<std::vector<std::string>> stages =
-      spec.stages.empty() ? std::vector<std::vector<std::string>>{{}} : spec.stages;
+  const std::vector<FitStage> stages =
+      spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   RefineResult r;
   Parameters current = start;
   int iterations = 0;
   std::vector<ExperimentCost> before;
   double cost_before = 0;
+  bool first_fit = true;
   for (size_t k = 0; k < stages.size(); ++k) {
-    r = RefineStage(current, unit, StageSpec(spec, stages[k]), options);
+    if (stages[k].friction_replay) {
+      ReplayFriction(unit, &current, &r.replay_report);
+      continue;
+    }
+    const std::string replay_report = r.replay_report;
+    r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows, options);
+    r.replay_report = replay_report;
     iterations += r.iterations;
-    if (k == 0) {
+    if (first_fit) {
       before = r.fitted;
       cost_before = r.cost_before;
+      first_fit = false;
     }
     if (r.parameters.empty()) {
       r.message = "stage " + std::to_string(k + 1) + ": " + r.message;
@@ -641,6 +793,18 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     current = r.params;
   }
   r.iterations = iterations;
+  // A windowed stage's costs are windows': report whole runs, as validated
+  // (and at the true start when friction was replayed first).
+  if (stages.front().windows || stages.front().friction_replay) {
+    before = WholeRunCosts(start, unit, spec, options);
+    cost_before = 0;
+    for (const ExperimentCost& e : before) cost_before += e.before;
+  }
+  if (stages.back().windows && !r.parameters.empty()) {
+    r.fitted = WholeRunCosts(r.params, unit, spec, options);
+    r.cost_after = 0;
+    for (const ExperimentCost& e : r.fitted) r.cost_after += e.after;
+  }
   r.cost_before = cost_before;
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
     r.fitted[k].before = before[k].before;
@@ -669,6 +833,7 @@ std::string RefineResult::BriefReport() const {
                 stages, starts, best_start, wall_time_s);
   out << line;
   if (!converged && !message.empty()) out << "  " << message << "\n";
+  if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   for (const RefinedParameter& p : parameters) {
     std::snprintf(line, sizeof(line), "  %-28s %12.6g -> %12.6g +- %.3g%s\n", p.path.c_str(),
                   p.start, p.value, p.standard_error, p.at_bound ? "  (at a bound)" : "");

@@ -479,6 +479,65 @@ class ValveCommandTracker {
   std::array<BranchLatch, kValveCount> latches_;
 };
 
+// Relaxes the lags driven by the command alone over dt seconds of a held
+// command: exact exponentials.
+template <typename T>
+void RelaxCommandLags(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                      const ValveCommand& command, double dt, T* y) {
+  using std::exp;
+  if (!(dt > 0)) return;
+  if (layout.valve_lag) {
+    const T keep = exp(T(-dt) / c.valve_lag_tau_s);
+    for (int i = 0; i < kValveCount; ++i) {
+      T& opening = y[layout.opening_begin + i];
+      opening = T(command.opening[i]) + (opening - T(command.opening[i])) * keep;
+    }
+  }
+  if (layout.conductance_lag) {
+    const auto gain = ValveGains(c, command, ValveOpeningsInUse(layout, command, y));
+    const T keep = exp(T(-dt) * c.pipeline_delta_per_s);
+    for (int i = 0; i < kValveCount; ++i) {
+      T& lagged = y[layout.conductance_begin + i];
+      lagged = gain[i] + (lagged - gain[i]) * keep;
+    }
+  }
+}
+
+// The lag states at t0 (InitialState::lag_history_from_s): settled for the
+// command at `from`, then relaxed through every knot up to t0. `tracker` is
+// fresh; it is advanced as the run's own tracker would be.
+template <typename T>
+void ReplayLagHistory(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                      const CommandSignal& command, ValveCommandTracker tracker, double from,
+                      double t0, T* y) {
+  ValveCommand current = tracker.Next(command.initial_V);
+  size_t knot = 0;
+  for (; knot < command.time_s.size() && command.time_s[knot] <= from; ++knot) {
+    current = tracker.Next(command.value_V[knot]);
+  }
+  SetLagStatesToEquilibrium(layout, c, current, y);
+  double t = from;
+  for (; knot < command.time_s.size() && command.time_s[knot] <= t0; ++knot) {
+    RelaxCommandLags(layout, c, current, command.time_s[knot] - t, y);
+    current = tracker.Next(command.value_V[knot]);
+    t = command.time_s[knot];
+  }
+  RelaxCommandLags(layout, c, current, t0 - t, y);
+}
+
+// The lag states of y at t0: settled for the initial command, or replayed.
+template <typename T>
+void InitialLagStates(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                      const CommandSignal& command, const ValveCommandTracker& fresh,
+                      const ValveCommand& initial_command, const InitialState& initial, double t0,
+                      T* y) {
+  if (std::isnan(initial.lag_history_from_s)) {
+    SetLagStatesToEquilibrium(layout, c, initial_command, y);
+  } else {
+    ReplayLagHistory(layout, c, command, fresh, initial.lag_history_from_s, t0, y);
+  }
+}
+
 SimulationSummary Failure(SimulationStatus status, std::string message) {
   SimulationSummary summary;
   summary.status = status;
@@ -506,6 +565,10 @@ std::string CheckInputs(const Parameters& params, const CommandSignal& command,
     }
   }
   if (!(initial.p1_Pa > 0 && initial.p2_Pa > 0)) return "initial pressures must be > 0 Pa absolute";
+  if (!std::isnan(initial.lag_history_from_s) &&
+      !(initial.lag_history_from_s <= output_times_s.front())) {
+    return "lag_history_from_s must not be after the first output time";
+  }
   const double half_stroke = 0.5 * params.cylinder.stroke_m;
   if (!(std::fabs(initial.position_m) <= half_stroke) || !std::isfinite(initial.velocity_m_per_s)) {
     return "initial position must lie within the stroke, velocity finite";
@@ -578,13 +641,16 @@ void AppendSensitivities(const ModelData& data, const double* y, const N_Vector*
 // dy(t0)/dp: the chamber states and settled lags depend on the parameters
 // even though the initial pressures and position do not.
 std::vector<std::vector<double>> InitialSensitivities(const ModelData& data,
-                                                      const InitialState& initial) {
+                                                      const InitialState& initial,
+                                                      const CommandSignal& command,
+                                                      const ValveCommandTracker& fresh, double t0) {
   JetP y[kMaxStates];
   for (auto& value : y) value = JetP(0.0);
   y[kPosition] = JetP(initial.position_m);
   y[kVelocity] = JetP(data.motion == MotionMode::kStuck ? 0.0 : initial.velocity_m_per_s);
   SetChamberPressures(*data.parameter_coefficients, JetP(initial.p1_Pa), JetP(initial.p2_Pa), y);
-  SetLagStatesToEquilibrium(data.layout, *data.parameter_coefficients, data.command, y);
+  InitialLagStates(data.layout, *data.parameter_coefficients, command, fresh, data.command, initial,
+                   t0, y);
   std::vector<std::vector<double>> s(static_cast<size_t>(data.parameter_count),
                                      std::vector<double>(static_cast<size_t>(data.layout.size)));
   for (int j = 0; j < data.parameter_count; ++j) {
@@ -605,12 +671,13 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   data.jet_coefficients = MakeActuatorCoefficients<JetN>(params, options.regularization);
 
   const double t0 = times.front();
-  ValveCommandTracker tracker(params.valve.branch, options.hysteresis_threshold_V);
+  const ValveCommandTracker fresh(params.valve.branch, options.hysteresis_threshold_V);
+  ValveCommandTracker tracker = fresh;
   data.command = tracker.Next(command.initial_V);
   data.supply_pressure_Pa = params.supply.supply_pressure_Pa;
   double y0[kMaxStates] = {initial.position_m, initial.velocity_m_per_s};
   SetChamberPressures(data.coefficients, initial.p1_Pa, initial.p2_Pa, y0);
-  SetLagStatesToEquilibrium(data.layout, data.coefficients, data.command, y0);
+  InitialLagStates(data.layout, data.coefficients, command, fresh, data.command, initial, t0, y0);
   data.breakaway_margin_N = options.breakaway_margin_N;
   data.reversal_velocity_m_per_s = options.velocity_tolerance_m_per_s;
   data.motion = options.stick_slip == StickSlipTreatment::kEvents ? InitialMode(data, y0)
@@ -623,7 +690,7 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
     data.parameter_count = static_cast<int>(sensitivity->parameter_paths.size());
     data.parameter_coefficients = std::make_unique<ActuatorCoefficients<JetP>>(
         CoefficientsWithDerivatives(params, *sensitivity, options.regularization));
-    initial_sensitivities = InitialSensitivities(data, initial);
+    initial_sensitivities = InitialSensitivities(data, initial, command, fresh, t0);
   }
 
   // Knots at or before t0 have already happened: apply them in order.

@@ -16,11 +16,21 @@ TEST(FitSpecTest, TheDefaultSpecFreesTenParametersInTwoStages) {
   EXPECT_EQ(spec.parameters[0].scale, ParameterScale::kLog);
   EXPECT_EQ(spec.parameters[2].scale, ParameterScale::kLinear);
   ASSERT_EQ(spec.stages.size(), 2u);
-  EXPECT_EQ(spec.stages[0].size(), 2u);
-  EXPECT_TRUE(spec.stages[1].empty());  // all
+  EXPECT_EQ(spec.stages[0].parameters.size(), 2u);
+  EXPECT_TRUE(spec.stages[1].parameters.empty());  // all
   EXPECT_EQ(spec.channels.size(), 3u);
   EXPECT_EQ(spec.fit, std::vector<std::string>{"stroke"});
   EXPECT_EQ(spec.hold_out, std::vector<std::string>{"validation"});
+}
+
+TEST(FitSpecTest, TheFromScratchSpecReplaysFrictionThenShootsThenFitsAll) {
+  const FitSpec spec =
+      LoadFitSpec(std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-from-scratch.yaml");
+  ASSERT_EQ(spec.stages.size(), 3u);
+  EXPECT_TRUE(spec.stages[0].friction_replay);
+  EXPECT_TRUE(spec.stages[1].windows);
+  EXPECT_EQ(spec.stages[1].parameters.size(), 2u);
+  EXPECT_FALSE(spec.stages[2].windows || spec.stages[2].friction_replay);
 }
 
 TEST(FitSpecTest, ChannelsTakeASigmaAndAWeight) {
@@ -93,6 +103,14 @@ INSTANTIATE_TEST_SUITE_P(
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "stages:\n  - [valve.increasing.q_max]\n",
                 4, "not under parameters"},
+        BadSpec{"friction replay as the last stage",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "stages:\n  - {friction_replay: true}\n",
+                4, "last stage"},
+        BadSpec{"friction replay with parameters",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "stages:\n  - {friction_replay: true, parameters: all}\n  - all\n",
+                4, "stands alone"},
         BadSpec{"fractional multistart",
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "multistart: 1.5\n",

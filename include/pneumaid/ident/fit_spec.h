@@ -31,6 +31,23 @@ struct ChannelWeight {
   double weight = 1;
 };
 
+struct FitStage {
+  // Parameters freed in this stage (paths under `parameters`); empty: all.
+  std::vector<std::string> parameters;
+  // Multiple shooting: cut every fitted run at the rod's stuck phases and
+  // simulate each window from its logged state (x, p1, p2, v = 0, the tube's
+  // lag replayed from the command). Errors cannot accumulate from window to
+  // window, which widens the basin around the optimum; a later full-horizon
+  // stage then fits the runs as the simulator replays them.
+  bool windows = false;
+  // Instead of a simulation fit: refit the Stribeck friction of both
+  // directions by the rod replay driven by the measured pressures (the
+  // identification's friction fit, docs/identification.md) on the unit's
+  // stroke logs. It needs no start near the optimum and no simulation, so it
+  // puts friction in the basin before the simulation stages.
+  bool friction_replay = false;
+};
+
 struct FitSpec {
   std::vector<FreeParameter> parameters;
   // Residual channels (x, p1, p2, q1, q2); a channel a log lacks is skipped.
@@ -41,11 +58,11 @@ struct FitSpec {
   // Extra starting points from a Latin hypercube inside the bounds (0: only
   // the given start).
   int multistart = 0;
-  // Optional: refine in stages, each from the previous one's result, freeing
-  // the listed parameters (an empty list: all of them). Output error from a
-  // poor start has narrow basins in the parameters that set the timing (the
-  // valve gain, the tube lag); fitting those first widens them.
-  std::vector<std::vector<std::string>> stages;
+  // Optional: refine in stages, each from the previous one's result. Output
+  // error from a poor start has narrow basins in the parameters that set the
+  // timing (the valve gain, the tube lag); fitting those first, or fitting
+  // windows first, widens them.
+  std::vector<FitStage> stages;
   std::uint64_t seed = 1;
   int max_iterations = 50;
   std::string source;  // the file it came from, for messages and provenance

@@ -37,10 +37,10 @@ struct RefineOptions {
   int threads = 1;
   // Relative change of the cost below which a start has converged.
   double function_tolerance = 1e-6;
-  // A start has converged when its best cost improved by less than
-  // stall_tolerance (relative) over the last stall_iterations iterations:
-  // the cost of the event-driven model jitters at about that level
-  // (docs/refinement.md).
+  // A start has converged when its cost improved by less than
+  // stall_tolerance (relative) over its last stall_iterations accepted steps,
+  // or after four rejected steps in a row once it has moved: the cost of the
+  // event-driven model jitters at about that level (docs/refinement.md).
   int stall_iterations = 2;
   double stall_tolerance = 1e-3;
   // Pairs of free parameters whose correlation exceeds this are flagged.
@@ -86,6 +86,8 @@ struct RefineResult {
   double cost_before = 0, cost_after = 0;
   int stages = 0, starts = 0, best_start = 0, iterations = 0;  // starts, best: last stage
   double wall_time_s = 0;
+  // What a friction_replay stage found (empty without one).
+  std::string replay_report;
   // Held-out experiments, validated with the start and the refined set.
   ValidationReport held_out_before, held_out_after;
 

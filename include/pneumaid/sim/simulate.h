@@ -2,6 +2,7 @@
 // dense, exact Jacobian from automatic differentiation of the model).
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,13 @@ struct InitialState {
   double velocity_m_per_s = 0.0;
   double p1_Pa = 1e5;
   double p2_Pa = 1e5;
+  // NaN: the lag states start settled for the command's initial value. A
+  // time before the first output time: they start settled for the command at
+  // that time and follow the command (zero-order hold) to the first output
+  // time, as they would have on the rig (a run restarted mid-log from a logged
+  // state). Replayed exactly: the lags driven by the command alone (valve_lag,
+  // the conductance lag, each exact on its own); the flow lags start settled.
+  double lag_history_from_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The paper's start: rod at the retracted end, at rest, both chambers at p_atm.
