@@ -432,7 +432,7 @@ struct Problem {
 };
 
 // Stops a start once its cost has improved by less than stall_tolerance
-// (relative) over its last stall_iterations accepted steps, or after four
+// (relative) over its last stall_iterations accepted steps, or after two
 // rejected steps in a row once it has moved. The
 // cost of an event-driven model is rough at about 1e-3 relative: each
 // stick/slip switch is located to the integrator's tolerance, so the
@@ -468,7 +468,7 @@ class StallCallback final : public ceres::IterationCallback {
   }
 
  private:
-  static constexpr int kMaxRejectedInARow = 4;
+  static constexpr int kMaxRejectedInARow = 2;
   int window_;
   double tolerance_;
   int rejected_in_a_row_ = 0;

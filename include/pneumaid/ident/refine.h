@@ -39,7 +39,7 @@ struct RefineOptions {
   double function_tolerance = 1e-6;
   // A start has converged when its cost improved by less than
   // stall_tolerance (relative) over its last stall_iterations accepted steps,
-  // or after four rejected steps in a row once it has moved: the cost of the
+  // or after two rejected steps in a row once it has moved: the cost of the
   // event-driven model jitters at about that level (docs/refinement.md).
   int stall_iterations = 2;
   double stall_tolerance = 1e-3;
