@@ -36,6 +36,20 @@ TEST_F(RefineCliTest, RefinesAndWritesUncertaintyAndProvenance) {
       << Stdout() << Stderr();
 }
 
+TEST_F(RefineCliTest, IdentifyRefineRunsTheComponentFitsThenTheRefinement) {
+  const std::string spec = Write("small.yaml", kSmallSpec);
+  const std::string out = (dir_ / "identified.yaml").string();
+  ASSERT_EQ(Run("identify " + testing::Source("datasets/paper-rig") + " --refine --spec " + spec +
+                " --out " + out),
+            0)
+      << Stdout() << Stderr();
+  EXPECT_NE(Stdout().find("From the prior"), std::string::npos) << Stdout();  // identify's report
+  EXPECT_NE(Stdout().find("Refinement: converged"), std::string::npos) << Stdout();
+  const std::string written = Read(out);
+  EXPECT_NE(written.find("friction:"), std::string::npos) << written;  // identify's provenance
+  EXPECT_NE(written.find("refine:"), std::string::npos) << written;
+}
+
 TEST_F(RefineCliTest, BadInputExitsTwoAndWritesNothing) {
   const std::string out = (dir_ / "refined.yaml").string();
   const std::string unit = testing::Source("datasets/paper-rig");
