@@ -18,6 +18,7 @@ struct IdentifyArgs {
   std::string prior_path = PNEUMAID_DEFAULT_PRIOR;
   std::string out_path;
   bool refine = false;
+  bool fit_u_sat = false;
   std::string spec_path = PNEUMAID_DEFAULT_FIT_SPEC;
   int threads = 1;
 };
@@ -54,6 +55,7 @@ int RunIdentify(const IdentifyArgs& args) {
     options.components = ParseComponents(args.only);
     options.components_explicit = true;
   }
+  options.valve.fit_u_sat = args.fit_u_sat;
   options.tool_version = PNEUMAID_VERSION;
   options.date = UtcNow();
   IdentifyReport report;
@@ -80,6 +82,8 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
   app->add_option("--prior", args->prior_path, "parameter set for what is not fitted")
       ->capture_default_str();
   app->add_option("--out", args->out_path, "identified parameter set (params-v1)")->required();
+  app->add_flag("--fit-u-sat", args->fit_u_sat,
+                "also fit each valve branch's saturation opening u_sat (default: fixed)");
   app->add_flag("--refine", args->refine,
                 "after the component fits, refine through the simulator (see --spec)");
   app->add_option("--spec", args->spec_path, "fit spec for --refine")->capture_default_str();

@@ -34,7 +34,12 @@ void ApplyBranch(const BranchFit& fit, const std::string& prefix, Parameters* pa
       report->priors.push_back(path + " (" + fit.note + ")");
     }
   }
-  report->priors.push_back(prefix + ".u_sat (fixed)");
+  if (fit.fitted && fit.u_sat_fitted) {
+    report->fitted.push_back(prefix + ".u_sat");
+    params->uncertainty[prefix + ".u_sat"] = fit.standard_errors.at("u_sat");
+  } else {
+    report->priors.push_back(prefix + ".u_sat (fixed)");
+  }
 }
 
 bool HasKind(const Unit& unit, ExperimentKind kind) {

@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
@@ -136,6 +137,53 @@ BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpB
   return fit;
 }
 
+// Where q_max poly(u) = q_max inside (low, high], or the middle of the gap:
+// the saturation opening that keeps K_vp continuous.
+double ContinuousSaturation(const KvpBranchParams& p, double low, double high) {
+  const auto excess = [&p](double u) {
+    return ((p.a * u + p.b) * u + p.c) * u * u + p.d * u - 1.0;
+  };
+  if (excess(low) * excess(high) > 0) return 0.5 * (low + high);
+  for (int i = 0; i < 60; ++i) {  // bisection: the gap holds one crossing
+    const double mid = 0.5 * (low + high);
+    (excess(low) * excess(mid) <= 0 ? high : low) = mid;
+  }
+  return 0.5 * (low + high);
+}
+
+// FitBranch with u_sat free (ValveFitOptions::fit_u_sat).
+BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateaus,
+                                 const KvpBranchParams& prior, const ValveFitOptions& options) {
+  std::vector<double> openings;
+  for (const ValvePlateau* p : plateaus) openings.push_back(p->u_V);
+  std::sort(openings.begin(), openings.end());
+  openings.erase(std::unique(openings.begin(), openings.end()), openings.end());
+  BranchFit best;
+  double gap_low = 0, gap_high = 0;
+  for (size_t k = 0; k + 1 < openings.size(); ++k) {
+    KvpBranchParams candidate = prior;
+    candidate.u_sat_V = 0.5 * (openings[k] + openings[k + 1]);
+    const BranchFit fit = FitBranch(plateaus, candidate, options);
+    if (fit.fitted && (!best.fitted || fit.final_cost < best.final_cost)) {
+      best = fit;
+      gap_low = openings[k];
+      gap_high = openings[k + 1];
+    }
+  }
+  if (!best.fitted) {
+    best = FitBranch(plateaus, prior, options);
+    best.note += (best.note.empty() ? "" : "; ") + std::string("u_sat could not be fitted");
+    return best;
+  }
+  // Same split, same cost: only the value inside the gap changes.
+  KvpBranchParams located = best.params;
+  located.u_sat_V = ContinuousSaturation(best.params, gap_low, gap_high);
+  best = FitBranch(plateaus, located, options);
+  best.standard_errors["u_sat"] = (gap_high - gap_low) / std::sqrt(12.0);
+  best.u_sat_fitted = true;
+  return best;
+}
+
 // Indices [begin, end) of the runs of equal command in `u`.
 std::vector<std::pair<std::size_t, std::size_t>> ConstantSegments(const std::vector<double>& u) {
   std::vector<std::pair<std::size_t, std::size_t>> segments;
@@ -221,8 +269,9 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
   result.plateaus = ExtractValvePlateaus(unit, prior.normalization, options);
   std::vector<const ValvePlateau*> up, down;
   for (const auto& p : result.plateaus) (p.decreasing ? down : up).push_back(&p);
-  result.increasing = FitBranch(up, prior.increasing, options);
-  result.decreasing = FitBranch(down, prior.decreasing, options);
+  const auto fit = options.fit_u_sat ? FitBranchAndSaturation : FitBranch;
+  result.increasing = fit(up, prior.increasing, options);
+  result.decreasing = fit(down, prior.decreasing, options);
   return result;
 }
 
@@ -246,6 +295,11 @@ std::string ValveFitResult::BriefReport() const {
                   fit->params.c, fit->standard_errors.at("c"), fit->params.d,
                   fit->standard_errors.at("d"));
     out << line;
+    if (fit->u_sat_fitted) {
+      std::snprintf(line, sizeof(line), "    u_sat %.4g +- %.2g V (the plateau spacing)\n",
+                    fit->params.u_sat_V, fit->standard_errors.at("u_sat"));
+      out << line;
+    }
     for (const auto& [pair, r] : fit->correlations) {
       if (std::fabs(r) > 0.95) {
         out << "    poorly separable: " << pair << " correlation " << r

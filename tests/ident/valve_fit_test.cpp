@@ -62,6 +62,44 @@ TEST(ValveFitTest, RecoversKvpWithinOnePercentOfQmaxOnTheBundledUnit) {
   EXPECT_EQ(fit.plateaus.size(), 39u);  // 20 up (0.05 .. 1) + 19 down (0.95 .. 0.05); u = 0 skipped
 }
 
+// --fit-u-sat: a unit saturating at 0.67 V while the prior says 0.75 V. The
+// staircase's plateaus are 0.05 V apart, so u_sat is determined to the gap
+// (0.65, 0.70] that holds the truth and reported with that resolution; K_vp
+// is recovered within 1 % of q_max outside that gap (inside it no plateau
+// tells where the polynomial ends).
+TEST(ValveFitTest, FitsTheSaturationOpeningToThePlateauGapThatHoldsIt) {
+  Parameters truth;
+  truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.67;
+  ValveParams prior = Perturbed(truth.valve);
+  prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
+  ValveFitOptions options;
+  options.fit_u_sat = true;
+  const ValveFitResult fit = FitValve(SyntheticValveUnit(truth, 41), prior, options);
+  std::cout << fit.BriefReport();
+  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+    ASSERT_TRUE(fitted->fitted) << fitted->note;
+    EXPECT_TRUE(fitted->u_sat_fitted);
+    EXPECT_GT(fitted->params.u_sat_V, 0.65);
+    EXPECT_LE(fitted->params.u_sat_V, 0.70);
+    EXPECT_NEAR(fitted->standard_errors.at("u_sat"), 0.05 / std::sqrt(12.0), 1e-12);
+    const auto c_fit = MakeKvpCoefficients<double>(fitted->params);
+    const auto c_true = MakeKvpCoefficients<double>(*real);
+    double worst = 0;
+    for (int k = 0; k <= 1000; ++k) {
+      const double u = k / 1000.0;
+      if (u > 0.65 && u <= 0.70) continue;
+      worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real->q_max_kg_per_s);
+    }
+    EXPECT_LT(worst, 0.01);
+  }
+  // Without the option the prior's 0.75 V is kept, and the fit pays for it.
+  const ValveFitResult fixed = FitValve(SyntheticValveUnit(truth, 41), prior, ValveFitOptions{});
+  EXPECT_DOUBLE_EQ(fixed.increasing.params.u_sat_V, 0.75);
+  EXPECT_FALSE(fixed.increasing.u_sat_fitted);
+  EXPECT_GT(fixed.increasing.final_cost, fit.increasing.final_cost + 1.0);  // chi^2 up by > 2
+}
+
 TEST(ValveFitTest, StandardErrorsAndBandAreHonestOverSeeds) {
   const Parameters truth;
   int inside = 0, total = 0, band_inside = 0, band_total = 0;

@@ -26,6 +26,12 @@ struct ValveFitOptions {
   double band_sigmas = 2.0;
   // Ceres Levenberg-Marquardt iterations.
   int max_iterations = 200;
+  // Also fit u_sat (identify --fit-u-sat). u_sat only decides which plateaus
+  // are saturated, so the cost is piecewise constant in it: every split of
+  // the plateau openings is fitted and the cheapest kept; inside its gap u_sat
+  // is where the fitted polynomial reaches 1 (K_vp continuous at saturation),
+  // or the gap's middle; its standard error is the gap / sqrt(12).
+  bool fit_u_sat = false;
 
   bool IsValid(std::string* error) const;
 };
@@ -49,7 +55,8 @@ struct BranchFit {
   bool fitted = false;  // false: too few plateaus, the prior is kept
   std::string note;     // why not, or warnings
   KvpBranchParams params;
-  std::map<std::string, double> standard_errors;  // "a" .. "q_max"
+  std::map<std::string, double> standard_errors;  // "a" .. "q_max" (and "u_sat" when fitted)
+  bool u_sat_fitted = false;                      // ValveFitOptions::fit_u_sat
   std::map<std::string, double> correlations;     // "a,b" -> r, |r| > 0.95 flagged
   int plateaus = 0;
   double initial_cost = 0, final_cost = 0;
