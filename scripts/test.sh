@@ -16,6 +16,7 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   # minutes each and exercise no code path that the other tests leave out.
   SLOW='StandardErrorsAreHonestOverTenSeeds|HalvesTheHeldOutPositionError'
   SLOW+='|MultistartKeepsTheBest|FromTrajectoriesAloneStartingThirtyPercentOff'
+  SLOW+='|RecoversAHorizontalCylindersFriction|RecoversTheTenDefaultParametersFromTheComponentFits'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
 fi
