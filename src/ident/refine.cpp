@@ -306,35 +306,35 @@ class ExperimentResidual final : public ceres::CostFunction {
   }
 
   bool EvaluateOrFail(const double* theta, double* residuals, double* jacobian) const {
-    if (jacobian != nullptr && method_ == JacobianMethod::kCentralDifferences) {
-      return EvaluateOrFail(theta, residuals, nullptr) && CentralDifferences(theta, jacobian);
+    // Ceres evaluates the residuals at a trial point, then, if it accepts
+    // the step, residuals and Jacobian at the same point: the plain run is
+    // not repeated.
+    const int m = map_->size();
+    const bool known = jacobian != nullptr && last_residuals_.size() == num_residuals() &&
+                       std::equal(theta, theta + m, last_theta_.begin(), last_theta_.end());
+    if (known) {
+      std::copy(last_residuals_.data(), last_residuals_.data() + num_residuals(), residuals);
+    } else {
+      if (!Residuals(theta, residuals)) return false;
+      last_theta_.assign(theta, theta + m);
+      last_residuals_ = Eigen::Map<const Eigen::VectorXd>(residuals, num_residuals());
     }
+    if (jacobian == nullptr) return true;
+    return method_ == JacobianMethod::kCentralDifferences ? CentralDifferences(theta, jacobian)
+                                                          : Sensitivities(theta, jacobian);
+  }
+
+  // The residuals always come from the plain simulation: the run with
+  // sensitivities takes slightly different steps, and with stick-slip its
+  // trajectory differs by more than Levenberg-Marquardt's cost comparisons
+  // between trial points (residuals only) and accepted points tolerate.
+  bool Residuals(const double* theta, double* residuals) const {
     const Parameters params = WithValues(*base_, *map_, theta);
     if (!Validate(params).empty()) return false;
     const FitExperiment& e = *experiment_;
-    // The residuals always come from the plain simulation: the run with
-    // sensitivities takes slightly different steps, and with stick-slip its
-    // trajectory differs by more than Levenberg-Marquardt's cost comparisons
-    // between trial points (residuals only) and accepted points tolerate.
     Trajectory sim;
-    SimulationSummary summary =
+    const SimulationSummary summary =
         Simulate(params, e.command, e.initial, e.measured.t_s, *simulation_, &sim);
-    TrajectorySensitivities sens;
-    if (summary.ok() && jacobian != nullptr) {
-      SensitivityOptions s;
-      for (int j = 0; j < map_->size(); ++j) {
-        s.parameter_paths.push_back(map_->free[j].path);
-        // Typical magnitude for the sensitivity tolerances: the value itself
-        // (a parameter near 0 takes a small fraction of its range).
-        const FreeParameter& free = map_->free[j];
-        s.parameter_scales.push_back(
-            std::max(std::fabs(map_->ToValue(j, theta[j])), 1e-6 * (free.upper - free.lower)));
-      }
-      s.tolerance_factor = kSensitivityToleranceFactor;
-      Trajectory with_sensitivities;
-      summary = SimulateWithSensitivities(params, e.command, e.initial, e.measured.t_s,
-                                          *simulation_, s, &with_sensitivities, &sens);
-    }
     if (!summary.ok() || sim.size() != e.measured.size()) return false;
     const long n = static_cast<long>(e.measured.size());
     long row = 0;
@@ -343,18 +343,37 @@ class ExperimentResidual final : public ceres::CostFunction {
       if (c.meter_tau_s > 0) simulated = FirstOrderLag(sim.t_s, simulated, c.meter_tau_s);
       const std::vector<double>& measured = e.measured.*c.values;
       for (long i = 0; i < n; ++i) residuals[row + i] = c.factor * (simulated[i] - measured[i]);
-      if (jacobian != nullptr) FillJacobian(c, sim.t_s, sens, theta, row, jacobian);
       row += n;
     }
-    for (long k = 0; k < row; ++k) {
-      if (!std::isfinite(residuals[k])) return false;
+    return std::all_of(residuals, residuals + row, [](double r) { return std::isfinite(r); });
+  }
+
+  // The Jacobian from the CVODES forward sensitivities.
+  bool Sensitivities(const double* theta, double* jacobian) const {
+    const Parameters params = WithValues(*base_, *map_, theta);
+    const FitExperiment& e = *experiment_;
+    SensitivityOptions s;
+    for (int j = 0; j < map_->size(); ++j) {
+      s.parameter_paths.push_back(map_->free[j].path);
+      // Typical magnitude for the sensitivity tolerances: the value itself
+      // (a parameter near 0 takes a small fraction of its range).
+      const FreeParameter& free = map_->free[j];
+      s.parameter_scales.push_back(
+          std::max(std::fabs(map_->ToValue(j, theta[j])), 1e-6 * (free.upper - free.lower)));
     }
-    if (jacobian != nullptr) {
-      for (long k = 0; k < row * map_->size(); ++k) {
-        if (!std::isfinite(jacobian[k])) return false;
-      }
+    s.tolerance_factor = kSensitivityToleranceFactor;
+    Trajectory sim;
+    TrajectorySensitivities sens;
+    const SimulationSummary summary = SimulateWithSensitivities(
+        params, e.command, e.initial, e.measured.t_s, *simulation_, s, &sim, &sens);
+    if (!summary.ok() || sim.size() != e.measured.size()) return false;
+    long row = 0;
+    for (const Channel& c : e.channels) {
+      FillJacobian(c, sim.t_s, sens, theta, row, jacobian);
+      row += static_cast<long>(e.measured.size());
     }
-    return true;
+    return std::all_of(jacobian, jacobian + row * map_->size(),
+                       [](double d) { return std::isfinite(d); });
   }
 
   // The baseline Jacobian: (r(theta + h e_j) - r(theta - h e_j)) / 2h.
@@ -365,9 +384,9 @@ class ExperimentResidual final : public ceres::CostFunction {
     constexpr double kStep = 1e-5;  // in theta: a relative change of about 1e-5
     for (int j = 0; j < m; ++j) {
       shifted[j] = theta[j] + kStep;
-      if (!EvaluateOrFail(shifted.data(), up.data(), nullptr)) return false;
+      if (!Residuals(shifted.data(), up.data())) return false;
       shifted[j] = theta[j] - kStep;
-      if (!EvaluateOrFail(shifted.data(), down.data(), nullptr)) return false;
+      if (!Residuals(shifted.data(), down.data())) return false;
       shifted[j] = theta[j];
       for (int i = 0; i < n; ++i) jacobian[i * m + j] = (up[i] - down[i]) / (2 * kStep);
     }
@@ -398,6 +417,8 @@ class ExperimentResidual final : public ceres::CostFunction {
   JacobianMethod method_;
   // Ceres never evaluates one block from two threads at once.
   mutable EvaluationCache cache_;
+  mutable std::vector<double> last_theta_;  // of the last residual evaluation
+  mutable Eigen::VectorXd last_residuals_;
   mutable double first_cost_ = NAN;
 };
 
@@ -730,6 +751,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     }
     Summarise(ParameterCovariance(normal, map, p.theta, r.cost_after, residuals), map, options, &r);
   }
+  if (windows) r.fitted = PerRun(r.fitted, experiments);
   return r;
 }
 
