@@ -121,13 +121,18 @@ int MatrixScaleAddIdentity(double c, SUNMatrix matrix) {
 }
 
 // Dense LU with partial pivoting, column-major like SUNDIALS' dense matrix,
-// and the explicit inverse formed from it. CVODE solves with one Newton
-// matrix many times (every Newton iteration, and once per sensitivity with
-// the staggered corrector): for these 4..14 states a row-major matrix-vector
-// product is several times cheaper than forward and back substitution.
+// and, once a factorisation is reused often, the explicit inverse formed from
+// it. With sensitivities the staggered corrector solves with one Newton
+// matrix dozens of times (once per sensitivity and iteration), and for these
+// 4..14 states a row-major matrix-vector product is several times cheaper
+// than forward and back substitution; a plain run solves only two or three
+// times per factorisation, where forming the inverse (n substitutions) would
+// cost more than it saves.
 struct DenseLu {
   std::vector<sunindextype> pivots;
-  std::vector<double> inverse;  // row-major n x n
+  std::vector<double> inverse;  // row-major n x n, valid when inverse_formed
+  bool inverse_formed = false;
+  sunindextype solves_since_setup = 0;
   sunindextype last_flag = 0;
 };
 
@@ -196,7 +201,8 @@ int Setup(SUNLinearSolver solver, SUNMatrix matrix) {
       for (sunindextype i = k + 1; i < n; ++i) col_j[i] -= factor * col_k[i];
     }
   }
-  FormInverse(lu, a, n);
+  lu->inverse_formed = false;
+  lu->solves_since_setup = 0;
   lu->last_flag = 0;
   return SUNLS_SUCCESS;
 }
@@ -233,13 +239,27 @@ void Multiply(const double* inverse, sunindextype n, const double* b, double* re
 }
 
 int Solve(SUNLinearSolver solver, SUNMatrix matrix, N_Vector x, N_Vector b, double) {
-  const DenseLu* lu = Content(solver);
+  DenseLu* lu = Content(solver);
   const sunindextype n = SM_ROWS_D(matrix);
-  double result[kMaxDenseSize];
-  Multiply(lu->inverse.data(), n, Data(b), result);
+  const double* a = SM_DATA_D(matrix);
+  // The inverse pays for itself after about n solves with one factorisation.
+  if (!lu->inverse_formed && ++lu->solves_since_setup > n) {
+    FormInverse(lu, a, n);
+    lu->inverse_formed = true;
+  }
   double* xd = Data(x);
-  for (sunindextype i = 0; i < n; ++i) xd[i] = result[i];  // x may alias b
-  Content(solver)->last_flag = 0;
+  if (lu->inverse_formed) {
+    double result[kMaxDenseSize];
+    Multiply(lu->inverse.data(), n, Data(b), result);
+    for (sunindextype i = 0; i < n; ++i) xd[i] = result[i];  // x may alias b
+  } else {
+    const double* bd = Data(b);
+    if (xd != bd) {
+      for (sunindextype i = 0; i < n; ++i) xd[i] = bd[i];
+    }
+    SolveWithFactors(*lu, a, n, xd);
+  }
+  lu->last_flag = 0;
   return SUNLS_SUCCESS;
 }
 
