@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The main job on the bundled data: check the bundled unit datasets/paper-rig
-# (synthetic), identify it (today: the valve's K_vp and the tube lag delta; the
-# friction fit is still to come and is taken from the prior, configs/paper.yaml,
-# as the report says), then validate the identified set on
-# the unit's validation runs. Results go to out/.
+# (synthetic), identify it (the valve's K_vp, the tube lag delta, Stribeck
+# friction per direction), validate the identified set on the unit's
+# validation runs, refine it through the simulator on the stroke logs
+# (configs/fit-default.yaml, about 10-20 s) and validate the refined set.
+# Results go to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,4 +19,11 @@ $pneumaid identify datasets/paper-rig --out out/paper-rig.yaml
 echo "== pneumaid validate --params out/paper-rig.yaml datasets/paper-rig"
 $pneumaid validate --params out/paper-rig.yaml datasets/paper-rig \
   --json out/paper-rig-validation.json --csv-out out/paper-rig-validation
-echo "results: out/paper-rig.yaml, out/paper-rig-validation.json, out/paper-rig-validation/*.csv"
+echo "== pneumaid refine datasets/paper-rig --params out/paper-rig.yaml --out out/paper-rig-refined.yaml"
+$pneumaid refine datasets/paper-rig --params out/paper-rig.yaml --out out/paper-rig-refined.yaml
+echo "== pneumaid validate --params out/paper-rig-refined.yaml datasets/paper-rig"
+$pneumaid validate --params out/paper-rig-refined.yaml datasets/paper-rig \
+  --json out/paper-rig-refined-validation.json
+echo "results: out/paper-rig.yaml (component fits), out/paper-rig-refined.yaml (refined),"
+echo "  out/paper-rig-validation.json, out/paper-rig-refined-validation.json,"
+echo "  out/paper-rig-validation/*.csv"
