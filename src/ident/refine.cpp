@@ -56,6 +56,16 @@ struct ParameterMap {
     const double dw = Span(j) * s * (1.0 - s);
     return IsLog(j) ? ToValue(j, theta) * dw : dw;
   }
+  // The coordinates of the free parameters' values in `params`.
+  std::vector<double> ThetaOf(const Parameters& params) const {
+    std::vector<double> theta;
+    for (int j = 0; j < size(); ++j) {
+      double value = 0;
+      GetParameter(params, free[j].path, &value);
+      theta.push_back(ToTheta(j, value));
+    }
+    return theta;
+  }
   int size() const { return static_cast<int>(free.size()); }
 };
 
@@ -642,12 +652,7 @@ std::vector<ExperimentCost> WholeRunCosts(const Parameters& params, const Unit& 
                                           const FitSpec& spec, const RefineOptions& options) {
   const Parameters conditioned = WithRigConditions(params, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
-  std::vector<double> theta;
-  for (int j = 0; j < map.size(); ++j) {
-    double value = 0;
-    GetParameter(conditioned, map.free[j].path, &value);
-    theta.push_back(map.ToTheta(j, value));
-  }
+  const std::vector<double> theta = map.ThetaOf(conditioned);
   std::vector<ExperimentCost> costs;
   for (const FitExperiment& run : FittedRuns(conditioned, unit, spec, false)) {
     const ExperimentResidual residual(&conditioned, &map, &run, &options.simulation,
@@ -671,11 +676,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   const std::vector<FitExperiment> experiments = FittedRuns(conditioned, unit, spec, windows);
 
   Problem p;
-  for (int j = 0; j < map.size(); ++j) {
-    double value = 0;
-    GetParameter(conditioned, map.free[j].path, &value);
-    p.theta.push_back(map.ToTheta(j, value));
-  }
+  p.theta = map.ThetaOf(conditioned);
   long residuals = 0;
   for (const FitExperiment& e : experiments) {
     auto* block =

@@ -243,15 +243,16 @@ class Integrator {
   void EnableSensitivities(const std::vector<std::vector<double>>& initial,
                            const SensitivityOptions& options) {
     const int count = data_->parameter_count;
-    sensitivity_storage_ = internal::VectorArray(
+    sensitivities_ = internal::VectorArray(
         CheckAllocated(N_VCloneVectorArray(count, state_.get()), "N_VCloneVectorArray"), count);
-    sensitivities_ = sensitivity_storage_.get();
     for (int j = 0; j < count; ++j) {
-      for (int i = 0; i < size_; ++i) N_VGetArrayPointer(sensitivities_[j])[i] = initial[j][i];
+      for (int i = 0; i < size_; ++i)
+        N_VGetArrayPointer(sensitivities_.get()[j])[i] = initial[j][i];
     }
     void* mem = memory_.get();
-    CheckFlag(CVodeSensInit(mem, count, CV_STAGGERED, SensitivityRightHandSide, sensitivities_),
-              "CVodeSensInit");
+    CheckFlag(
+        CVodeSensInit(mem, count, CV_STAGGERED, SensitivityRightHandSide, sensitivities_.get()),
+        "CVodeSensInit");
     std::vector<double> scales = options.parameter_scales;
     CheckFlag(CVodeSetSensParams(mem, nullptr, scales.data(), nullptr), "CVodeSetSensParams");
     if (options.tolerance_factor == 1.0) {
@@ -277,13 +278,13 @@ class Integrator {
   // Before the first step after a (re)start the vectors hold the values given
   // to CVODES (CVodeGetSens would divide by the step size, still zero).
   const N_Vector* Sensitivities() {
-    if (sensitivities_ == nullptr) return nullptr;
+    if (sensitivities_.get() == nullptr) return nullptr;
     if (!sensitivities_current_) {
       double t = 0;
-      if (CVodeGetSens(memory_.get(), &t, sensitivities_) < 0) return nullptr;
+      if (CVodeGetSens(memory_.get(), &t, sensitivities_.get()) < 0) return nullptr;
       sensitivities_current_ = true;
     }
-    return sensitivities_;
+    return sensitivities_.get();
   }
 
   // Integrates to `target`, never past `stop`, switching the motion mode at
@@ -313,7 +314,7 @@ class Integrator {
     ++restarts_;
     int flag = CVodeReInit(memory_.get(), t, state_.get());
     if (flag >= 0 && sensitivities != nullptr) {
-      flag = CVodeSensReInit(memory_.get(), CV_STAGGERED, sensitivities_);
+      flag = CVodeSensReInit(memory_.get(), CV_STAGGERED, sensitivities_.get());
     }
     sensitivities_current_ = sensitivities != nullptr;  // the restart values
     return flag;
@@ -372,7 +373,7 @@ class Integrator {
     // jump is left out (the rod touches the surface without crossing it).
     if (!(std::fabs(g_rate) > 1e-12)) return jump;
     JetP carried[kMaxStates];
-    LoadStateJets(size_, count, y, sensitivities_, carried);
+    LoadStateJets(size_, count, y, sensitivities_.get(), carried);
     JetP g_parameter[2];
     SwitchingValues(*data_, *data_->parameter_coefficients, carried, g_parameter);
     for (int j = 0; j < count; ++j) jump.time_derivative[j] = -g_parameter[fired].v[j] / g_rate;
@@ -385,7 +386,7 @@ class Integrator {
     ActuatorDerivatives(data_->layout, data_->coefficients, data_->command, data_->motion, state(),
                         rate_after, static_cast<ActuatorOutputs<double>*>(nullptr));
     for (int j = 0; j < data_->parameter_count; ++j) {
-      double* s = N_VGetArrayPointer(sensitivities_[j]);
+      double* s = N_VGetArrayPointer(sensitivities_.get()[j]);
       const double tau = jump.time_derivative[j];
       for (int i = 0; i < size_; ++i) {
         const bool reset =
@@ -443,9 +444,8 @@ class Integrator {
   internal::VectorPtr tolerances_;
   internal::MatrixPtr matrix_;
   internal::LinearSolverPtr solver_;
-  internal::VectorArray sensitivity_storage_;  // before memory_: outlives CVODES
+  internal::VectorArray sensitivities_;  // empty without; before memory_: outlives CVODES
   internal::CvodePtr memory_;
-  N_Vector* sensitivities_ = nullptr;  // sensitivity_storage_'s vectors, or null
   bool sensitivities_current_ = false;
   double relative_tolerance_ = 0;
   SimulationSummary banked_;
