@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <numeric>
 #include <sstream>
 
@@ -84,26 +85,118 @@ struct SegmentResidual {
     }
   }
 
+  // Residuals of the one-sided form (stop_time_s == nullptr) or the
+  // two-sided one; `trace` records the directions the replays slid in.
+  template <typename T>
+  void Evaluate(const T* positive, const T* negative, const T* stop_time_s, T* residual,
+                RodReplayTrace* trace) const {
+    std::vector<T> x(replay.samples);
+    if (stop_time_s == nullptr) {
+      ReplayRod(replay, Coefficients(positive), Coefficients(negative), x.data(), trace);
+    } else {
+      const std::size_t split = segment->split - segment->begin;
+      RodReplayInput forward = replay;
+      forward.samples = split + 1;
+      ReplayRod(forward, Coefficients(positive), Coefficients(negative), x.data(), trace);
+      ReplayArrestBackward(replay, stop_time_s[0], segment->stop_position_m, segment->direction,
+                           split + 1, Coefficients(positive), Coefficients(negative), x.data());
+      if (trace != nullptr) trace->Record(segment->direction);
+    }
+    Write(x, residual);
+  }
+
   template <typename T>
   bool operator()(const T* positive, const T* negative, T* residual) const {
-    std::vector<T> x(replay.samples);
-    ReplayRod(replay, Coefficients(positive), Coefficients(negative), x.data());
-    Write(x, residual);
+    Evaluate(positive, negative, static_cast<const T*>(nullptr), residual, nullptr);
     return true;
   }
 
   template <typename T>
   bool operator()(const T* positive, const T* negative, const T* stop_time_s, T* residual) const {
-    std::vector<T> x(replay.samples);
-    const std::size_t split = segment->split - segment->begin;
-    RodReplayInput forward = replay;
-    forward.samples = split + 1;
-    ReplayRod(forward, Coefficients(positive), Coefficients(negative), x.data());
-    ReplayArrestBackward(replay, stop_time_s[0], segment->stop_position_m, segment->direction,
-                         split + 1, Coefficients(positive), Coefficients(negative), x.data());
-    Write(x, residual);
+    Evaluate(positive, negative, stop_time_s, residual, nullptr);
     return true;
   }
+};
+
+// A segment's cost with derivatives from the narrowest Jet that covers what
+// its replay touches. A slide that keeps its logged direction depends on that
+// direction's four coefficients and the arrest time only, so it is
+// differentiated with 5 lanes instead of 9 (the fit's main cost); a replay
+// that also slides the other way is redone with every lane. The derivatives
+// are the same either way: the untouched block's columns are exactly zero.
+class SegmentCost : public ceres::CostFunction {
+ public:
+  SegmentCost(const Segment* segment, const RodReplayInput& replay, int rows)
+      : residual_{segment, replay} {
+    set_num_residuals(rows);
+    auto* blocks = mutable_parameter_block_sizes();
+    blocks->assign(TwoSided() ? 3 : 2, kDirectionParameters);
+    if (TwoSided()) blocks->back() = 1;
+    auto* functor = new SegmentResidual(residual_);
+    if (TwoSided()) {
+      all_lanes_.reset(
+          new ceres::AutoDiffCostFunction<SegmentResidual, ceres::DYNAMIC, kDirectionParameters,
+                                          kDirectionParameters, 1>(functor, rows));
+    } else {
+      all_lanes_.reset(
+          new ceres::AutoDiffCostFunction<SegmentResidual, ceres::DYNAMIC, kDirectionParameters,
+                                          kDirectionParameters>(functor, rows));
+    }
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const double* stop = TwoSided() ? parameters[2] : nullptr;
+    if (jacobians == nullptr) {
+      residual_.Evaluate(parameters[0], parameters[1], stop, residuals, nullptr);
+      return true;
+    }
+    const int direction = residual_.segment->direction;
+    if (direction == 0 || !OneDirection(parameters, direction, residuals, jacobians)) {
+      return all_lanes_->Evaluate(parameters, residuals, jacobians);
+    }
+    return true;
+  }
+
+ private:
+  // Lanes 0-3: the coefficients of the slide's direction; lane 4: the arrest time.
+  using Jet5 = ceres::Jet<double, kDirectionParameters + 1>;
+
+  bool TwoSided() const { return residual_.segment->two_sided; }
+
+  // Residuals and Jacobians with the other direction's coefficients held
+  // constant; false (nothing written) when the replay slid that way too.
+  bool OneDirection(double const* const* parameters, int direction, double* residuals,
+                    double** jacobians) const {
+    const int own = direction > 0 ? 0 : 1;
+    std::array<Jet5, kDirectionParameters> blocks[2];
+    for (int b = 0; b < 2; ++b) {
+      for (int i = 0; i < kDirectionParameters; ++i) {
+        blocks[b][i] = b == own ? Jet5(parameters[b][i], i) : Jet5(parameters[b][i]);
+      }
+    }
+    Jet5 stop;
+    if (TwoSided()) stop = Jet5(parameters[2][0], kDirectionParameters);
+    std::vector<Jet5> r(num_residuals());
+    RodReplayTrace trace;
+    residual_.Evaluate(blocks[0].data(), blocks[1].data(), TwoSided() ? &stop : nullptr, r.data(),
+                       &trace);
+    if (direction > 0 ? trace.slid_negative : trace.slid_positive) return false;
+    for (int row = 0; row < num_residuals(); ++row) {
+      residuals[row] = r[row].a;
+      for (int b = 0; b < 2; ++b) {
+        if (jacobians[b] == nullptr) continue;
+        for (int i = 0; i < kDirectionParameters; ++i) {
+          jacobians[b][row * kDirectionParameters + i] = b == own ? r[row].v[i] : 0.0;
+        }
+      }
+      if (TwoSided() && jacobians[2] != nullptr) jacobians[2][row] = r[row].v[kDirectionParameters];
+    }
+    return true;
+  }
+
+  SegmentResidual residual_;
+  std::unique_ptr<ceres::CostFunction> all_lanes_;  // every lane: both directions slid
 };
 
 using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
@@ -334,22 +427,16 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
     const Segment& s = data.segments[k];
     const RodReplayInput replay = ReplayOf(s, mass_kg, options.substeps);
     const int rows = static_cast<int>(replay.samples) - 1;
-    auto* functor = new SegmentResidual{&s, replay};
+    auto* cost = new SegmentCost(&s, replay, rows);
     ceres::LossFunction* loss =
         huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
     if (s.two_sided) {
       double* stop = &(*p->stop_time_s)[k];
-      p->problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<SegmentResidual, ceres::DYNAMIC, kDirectionParameters,
-                                          kDirectionParameters, 1>(functor, rows),
-          loss, positive->data(), negative->data(), stop);
+      p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data(), stop);
       p->problem.SetParameterLowerBound(stop, 0, s.stop_time_min_s);
       p->problem.SetParameterUpperBound(stop, 0, s.stop_time_max_s);
     } else {
-      p->problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<SegmentResidual, ceres::DYNAMIC, kDirectionParameters,
-                                          kDirectionParameters>(functor, rows),
-          loss, positive->data(), negative->data());
+      p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data());
     }
     p->rows.push_back(rows);
   }
@@ -369,6 +456,12 @@ ceres::Solver::Summary Solve(const FrictionFitOptions& options, ceres::Problem* 
   // move nothing that the covariance resolves.
   solver_options.function_tolerance = 1e-8;
   solver_options.parameter_tolerance = 1e-8;
+  // With bounds, Ceres follows every trust-region step with a projected
+  // Armijo search whose default cubic interpolation evaluates the whole
+  // Jacobian: that doubled the cost of an iteration here, and the full step
+  // was accepted anyway (same iterates without it). The bounds themselves
+  // still hold: steps are projected onto them.
+  solver_options.max_num_line_search_step_size_iterations = 0;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, problem, &summary);
   return summary;

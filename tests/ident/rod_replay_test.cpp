@@ -59,6 +59,28 @@ TEST(RodReplayTest, BreakawayIsLocatedInsideTheSampleInterval) {
   }
 }
 
+TEST(RodReplayTest, TraceRecordsTheDirectionsSlidIn) {
+  // The friction fit differentiates a replay that slid one way only in that
+  // direction's coefficients: the trace must not miss a slide the other way.
+  std::vector<double> force(40, 5.0);
+  std::vector<double> x(force.size());
+  RodReplayTrace up;
+  ReplayRod(Input(force), Coulomb(2.0), Coulomb(2.0), x.data(), &up);
+  EXPECT_TRUE(up.slid_positive);
+  EXPECT_FALSE(up.slid_negative);
+
+  for (std::size_t j = 20; j < force.size(); ++j) force[j] = -8.0;  // pushed back
+  RodReplayTrace both;
+  ReplayRod(Input(force), Coulomb(2.0), Coulomb(2.0), x.data(), &both);
+  EXPECT_TRUE(both.slid_positive);
+  EXPECT_TRUE(both.slid_negative);
+
+  const std::vector<double> held(40, 1.0);  // below Fs: never slides
+  RodReplayTrace none;
+  ReplayRod(Input(held), Coulomb(2.0), Coulomb(2.0), x.data(), &none);
+  EXPECT_FALSE(none.slid_positive || none.slid_negative);
+}
+
 TEST(RodReplayTest, SlideUnderCoulombFrictionStopsWhereItShould) {
   // Pushed at 5 N for 10 ms, then released (F = 0): decelerates at f/M and
   // sticks.

@@ -32,6 +32,21 @@ struct RodReplayInput {
   double mass_kg = 0.15;
   double initial_position_m = 0;
   int substeps = 8;  // RK4 substeps per sample interval while sliding
+  // Stick/slip switches followed inside one sample interval at most (bounded
+  // work; a Zeno sequence would be cut there and stay stuck).
+  int max_switches = 4;
+};
+
+// Which directions a replay slid in, so that a caller can tell which
+// friction coefficients its positions depend on.
+struct RodReplayTrace {
+  bool slid_positive = false;
+  bool slid_negative = false;
+
+  void Record(int direction) {
+    if (direction > 0) slid_positive = true;
+    if (direction < 0) slid_negative = true;
+  }
 };
 
 namespace rod_replay_detail {
@@ -140,12 +155,11 @@ int SubstepsAt(const RodState<T>& s, const StribeckCoefficients<T>& positive,
 }  // namespace rod_replay_detail
 
 // Replays the rod over `input` and writes x at every sample (position[0] is
-// the initial position). At most `max_switches` stick/slip switches are
-// followed inside one sample interval (bounded work; a Zeno sequence would be
-// cut there and stay stuck).
+// the initial position); `trace`, if given, records the directions slid in.
 template <typename T>
 void ReplayRod(const RodReplayInput& input, const StribeckCoefficients<T>& positive,
-               const StribeckCoefficients<T>& negative, T* position, int max_switches = 4) {
+               const StribeckCoefficients<T>& negative, T* position,
+               RodReplayTrace* trace = nullptr) {
   using namespace rod_replay_detail;
   if (input.samples == 0) return;
   RodState<T> s{T(input.initial_position_m), T(0.0), 0};
@@ -154,11 +168,12 @@ void ReplayRod(const RodReplayInput& input, const StribeckCoefficients<T>& posit
   for (std::size_t i = 0; i + 1 < input.samples; ++i) {
     const double force_a = input.force_N[i], force_b = input.force_N[i + 1];
     T t(0.0);
-    for (int switches = 0; switches <= max_switches; ++switches) {
+    for (int switches = 0; switches <= input.max_switches; ++switches) {
       if (s.direction == 0 &&
           !FindBreakaway(t, h, force_a, force_b, positive, negative, &t, &s.direction)) {
         break;
       }
+      if (trace != nullptr) trace->Record(s.direction);
       t = Slide(t, T(h), force_a, (force_b - force_a) / h,
                 SubstepsAt(s, positive, negative, input.substeps), positive, negative,
                 input.mass_kg, &s);
