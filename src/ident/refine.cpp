@@ -597,6 +597,8 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (!(function_tolerance > 0)) return fail("function_tolerance must be > 0");
   if (stall_iterations < 1) return fail("stall_iterations must be >= 1");
   if (!(stall_tolerance >= 0)) return fail("stall_tolerance must be >= 0");
+  if (!(earlier_stage_stall_tolerance >= 0))
+    return fail("earlier_stage_stall_tolerance must be >= 0");
   if (!(correlation_flag > 0 && correlation_flag < 1)) {
     return fail("correlation_flag must be in (0, 1)");
   }
@@ -670,7 +672,7 @@ std::vector<ExperimentCost> WholeRunCosts(const Parameters& params, const Unit& 
 }
 
 RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                         bool windows, const RefineOptions& options) {
+                         bool windows, bool last, const RefineOptions& options) {
   const Parameters conditioned = WithRigConditions(start, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
   const std::vector<FitExperiment> experiments = FittedRuns(conditioned, unit, spec, windows);
@@ -696,7 +698,10 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   std::vector<double> best_theta = start_theta;
   for (size_t s = 0; s < starts.size(); ++s) {
     p.theta = starts[s];
-    StallCallback stall(options.stall_iterations, options.stall_tolerance);
+    // A stage before the last only prepares the next one's start, which
+    // refits its parameters anyway: it stops at the first small gain.
+    StallCallback stall(last ? options.stall_iterations : 1,
+                        last ? options.stall_tolerance : options.earlier_stage_stall_tolerance);
     ceres::Solver::Options start_options = solver;
     start_options.callbacks.push_back(&stall);
     ceres::Solver::Summary summary;
@@ -801,7 +806,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       continue;
     }
     const std::string replay_report = r.replay_report;
-    r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows, options);
+    r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows,
+                    k + 1 == stages.size(), options);
     r.replay_report = replay_report;
     iterations += r.iterations;
     if (first_fit) {

@@ -220,6 +220,10 @@ TEST(RefineOptionsTest, IsValidNamesTheBadField) {
   options.correlation_flag = 1.5;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("correlation_flag"), std::string::npos);
+  options = RefineOptions{};
+  options.earlier_stage_stall_tolerance = -1;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("earlier_stage_stall_tolerance"), std::string::npos);
 }
 
 }  // namespace
