@@ -17,14 +17,15 @@ namespace pneumaid {
 namespace {
 
 using JetN = ceres::Jet<double, kMaxStates>;
-// One derivative direction per free parameter (sensitivities.h).
-using JetP = ceres::Jet<double, kMaxSensitivityParameters>;
 
 inline double Value(double x) { return x; }
 template <int N>
 double Value(const ceres::Jet<double, N>& x) {
   return x.a;
 }
+
+class ParameterJets;  // below: the model's derivatives in the free parameters
+class ValveCommandTracker;
 
 // Everything the CVODE callbacks need. The command changes between segments;
 // the layout and coefficients are fixed for the run.
@@ -40,41 +41,42 @@ struct ModelData {
   // right after a restart v is only known to within its tolerance.
   double reversal_velocity_m_per_s = 0.0;
   std::string last_solver_message;
-  // Parameter sensitivities: how many (0: none), and the coefficients with
-  // their derivatives with respect to each free parameter.
+  // Parameter sensitivities: how many (0: none), and the model's
+  // derivatives with respect to each (null without).
   int parameter_count = 0;
-  std::unique_ptr<ActuatorCoefficients<JetP>> parameter_coefficients;  // null without
+  std::unique_ptr<const ParameterJets> parameter_jets;
 };
 
-// The state as Jets whose derivative j is the sensitivity s_j = dy/dp_j.
-void LoadStateJets(int size, int parameter_count, const double* y, const N_Vector* sensitivities,
-                   JetP* jets) {
-  for (int i = 0; i < size; ++i) {
-    jets[i] = JetP(y[i]);
-    for (int j = 0; j < parameter_count; ++j)
-      jets[i].v[j] = N_VGetArrayPointer(sensitivities[j])[i];
-  }
-}
+// What a run with sensitivities evaluates in Jets whose derivative j is taken
+// with respect to free parameter j (the coefficients carry dc/dp_j, the state
+// carries s_j = dy/dp_j). Implemented for a few lane counts (LanedJets below):
+// Jet arithmetic is the part of a sensitivity step that grows with the lanes,
+// so a 2-parameter fit should not pay for 16.
+class ParameterJets {
+ public:
+  virtual ~ParameterJets() = default;
+  // CVODES' sensitivity right-hand sides, all at once: s_j' = f_y s_j + f_p_j.
+  // Returns 1 (recoverable) on a non-finite rate.
+  virtual int Rates(const ModelData& data, const double* y, const N_Vector* s,
+                    N_Vector* rates) const = 0;
+  // The total derivative g_y s_j + g_p_j of switching function `fired`.
+  virtual void SwitchingDerivatives(const ModelData& data, const double* y, const N_Vector* s,
+                                    int fired, double* dg_dp) const = 0;
+  // Row `row` of the output sensitivities.
+  virtual void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s,
+                             Eigen::Index row, TrajectorySensitivities* out) const = 0;
+  // dy(t0)/dp_j: the chamber states and settled lags depend on the
+  // parameters even though the initial pressures and position do not.
+  virtual std::vector<std::vector<double>> Initial(
+      const ModelData& data, const InitialState& initial, const CommandSignal& command,
+      const ValveCommandTracker& fresh, const ValveCommand& initial_command, double t0) const = 0;
+};
 
-// CVODES sensitivity right-hand sides, all at once: s_j' = f_y s_j + f_p_j is
-// the derivative part of f evaluated at Jets carrying s_j and dc/dp_j.
-int SensitivityRightHandSide(int count, sunrealtype, N_Vector y, N_Vector, N_Vector* sensitivities,
+// CVODES sensitivity right-hand side callback. Never throws.
+int SensitivityRightHandSide(int, sunrealtype, N_Vector y, N_Vector, N_Vector* sensitivities,
                              N_Vector* rates, void* user_data, N_Vector, N_Vector) {
   const auto* data = static_cast<const ModelData*>(user_data);
-  const int n = data->layout.size;
-  JetP state[kMaxStates];
-  JetP rate[kMaxStates];
-  LoadStateJets(n, count, N_VGetArrayPointer(y), sensitivities, state);
-  ActuatorDerivatives(data->layout, *data->parameter_coefficients, data->command, data->motion,
-                      state, rate, static_cast<ActuatorOutputs<JetP>*>(nullptr));
-  for (int j = 0; j < count; ++j) {
-    double* out = N_VGetArrayPointer(rates[j]);
-    for (int i = 0; i < n; ++i) {
-      out[i] = rate[i].v[j];
-      if (!std::isfinite(out[i])) return 1;
-    }
-  }
-  return 0;
+  return data->parameter_jets->Rates(*data, N_VGetArrayPointer(y), sensitivities, rates);
 }
 
 // CVODE right-hand side. Returns 1 (recoverable: CVODE retries with a smaller
@@ -372,11 +374,9 @@ class Integrator {
     // A grazing event (dg/dt ~ 0) has no well-defined time derivative; its
     // jump is left out (the rod touches the surface without crossing it).
     if (!(std::fabs(g_rate) > 1e-12)) return jump;
-    JetP carried[kMaxStates];
-    LoadStateJets(size_, count, y, sensitivities_.get(), carried);
-    JetP g_parameter[2];
-    SwitchingValues(*data_, *data_->parameter_coefficients, carried, g_parameter);
-    for (int j = 0; j < count; ++j) jump.time_derivative[j] = -g_parameter[fired].v[j] / g_rate;
+    double dg_dp[kMaxSensitivityParameters];
+    data_->parameter_jets->SwitchingDerivatives(*data_, y, sensitivities_.get(), fired, dg_dp);
+    for (int j = 0; j < count; ++j) jump.time_derivative[j] = -dg_dp[j] / g_rate;
     return jump;
   }
 
@@ -594,14 +594,15 @@ void AppendSample(const ModelData& data, double t, double command_V, const doubl
 
 // The coefficients with dc/dp_j of each free parameter in derivative j, by
 // central differences of the (algebraic) parameter -> coefficient map.
-ActuatorCoefficients<JetP> CoefficientsWithDerivatives(const Parameters& params,
-                                                       const SensitivityOptions& sensitivity,
-                                                       const ModelRegularization& regularization) {
+template <typename Jet>
+ActuatorCoefficients<Jet> CoefficientsWithDerivatives(const Parameters& params,
+                                                      const SensitivityOptions& sensitivity,
+                                                      const ModelRegularization& regularization) {
   auto base = MakeActuatorCoefficients<double>(params, regularization);
-  ActuatorCoefficients<JetP> result;
-  JetP* out = CoefficientArray(&result);
+  ActuatorCoefficients<Jet> result;
+  Jet* out = CoefficientArray(&result);
   const double* value = CoefficientArray(&base);
-  for (int k = 0; k < kCoefficientCount<double>; ++k) out[k] = JetP(value[k]);
+  for (int k = 0; k < kCoefficientCount<double>; ++k) out[k] = Jet(value[k]);
   for (size_t j = 0; j < sensitivity.parameter_paths.size(); ++j) {
     const std::string& path = sensitivity.parameter_paths[j];
     double nominal = 0;
@@ -619,44 +620,102 @@ ActuatorCoefficients<JetP> CoefficientsWithDerivatives(const Parameters& params,
   return result;
 }
 
-// Fills row `row` of the output sensitivities from the state sensitivities.
-void AppendSensitivities(const ModelData& data, const double* y, const N_Vector* sensitivities,
-                         Eigen::Index row, TrajectorySensitivities* out) {
-  JetP state[kMaxStates];
-  JetP rate[kMaxStates];
-  LoadStateJets(data.layout.size, data.parameter_count, y, sensitivities, state);
-  ActuatorOutputs<JetP> outputs;
-  ActuatorDerivatives(data.layout, *data.parameter_coefficients, data.command, data.motion, state,
-                      rate, &outputs);
-  const ChamberPressures<JetP> chambers = DecodeChambers(*data.parameter_coefficients, state);
-  for (int j = 0; j < data.parameter_count; ++j) {
-    out->x(row, j) = state[kPosition].v[j];
-    out->p1(row, j) = chambers.p1_Pa.v[j];
-    out->p2(row, j) = chambers.p2_Pa.v[j];
-    out->q1(row, j) = outputs.q1_kg_per_s.v[j];
-    out->q2(row, j) = outputs.q2_kg_per_s.v[j];
-  }
-}
+// ParameterJets with `Lanes` derivative lanes (at least the parameter count).
+template <int Lanes>
+class LanedJets final : public ParameterJets {
+ public:
+  using Jet = ceres::Jet<double, Lanes>;
 
-// dy(t0)/dp: the chamber states and settled lags depend on the parameters
-// even though the initial pressures and position do not.
-std::vector<std::vector<double>> InitialSensitivities(const ModelData& data,
-                                                      const InitialState& initial,
-                                                      const CommandSignal& command,
-                                                      const ValveCommandTracker& fresh, double t0) {
-  JetP y[kMaxStates];
-  for (auto& value : y) value = JetP(0.0);
-  y[kPosition] = JetP(initial.position_m);
-  y[kVelocity] = JetP(data.motion == MotionMode::kStuck ? 0.0 : initial.velocity_m_per_s);
-  SetChamberPressures(*data.parameter_coefficients, JetP(initial.p1_Pa), JetP(initial.p2_Pa), y);
-  InitialLagStates(data.layout, *data.parameter_coefficients, command, fresh, data.command, initial,
-                   t0, y);
-  std::vector<std::vector<double>> s(static_cast<size_t>(data.parameter_count),
-                                     std::vector<double>(static_cast<size_t>(data.layout.size)));
-  for (int j = 0; j < data.parameter_count; ++j) {
-    for (int i = 0; i < data.layout.size; ++i) s[j][i] = y[i].v[j];
+  LanedJets(const Parameters& params, const SensitivityOptions& sensitivity,
+            const ModelRegularization& regularization)
+      : coefficients_(CoefficientsWithDerivatives<Jet>(params, sensitivity, regularization)) {}
+
+  int Rates(const ModelData& data, const double* y, const N_Vector* s,
+            N_Vector* rates) const override {
+    const int n = data.layout.size;
+    Jet state[kMaxStates];
+    Jet rate[kMaxStates];
+    Load(data, y, s, state);
+    ActuatorDerivatives(data.layout, coefficients_, data.command, data.motion, state, rate,
+                        static_cast<ActuatorOutputs<Jet>*>(nullptr));
+    for (int j = 0; j < data.parameter_count; ++j) {
+      double* out = N_VGetArrayPointer(rates[j]);
+      for (int i = 0; i < n; ++i) {
+        out[i] = rate[i].v[j];
+        if (!std::isfinite(out[i])) return 1;
+      }
+    }
+    return 0;
   }
-  return s;
+
+  void SwitchingDerivatives(const ModelData& data, const double* y, const N_Vector* s, int fired,
+                            double* dg_dp) const override {
+    Jet carried[kMaxStates];
+    Load(data, y, s, carried);
+    Jet g[2];
+    SwitchingValues(data, coefficients_, carried, g);
+    for (int j = 0; j < data.parameter_count; ++j) dg_dp[j] = g[fired].v[j];
+  }
+
+  void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s, Eigen::Index row,
+                     TrajectorySensitivities* out) const override {
+    Jet state[kMaxStates];
+    Jet rate[kMaxStates];
+    Load(data, y, s, state);
+    ActuatorOutputs<Jet> outputs;
+    ActuatorDerivatives(data.layout, coefficients_, data.command, data.motion, state, rate,
+                        &outputs);
+    const ChamberPressures<Jet> chambers = DecodeChambers(coefficients_, state);
+    for (int j = 0; j < data.parameter_count; ++j) {
+      out->x(row, j) = state[kPosition].v[j];
+      out->p1(row, j) = chambers.p1_Pa.v[j];
+      out->p2(row, j) = chambers.p2_Pa.v[j];
+      out->q1(row, j) = outputs.q1_kg_per_s.v[j];
+      out->q2(row, j) = outputs.q2_kg_per_s.v[j];
+    }
+  }
+
+  std::vector<std::vector<double>> Initial(const ModelData& data, const InitialState& initial,
+                                           const CommandSignal& command,
+                                           const ValveCommandTracker& fresh,
+                                           const ValveCommand& initial_command,
+                                           double t0) const override {
+    Jet y[kMaxStates];
+    for (auto& value : y) value = Jet(0.0);
+    y[kPosition] = Jet(initial.position_m);
+    y[kVelocity] = Jet(data.motion == MotionMode::kStuck ? 0.0 : initial.velocity_m_per_s);
+    SetChamberPressures(coefficients_, Jet(initial.p1_Pa), Jet(initial.p2_Pa), y);
+    InitialLagStates(data.layout, coefficients_, command, fresh, initial_command, initial, t0, y);
+    std::vector<std::vector<double>> s(static_cast<size_t>(data.parameter_count),
+                                       std::vector<double>(static_cast<size_t>(data.layout.size)));
+    for (int j = 0; j < data.parameter_count; ++j) {
+      for (int i = 0; i < data.layout.size; ++i) s[j][i] = y[i].v[j];
+    }
+    return s;
+  }
+
+ private:
+  // The state as Jets whose derivative j is the sensitivity s_j = dy/dp_j.
+  static void Load(const ModelData& data, const double* y, const N_Vector* s, Jet* jets) {
+    for (int i = 0; i < data.layout.size; ++i) {
+      jets[i] = Jet(y[i]);
+      for (int j = 0; j < data.parameter_count; ++j) jets[i].v[j] = N_VGetArrayPointer(s[j])[i];
+    }
+  }
+
+  ActuatorCoefficients<Jet> coefficients_;
+};
+
+// The fewest lanes of those compiled that hold every free parameter.
+std::unique_ptr<const ParameterJets> MakeParameterJets(const Parameters& params,
+                                                       const SensitivityOptions& sensitivity,
+                                                       const ModelRegularization& regularization) {
+  static_assert(kMaxSensitivityParameters == 16, "compile a LanedJets for the new maximum");
+  const size_t count = sensitivity.parameter_paths.size();
+  if (count <= 2) return std::make_unique<LanedJets<2>>(params, sensitivity, regularization);
+  if (count <= 4) return std::make_unique<LanedJets<4>>(params, sensitivity, regularization);
+  if (count <= 10) return std::make_unique<LanedJets<10>>(params, sensitivity, regularization);
+  return std::make_unique<LanedJets<16>>(params, sensitivity, regularization);
 }
 
 // The run itself, once inputs are known to be valid. `sensitivity` and
@@ -688,9 +747,9 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   std::vector<std::vector<double>> initial_sensitivities;
   if (sensitivity != nullptr) {
     data.parameter_count = static_cast<int>(sensitivity->parameter_paths.size());
-    data.parameter_coefficients = std::make_unique<ActuatorCoefficients<JetP>>(
-        CoefficientsWithDerivatives(params, *sensitivity, options.regularization));
-    initial_sensitivities = InitialSensitivities(data, initial, command, fresh, t0);
+    data.parameter_jets = MakeParameterJets(params, *sensitivity, options.regularization);
+    initial_sensitivities =
+        data.parameter_jets->Initial(data, initial, command, fresh, data.command, t0);
   }
 
   // Knots at or before t0 have already happened: apply them in order.
@@ -751,8 +810,8 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
     if (sensitivity != nullptr) {
       const N_Vector* s = integrator.Sensitivities();
       if (s == nullptr) return fail("sensitivities unavailable");
-      AppendSensitivities(data, integrator.state(), s, static_cast<Eigen::Index>(out->size()),
-                          derivatives);
+      data.parameter_jets->AppendOutputs(data, integrator.state(), s,
+                                         static_cast<Eigen::Index>(out->size()), derivatives);
     }
     AppendSample(data, t_out, current_V, integrator.state(), out);
   }

@@ -193,6 +193,41 @@ TEST(SensitivitiesTest, MatchCentralDifferencesAcrossStickSlipAndTheEndStop) {
   EXPECT_EQ(mismatch, 0);
 }
 
+// Fewer free parameters are carried in fewer Jet lanes (2, 4, 10 or 16): the
+// lane count must not change a column beyond the corrector's tolerance (its
+// convergence test spans all the sensitivities carried). The smooth slide,
+// each subset against the same parameters among all 13.
+TEST(SensitivitiesTest, EveryLaneCountGivesTheSameColumns) {
+  Case all = SmoothSlide();
+  all.sensitivity.error_control = false;  // the same steps whatever the count
+  Trajectory run;
+  TrajectorySensitivities reference;
+  ASSERT_TRUE(SimulateWithSensitivities(all.params, all.command, all.initial, all.times,
+                                        all.options, all.sensitivity, &run, &reference)
+                  .ok());
+  for (const size_t count : {1u, 3u, 7u}) {
+    Case subset = all;
+    subset.sensitivity = FreeParameters(all.params, {kPaths.begin(), kPaths.begin() + count});
+    subset.sensitivity.error_control = false;
+    TrajectorySensitivities sens;
+    ASSERT_TRUE(SimulateWithSensitivities(subset.params, subset.command, subset.initial,
+                                          subset.times, subset.options, subset.sensitivity, &run,
+                                          &sens)
+                    .ok());
+    for (const ChannelCheck& channel : kChannels) {
+      const Eigen::MatrixXd& expected = reference.*(channel.derivatives);
+      const Eigen::MatrixXd& got = sens.*(channel.derivatives);
+      ASSERT_EQ(got.cols(), static_cast<Eigen::Index>(count));
+      for (Eigen::Index j = 0; j < got.cols(); ++j) {
+        const double unit =
+            all.sensitivity.parameter_scales[static_cast<size_t>(j)] / channel.scale;
+        const double worst = ((got.col(j) - expected.col(j)) * unit).cwiseAbs().maxCoeff();
+        EXPECT_LE(worst, 1e-10) << count << " parameters, " << channel.name << " / " << kPaths[j];
+      }
+    }
+  }
+}
+
 TEST(SensitivitiesTest, RefusesUnknownParametersAndMissingScales) {
   Case c = SmoothSlide();
   Trajectory run;
