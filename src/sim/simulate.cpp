@@ -240,10 +240,10 @@ class Integrator {
 
   double* state() { return N_VGetArrayPointer(state_.get()); }
 
-  // Turns on forward sensitivities for data->parameter_count parameters,
-  // starting from initial[j][i] = dy_i(t0)/dp_j.
+  // Turns on forward sensitivities for data->parameter_count columns (their
+  // typical magnitudes in `scales`), starting from initial[j][i] = dy_i(t0)/dp_j.
   void EnableSensitivities(const std::vector<std::vector<double>>& initial,
-                           const SensitivityOptions& options) {
+                           const SensitivityOptions& options, const std::vector<double>& scales) {
     const int count = data_->parameter_count;
     sensitivities_ = internal::VectorArray(
         CheckAllocated(N_VCloneVectorArray(count, state_.get()), "N_VCloneVectorArray"), count);
@@ -255,8 +255,8 @@ class Integrator {
     CheckFlag(
         CVodeSensInit(mem, count, CV_STAGGERED, SensitivityRightHandSide, sensitivities_.get()),
         "CVodeSensInit");
-    std::vector<double> scales = options.parameter_scales;
-    CheckFlag(CVodeSetSensParams(mem, nullptr, scales.data(), nullptr), "CVodeSetSensParams");
+    std::vector<double> pbar = scales;  // CVODES takes a non-const array
+    CheckFlag(CVodeSetSensParams(mem, nullptr, pbar.data(), nullptr), "CVodeSetSensParams");
     if (options.tolerance_factor == 1.0) {
       CheckFlag(CVodeSensEEtolerances(mem), "CVodeSensEEtolerances");
     } else {
@@ -264,8 +264,7 @@ class Integrator {
       internal::VectorArray absolute(
           CheckAllocated(N_VCloneVectorArray(count, state_.get()), "N_VCloneVectorArray"), count);
       for (int j = 0; j < count; ++j) {
-        N_VScale(options.tolerance_factor / options.parameter_scales[j], tolerances_.get(),
-                 absolute.get()[j]);
+        N_VScale(options.tolerance_factor / scales[j], tolerances_.get(), absolute.get()[j]);
       }
       CheckFlag(CVodeSensSVtolerances(mem, options.tolerance_factor * relative_tolerance_,
                                       absolute.get()),
@@ -628,7 +627,10 @@ class LanedJets final : public ParameterJets {
 
   LanedJets(const Parameters& params, const SensitivityOptions& sensitivity,
             const ModelRegularization& regularization)
-      : coefficients_(CoefficientsWithDerivatives<Jet>(params, sensitivity, regularization)) {}
+      : coefficients_(CoefficientsWithDerivatives<Jet>(params, sensitivity, regularization)),
+        initial_p1_lane_(sensitivity.initial_pressures
+                             ? static_cast<int>(sensitivity.parameter_paths.size())
+                             : -1) {}
 
   int Rates(const ModelData& data, const double* y, const N_Vector* s,
             N_Vector* rates) const override {
@@ -684,7 +686,10 @@ class LanedJets final : public ParameterJets {
     for (auto& value : y) value = Jet(0.0);
     y[kPosition] = Jet(initial.position_m);
     y[kVelocity] = Jet(data.motion == MotionMode::kStuck ? 0.0 : initial.velocity_m_per_s);
-    SetChamberPressures(coefficients_, Jet(initial.p1_Pa), Jet(initial.p2_Pa), y);
+    const bool seeded = initial_p1_lane_ >= 0;  // the initial pressures' own lanes
+    SetChamberPressures(coefficients_,
+                        seeded ? Jet(initial.p1_Pa, initial_p1_lane_) : Jet(initial.p1_Pa),
+                        seeded ? Jet(initial.p2_Pa, initial_p1_lane_ + 1) : Jet(initial.p2_Pa), y);
     InitialLagStates(data.layout, coefficients_, command, fresh, initial_command, initial, t0, y);
     std::vector<std::vector<double>> s(static_cast<size_t>(data.parameter_count),
                                        std::vector<double>(static_cast<size_t>(data.layout.size)));
@@ -704,6 +709,7 @@ class LanedJets final : public ParameterJets {
   }
 
   ActuatorCoefficients<Jet> coefficients_;
+  int initial_p1_lane_;  // p2's follows; -1 without initial-pressure lanes
 };
 
 // The fewest lanes of those compiled that hold every free parameter.
@@ -711,10 +717,11 @@ std::unique_ptr<const ParameterJets> MakeParameterJets(const Parameters& params,
                                                        const SensitivityOptions& sensitivity,
                                                        const ModelRegularization& regularization) {
   static_assert(kMaxSensitivityParameters == 16, "compile a LanedJets for the new maximum");
-  const size_t count = sensitivity.parameter_paths.size();
+  const int count = sensitivity.Columns();
   if (count <= 2) return std::make_unique<LanedJets<2>>(params, sensitivity, regularization);
   if (count <= 4) return std::make_unique<LanedJets<4>>(params, sensitivity, regularization);
   if (count <= 10) return std::make_unique<LanedJets<10>>(params, sensitivity, regularization);
+  if (count <= 12) return std::make_unique<LanedJets<12>>(params, sensitivity, regularization);
   return std::make_unique<LanedJets<16>>(params, sensitivity, regularization);
 }
 
@@ -746,7 +753,7 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   // Taken where y0 is: before the knots at t0 change the command.
   std::vector<std::vector<double>> initial_sensitivities;
   if (sensitivity != nullptr) {
-    data.parameter_count = static_cast<int>(sensitivity->parameter_paths.size());
+    data.parameter_count = sensitivity->Columns();
     data.parameter_jets = MakeParameterJets(params, *sensitivity, options.regularization);
     initial_sensitivities =
         data.parameter_jets->Initial(data, initial, command, fresh, data.command, t0);
@@ -762,7 +769,10 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
 
   Integrator integrator(&data, options, t0, y0);
   if (sensitivity != nullptr) {
-    integrator.EnableSensitivities(initial_sensitivities, *sensitivity);
+    // The initial pressures' typical magnitude: their own values.
+    std::vector<double> scales = sensitivity->parameter_scales;
+    if (sensitivity->initial_pressures) scales.insert(scales.end(), {initial.p1_Pa, initial.p2_Pa});
+    integrator.EnableSensitivities(initial_sensitivities, *sensitivity, scales);
     for (Eigen::MatrixXd* m : {&derivatives->x, &derivatives->p1, &derivatives->p2,
                                &derivatives->q1, &derivatives->q2}) {
       m->setZero(static_cast<Eigen::Index>(times.size()), data.parameter_count);
@@ -916,9 +926,10 @@ bool SensitivityOptions::IsValid(const Parameters& params, std::string* error) c
     if (error != nullptr) *error = what;
     return false;
   };
-  if (parameter_paths.empty()) return fail("no free parameters");
-  if (parameter_paths.size() > static_cast<size_t>(kMaxSensitivityParameters)) {
-    return fail("at most " + std::to_string(kMaxSensitivityParameters) + " free parameters");
+  if (Columns() == 0) return fail("no free parameters");
+  if (Columns() > kMaxSensitivityParameters) {
+    return fail("at most " + std::to_string(kMaxSensitivityParameters) +
+                " sensitivities (free parameters and initial pressures)");
   }
   if (parameter_scales.size() != parameter_paths.size()) {
     return fail("one scale per free parameter expected");

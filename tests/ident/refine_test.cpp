@@ -55,6 +55,30 @@ void ExpectRecovered(const RefineResult& result, const Parameters& truth, const 
   }
 }
 
+// (refined - truth) / reported standard error of every free parameter.
+std::vector<double> ZScores(const RefineResult& result, const Parameters& truth,
+                            const FitSpec& spec) {
+  std::vector<double> z;
+  for (const FreeParameter& free : spec.parameters) {
+    const double error = result.params.uncertainty.at(free.path);
+    z.push_back((Value(result.params, free.path) - Value(truth, free.path)) / error);
+    std::cout << "  z " << free.path << " " << z.back() << "\n";
+  }
+  return z;
+}
+
+// Honest standard errors: at least 9 of 10 parameters within 3 of them of the
+// truth (too small errors fail), and not all within a tenth of one (errors
+// inflated out of use fail).
+void ExpectHonestErrors(const RefineResult& result, const Parameters& truth, const FitSpec& spec) {
+  const std::vector<double> z = ZScores(result, truth, spec);
+  const auto within = [&z](double bound) {
+    return std::count_if(z.begin(), z.end(), [bound](double v) { return std::fabs(v) <= bound; });
+  };
+  EXPECT_GE(within(3.0), static_cast<long>(z.size()) - 1);
+  EXPECT_LT(within(0.1), static_cast<long>(z.size()));
+}
+
 // From the stroke trajectories alone (the unit has no bench logs), starting
 // 30 % off the truth on all ten parameters of fit-from-scratch.yaml.
 TEST(RefineTest, RecoversTenParametersFromTrajectoriesAloneStartingThirtyPercentOff) {
@@ -70,6 +94,7 @@ TEST(RefineTest, RecoversTenParametersFromTrajectoriesAloneStartingThirtyPercent
   }
   const RefineResult result = Refine(start, unit, spec, RefineOptions{});
   ExpectRecovered(result, truth, spec);
+  ExpectHonestErrors(result, truth, spec);
   EXPECT_LT(result.cost_after, 1e-4 * result.cost_before);
 }
 
@@ -86,6 +111,7 @@ TEST(RefineTest, RecoversTheTenDefaultParametersFromTheComponentFits) {
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   const RefineResult result = Refine(start, unit, spec, RefineOptions{});
   ExpectRecovered(result, truth, spec);
+  ExpectHonestErrors(result, truth, spec);
   // Near the noise floor: chi^2 per residual below 2 (the position sensor's
   // 10 um quantisation adds a third to its declared 5 um noise).
   long residuals = 0;
@@ -113,6 +139,10 @@ TEST(RefineTest, TheDefaultRefinementRecoversAHorizontalCylindersFriction) {
   IdentifyReport report;
   const Parameters identified = Identify(unit, truth, IdentifyOptions{}, &report);
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  // No ExpectHonestErrors here: the standard errors are conditional on the
+  // parameters the spec holds fixed, and this unit's component-fitted
+  // decreasing valve branch is off enough to pull three of the ten free ones
+  // 3 to 4.3 errors away (held-out profile x RMSE 0.10 -> 0.15 mm).
   ExpectRecovered(Refine(identified, unit, spec, RefineOptions{}), truth, spec);
 }
 

@@ -193,6 +193,52 @@ TEST(SensitivitiesTest, MatchCentralDifferencesAcrossStickSlipAndTheEndStop) {
   EXPECT_EQ(mismatch, 0);
 }
 
+// d(channel)/d(initial p_k) by central differences, k = 1 or 2.
+Eigen::VectorXd InitialPressureDifference(const Case& c, int k,
+                                          std::vector<double> Trajectory::*channel) {
+  const double step = 1e-4 * (k == 1 ? c.initial.p1_Pa : c.initial.p2_Pa);
+  Case up = c, down = c;
+  (k == 1 ? up.initial.p1_Pa : up.initial.p2_Pa) += step;
+  (k == 1 ? down.initial.p1_Pa : down.initial.p2_Pa) -= step;
+  const Trajectory a = Run(up, c.params), b = Run(down, c.params);
+  Eigen::VectorXd d(static_cast<Eigen::Index>(a.size()));
+  for (size_t i = 0; i < a.size(); ++i) d[i] = ((a.*channel)[i] - (b.*channel)[i]) / (2 * step);
+  return d;
+}
+
+// The initial pressures' columns (after the parameters') against central
+// differences of the start, with the bound of the parameters' (scale: the
+// pressure itself).
+TEST(SensitivitiesTest, InitialPressureColumnsMatchCentralDifferences) {
+  Case c = SmoothSlide();
+  c.sensitivity = FreeParameters(c.params, {"friction.positive.Fd"});
+  c.sensitivity.error_control = true;
+  c.sensitivity.initial_pressures = true;
+  ASSERT_EQ(c.sensitivity.Columns(), 3);
+  Trajectory run;
+  TrajectorySensitivities sens;
+  const SimulationSummary summary = SimulateWithSensitivities(
+      c.params, c.command, c.initial, c.times, c.options, c.sensitivity, &run, &sens);
+  ASSERT_TRUE(summary.ok()) << summary.message;
+  double worst = 0;
+  for (const ChannelCheck& channel : kChannels) {
+    const Eigen::MatrixXd& exact = sens.*(channel.derivatives);
+    ASSERT_EQ(exact.cols(), 3);
+    for (int k = 1; k <= 2; ++k) {
+      const Eigen::VectorXd fd = InitialPressureDifference(c, k, channel.values);
+      const double unit = (k == 1 ? c.initial.p1_Pa : c.initial.p2_Pa) / channel.scale;
+      for (Eigen::Index i = 0; i < fd.size(); ++i) {
+        const double error = std::fabs(exact(i, k) - fd[i]) * unit;
+        worst = std::max(worst, error / (std::fabs(fd[i]) * unit + 1.0));
+      }
+    }
+  }
+  std::cout << "worst |J - J_fd| / (|J_fd| + 1): " << worst << "\n";
+  EXPECT_LE(worst, 1e-4);
+  // They are not zero: the start matters.
+  EXPECT_GT(sens.x.col(1).cwiseAbs().maxCoeff() * c.initial.p1_Pa, 1e-5);
+}
+
 // Fewer free parameters are carried in fewer Jet lanes (2, 4, 10 or 16): the
 // lane count must not change a column beyond the corrector's tolerance (its
 // convergence test spans all the sensitivities carried). The smooth slide,

@@ -41,12 +41,24 @@ struct SensitivityOptions {
   // when 1). Larger values let the staggered corrector stop sooner; the
   // Jacobian of a fit needs far fewer digits than the trajectory.
   double tolerance_factor = 1.0;
+  // Also the sensitivities to the initial chamber pressures p1(t0), p2(t0)
+  // [per Pa]: two more columns after the parameters', in that order. A fit
+  // can then estimate where a run started instead of trusting the noisy
+  // logged pressures, which stick-slip amplifies (docs/refinement.md).
+  bool initial_pressures = false;
+
+  // Columns of the output sensitivities: the parameters, then the initial
+  // pressures when asked for; at most kMaxSensitivityParameters.
+  int Columns() const {
+    return static_cast<int>(parameter_paths.size()) + (initial_pressures ? 2 : 0);
+  }
 
   bool IsValid(const Parameters& params, std::string* error) const;
 };
 
 // d(channel)/d(parameter) at every output time: one row per sample, one column
-// per parameter, in SI units of the channel per unit of the parameter.
+// per SensitivityOptions column, in SI units of the channel per unit of the
+// parameter.
 struct TrajectorySensitivities {
   Eigen::MatrixXd x, p1, p2, q1, q2;
 };
