@@ -23,8 +23,8 @@ class FitSpecReader : internal::YamlReader {
     const YAML::Node root = LoadMapping(
         text, std::string("expected a mapping starting with format: ") + kFitSpecFormat);
     Keys(root, "",
-         {"format", "parameters", "channels", "experiments", "stages", "multistart", "seed",
-          "max_iterations"});
+         {"format", "parameters", "channels", "experiments", "stages", "initial_pressures",
+          "multistart", "seed", "max_iterations"});
     if (!root["format"] || Text(root["format"]) != kFitSpecFormat) {
       Fail(root, std::string("expected format: ") + kFitSpecFormat);
     }
@@ -43,6 +43,18 @@ class FitSpecReader : internal::YamlReader {
     ReadStages(root["stages"], &spec);
     if (!spec.stages.empty() && spec.stages.back().friction_replay) {
       Fail(root["stages"], "stages: the last stage must fit through the simulator");
+    }
+    if (const YAML::Node start = root["initial_pressures"]) {
+      const std::string how = Text(start);
+      if (how != "fit" && how != "logged") Fail(start, "initial_pressures: expected fit or logged");
+      spec.fit_initial_pressures = how == "fit";
+    }
+    const int room = kMaxSensitivityParameters - (spec.fit_initial_pressures ? 2 : 0);
+    if (spec.parameters.size() > static_cast<size_t>(room)) {
+      Fail(root["parameters"], "parameters: at most " + std::to_string(room) +
+                                   " free (with initial_pressures: fit, 2 of the " +
+                                   std::to_string(kMaxSensitivityParameters) +
+                                   " sensitivities are the start's)");
     }
     spec.multistart = Count(root["multistart"], "multistart", 0, 1000, spec.multistart);
     spec.seed = static_cast<std::uint64_t>(Count(root["seed"], "seed", 0, 1e15, 1));

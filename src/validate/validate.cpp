@@ -164,7 +164,7 @@ std::string ValidationReport::BriefReport() const {
 // The state a run starts from: the mean of its leading samples while the
 // command has not yet changed (at most 50), so that one noisy first sample
 // does not set the start. A log that starts moving gets its first sample.
-InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m) {
+InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* samples_averaged) {
   std::size_t n = 1;
   while (n < m.size() && n < 50 && m.u_V[n] == m.u_V[0]) ++n;
   const auto mean = [n](const std::vector<double>& v) {
@@ -180,7 +180,9 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m) {
     initial.position_m = m.x_m.front();
     initial.p1_Pa = m.p1_Pa.front();
     initial.p2_Pa = m.p2_Pa.front();
+    n = 1;
   }
+  if (samples_averaged != nullptr) *samples_averaged = static_cast<int>(n);
   // A rod resting on an end stop reads up to a few noise sigmas beyond it.
   initial.position_m = std::clamp(initial.position_m, -half_stroke_m, half_stroke_m);
   return initial;

@@ -46,6 +46,22 @@ seed: 9
   EXPECT_DOUBLE_EQ(spec.channels.at("p1").sigma, 0.0);  // the manifest's
   EXPECT_EQ(spec.multistart, 4);
   EXPECT_EQ(spec.seed, 9u);
+  EXPECT_TRUE(spec.fit_initial_pressures);  // the default
+}
+
+TEST(FitSpecTest, InitialPressuresAreFittedOrTakenAsLogged) {
+  const FitSpec logged = ParseFitSpec(R"(format: pneumaid-fit/1
+parameters: {friction.positive.Fs: {min: 0, max: 50}}
+initial_pressures: logged
+)",
+                                      "s.yaml");
+  EXPECT_FALSE(logged.fit_initial_pressures);
+  const FitSpec fitted = ParseFitSpec(R"(format: pneumaid-fit/1
+parameters: {friction.positive.Fs: {min: 0, max: 50}}
+initial_pressures: fit
+)",
+                                      "s.yaml");
+  EXPECT_TRUE(fitted.fit_initial_pressures);
 }
 
 struct BadSpec {
@@ -111,6 +127,10 @@ INSTANTIATE_TEST_SUITE_P(
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "stages:\n  - {friction_replay: true, parameters: all}\n  - all\n",
                 4, "stands alone"},
+        BadSpec{"initial pressures neither fit nor logged",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "initial_pressures: guess\n",
+                3, "fit or logged"},
         BadSpec{"fractional multistart",
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "multistart: 1.5\n",

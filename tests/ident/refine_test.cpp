@@ -139,11 +139,20 @@ TEST(RefineTest, TheDefaultRefinementRecoversAHorizontalCylindersFriction) {
   IdentifyReport report;
   const Parameters identified = Identify(unit, truth, IdentifyOptions{}, &report);
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
-  // No ExpectHonestErrors here: the standard errors are conditional on the
-  // parameters the spec holds fixed, and this unit's component-fitted
-  // decreasing valve branch is off enough to pull three of the ten free ones
-  // 3 to 4.3 errors away (held-out profile x RMSE 0.10 -> 0.15 mm).
-  ExpectRecovered(Refine(identified, unit, spec, RefineOptions{}), truth, spec);
+  const RefineResult result = Refine(identified, unit, spec, RefineOptions{});
+  ExpectRecovered(result, truth, spec);
+  // The runs' starts are estimated (initial_pressures: fit): taken as logged,
+  // the 40 Pa error of a logged start, amplified by stick-slip, was absorbed
+  // by the parameters and the held-out profile got worse (x RMSE 0.10 ->
+  // 0.15 mm; with the starts estimated 0.03 mm).
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_LT(result.held_out_after.experiments[i].channels.at("x").rmse,
+              0.5 * result.held_out_before.experiments[i].channels.at("x").rmse);
+  }
+  // No ExpectHonestErrors here: fitted at rtol 1e-5 against logs simulated
+  // at 1e-6, this unit's stick-slip turns the integrators' difference into a
+  // misfit that pulls delta, q_max and negative Fd 2.8 to 3.9 standard
+  // errors off (fitted at 1e-6, all ten stay within 2.3).
 }
 
 // Component fits made blind to the flow meters' 30 ms lag (not declared in the

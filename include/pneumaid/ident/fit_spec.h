@@ -63,6 +63,13 @@ struct FitSpec {
   // timing (the valve gain, the tube lag); fitting those first, or fitting
   // windows first, widens them.
   std::vector<FitStage> stages;
+  // Estimate each fitted run's (and window's) initial chamber pressures as
+  // nuisance parameters, each tied to its logged value by a prior of the
+  // logged value's standard error (`initial_pressures: fit`, the default),
+  // or start from the logged values (`logged`). Stick-slip amplifies a start
+  // a few tens of Pa off into a misfit that the model's parameters would
+  // otherwise absorb (docs/refinement.md).
+  bool fit_initial_pressures = true;
   std::uint64_t seed = 1;
   int max_iterations = 50;
   std::string source;  // the file it came from, for messages and provenance

@@ -91,6 +91,11 @@ struct RefineResult {
   double cost_before = 0, cost_after = 0;
   int stages = 0, starts = 0, best_start = 0, iterations = 0;  // starts, best: last stage
   double wall_time_s = 0;
+  // Estimated starts (FitSpec::fit_initial_pressures), last stage: how many,
+  // and the largest move of an initial pressure from its logged value, in
+  // the logged value's standard errors and in Pa.
+  int estimated_starts = 0;
+  double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
   // What a friction_replay stage found (empty without one).
   std::string replay_report;
   // Held-out experiments, validated with the start and the refined set.

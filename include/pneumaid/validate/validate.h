@@ -57,7 +57,10 @@ Parameters WithRigConditions(const Parameters& params, const Unit& unit);
 // the command has not yet changed (at most 50); its first sample when the rod
 // already moves. The position is clamped to the stroke (+-half_stroke_m): a rod
 // resting on an end stop reads up to a few noise sigmas beyond it.
-InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m);
+// `samples_averaged`, if given, receives how many samples the start is the
+// mean of (1 for a moving start).
+InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m,
+                                int* samples_averaged = nullptr);
 
 // Throws InputError for an unknown experiment id or a unit without validation
 // runs; numerical failures are reported in the result.
