@@ -50,18 +50,14 @@ seed: 9
 }
 
 TEST(FitSpecTest, InitialPressuresAreFittedOrTakenAsLogged) {
-  const FitSpec logged = ParseFitSpec(R"(format: pneumaid-fit/1
-parameters: {friction.positive.Fs: {min: 0, max: 50}}
-initial_pressures: logged
-)",
+  for (const auto& [how, fitted] : {std::make_pair("logged", false), std::make_pair("fit", true)}) {
+    const FitSpec spec = ParseFitSpec(std::string("format: pneumaid-fit/1\n"
+                                                  "parameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                                                  "initial_pressures: ") +
+                                          how + "\n",
                                       "s.yaml");
-  EXPECT_FALSE(logged.fit_initial_pressures);
-  const FitSpec fitted = ParseFitSpec(R"(format: pneumaid-fit/1
-parameters: {friction.positive.Fs: {min: 0, max: 50}}
-initial_pressures: fit
-)",
-                                      "s.yaml");
-  EXPECT_TRUE(fitted.fit_initial_pressures);
+    EXPECT_EQ(spec.fit_initial_pressures, fitted) << how;
+  }
 }
 
 struct BadSpec {
