@@ -148,7 +148,16 @@ class SegmentCost : public ceres::CostFunction {
                 double** jacobians) const override {
     const double* stop = TwoSided() ? parameters[2] : nullptr;
     if (jacobians == nullptr) {
+      // Ceres' projected line search and its candidate evaluation often ask
+      // for the same point twice in a row.
+      const std::array<double, 2 * kDirectionParameters + 1> at = Point(parameters);
+      if (at == last_point_ && !last_residuals_.empty()) {
+        std::copy(last_residuals_.begin(), last_residuals_.end(), residuals);
+        return true;
+      }
       residual_.Evaluate(parameters[0], parameters[1], stop, residuals, nullptr);
+      last_point_ = at;
+      last_residuals_.assign(residuals, residuals + num_residuals());
       return true;
     }
     const int direction = residual_.segment->direction;
@@ -163,6 +172,15 @@ class SegmentCost : public ceres::CostFunction {
   using Jet5 = ceres::Jet<double, kDirectionParameters + 1>;
 
   bool TwoSided() const { return residual_.segment->two_sided; }
+
+  std::array<double, 2 * kDirectionParameters + 1> Point(double const* const* parameters) const {
+    std::array<double, 2 * kDirectionParameters + 1> at{};
+    std::copy(parameters[0], parameters[0] + kDirectionParameters, at.begin());
+    std::copy(parameters[1], parameters[1] + kDirectionParameters,
+              at.begin() + kDirectionParameters);
+    if (TwoSided()) at.back() = parameters[2][0];
+    return at;
+  }
 
   // Residuals and Jacobians with the other direction's coefficients held
   // constant; false (nothing written) when the replay slid that way too.
@@ -197,6 +215,10 @@ class SegmentCost : public ceres::CostFunction {
 
   SegmentResidual residual_;
   std::unique_ptr<ceres::CostFunction> all_lanes_;  // every lane: both directions slid
+  // The last residual-only evaluation (Ceres never evaluates one block from
+  // two threads at once).
+  mutable std::array<double, 2 * kDirectionParameters + 1> last_point_{};
+  mutable std::vector<double> last_residuals_;
 };
 
 using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
