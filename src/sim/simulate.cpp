@@ -9,6 +9,9 @@
 
 #include "cvode_handles.h"
 #include "fast_kernels.h"
+#include "lag_history.h"
+#include "model_data.h"
+#include "parameter_jets.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/sim/sensitivities.h"
@@ -16,61 +19,7 @@
 namespace pneumaid {
 namespace {
 
-using JetN = ceres::Jet<double, kMaxStates>;
-
-inline double Value(double x) { return x; }
-template <int N>
-double Value(const ceres::Jet<double, N>& x) {
-  return x.a;
-}
-
-class ParameterJets;  // below: the model's derivatives in the free parameters
-class ValveCommandTracker;
-
-// Everything the CVODE callbacks need. The command changes between segments;
-// the layout and coefficients are fixed for the run.
-struct ModelData {
-  ActuatorLayout layout;
-  ActuatorCoefficients<double> coefficients;
-  ActuatorCoefficients<JetN> jet_coefficients;
-  ValveCommand command;
-  MotionMode motion = MotionMode::kRegularized;
-  double supply_pressure_Pa = 0.0;
-  double breakaway_margin_N = 0.0;
-  // A sliding rod counts as stopped once v has crossed zero by this much:
-  // right after a restart v is only known to within its tolerance.
-  double reversal_velocity_m_per_s = 0.0;
-  std::string last_solver_message;
-  // Parameter sensitivities: how many (0: none), and the model's
-  // derivatives with respect to each (null without).
-  int parameter_count = 0;
-  std::unique_ptr<const ParameterJets> parameter_jets;
-};
-
-// What a run with sensitivities evaluates in Jets whose derivative j is taken
-// with respect to free parameter j (the coefficients carry dc/dp_j, the state
-// carries s_j = dy/dp_j). Implemented for a few lane counts (LanedJets below):
-// Jet arithmetic is the part of a sensitivity step that grows with the lanes,
-// so a 2-parameter fit should not pay for 16.
-class ParameterJets {
- public:
-  virtual ~ParameterJets() = default;
-  // CVODES' sensitivity right-hand sides, all at once: s_j' = f_y s_j + f_p_j.
-  // Returns 1 (recoverable) on a non-finite rate.
-  virtual int Rates(const ModelData& data, const double* y, const N_Vector* s,
-                    N_Vector* rates) const = 0;
-  // The total derivative g_y s_j + g_p_j of switching function `fired`.
-  virtual void SwitchingDerivatives(const ModelData& data, const double* y, const N_Vector* s,
-                                    int fired, double* dg_dp) const = 0;
-  // Row `row` of the output sensitivities.
-  virtual void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s,
-                             Eigen::Index row, TrajectorySensitivities* out) const = 0;
-  // dy(t0)/dp_j: the chamber states and settled lags depend on the
-  // parameters even though the initial pressures and position do not.
-  virtual std::vector<std::vector<double>> Initial(
-      const ModelData& data, const InitialState& initial, const CommandSignal& command,
-      const ValveCommandTracker& fresh, const ValveCommand& initial_command, double t0) const = 0;
-};
+using namespace internal;  // model_data.h, lag_history.h, parameter_jets.h
 
 // CVODES sensitivity right-hand side callback. Never throws.
 int SensitivityRightHandSide(int, sunrealtype, N_Vector y, N_Vector, N_Vector* sensitivities,
@@ -113,50 +62,6 @@ int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_d
     }
   }
   return 0;
-}
-
-// Within a nanometre of an end stop: a rod resting there is set exactly on
-// it, this margin only absorbs round-off.
-constexpr double kAtStop_m = 1e-9;
-
-bool AtExtendedStop(const ModelData& data, double position_m) {
-  return position_m >= data.coefficients.end_stop.half_stroke_m - kAtStop_m;
-}
-bool AtRetractedStop(const ModelData& data, double position_m) {
-  return position_m <= -data.coefficients.end_stop.half_stroke_m + kAtStop_m;
-}
-
-// Stick/slip and end-stop switching surfaces. Stuck: the driving force
-// reaches the breakaway force plus a margin (the switching hysteresis) in a
-// direction the rod can move. Sliding: the velocity returns to zero (g0) or
-// the rod reaches the end of the stroke (g1). Templated so that the event
-// sensitivities can differentiate them.
-template <typename T>
-void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g) {
-  const T half_stroke = c.end_stop.half_stroke_m;
-  const T margin(data.breakaway_margin_N);
-  const T reversal(data.reversal_velocity_m_per_s);
-  switch (data.motion) {
-    case MotionMode::kStuck: {
-      const ChamberPressures<T> p = DecodeChambers(c, y);
-      const T force = DrivingForce(c, y, p);
-      const double x = Value(y[kPosition]);
-      g[0] = AtExtendedStop(data, x) ? T(-1.0) : force - BreakawayForce(c, p, +1.0) - margin;
-      g[1] = AtRetractedStop(data, x) ? T(1.0) : force + BreakawayForce(c, p, -1.0) + margin;
-      break;
-    }
-    case MotionMode::kSlidingPositive:
-      g[0] = y[kVelocity] + reversal;
-      g[1] = half_stroke - y[kPosition];
-      break;
-    case MotionMode::kSlidingNegative:
-      g[0] = y[kVelocity] - reversal;
-      g[1] = y[kPosition] + half_stroke;
-      break;
-    case MotionMode::kRegularized:
-      g[0] = g[1] = T(1.0);
-      break;
-  }
 }
 
 // CVODE root function. Never throws.
@@ -452,91 +357,6 @@ class Integrator {
   long events_ = 0;
 };
 
-// Turns command values into valve commands, keeping each valve's hysteresis
-// latch across segments.
-class ValveCommandTracker {
- public:
-  ValveCommandTracker(ValveBranchMode mode, double threshold_V)
-      : mode_(mode),
-        latches_{BranchLatch(threshold_V), BranchLatch(threshold_V), BranchLatch(threshold_V),
-                 BranchLatch(threshold_V)} {}
-
-  ValveCommand Next(double command_V) {
-    ValveCommand command;
-    command.opening = OpeningsForCommand(command_V);
-    for (int i = 0; i < kValveCount; ++i) {
-      latches_[i].Update(command.opening[i]);
-      command.decreasing_branch[i] = mode_ == ValveBranchMode::kHysteresis
-                                         ? latches_[i].decreasing()
-                                         : mode_ == ValveBranchMode::kDecreasing;
-    }
-    return command;
-  }
-
- private:
-  ValveBranchMode mode_;
-  std::array<BranchLatch, kValveCount> latches_;
-};
-
-// Relaxes the lags driven by the command alone over dt seconds of a held
-// command: exact exponentials.
-template <typename T>
-void RelaxCommandLags(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
-                      const ValveCommand& command, double dt, T* y) {
-  using std::exp;
-  if (!(dt > 0)) return;
-  if (layout.valve_lag) {
-    const T keep = exp(T(-dt) / c.valve_lag_tau_s);
-    for (int i = 0; i < kValveCount; ++i) {
-      T& opening = y[layout.opening_begin + i];
-      opening = T(command.opening[i]) + (opening - T(command.opening[i])) * keep;
-    }
-  }
-  if (layout.conductance_lag) {
-    const auto gain = ValveGains(c, command, ValveOpeningsInUse(layout, command, y));
-    const T keep = exp(T(-dt) * c.pipeline_delta_per_s);
-    for (int i = 0; i < kValveCount; ++i) {
-      T& lagged = y[layout.conductance_begin + i];
-      lagged = gain[i] + (lagged - gain[i]) * keep;
-    }
-  }
-}
-
-// The lag states at t0 (InitialState::lag_history_from_s): settled for the
-// command at `from`, then relaxed through every knot up to t0. `tracker` is
-// fresh; it is advanced as the run's own tracker would be.
-template <typename T>
-void ReplayLagHistory(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
-                      const CommandSignal& command, ValveCommandTracker tracker, double from,
-                      double t0, T* y) {
-  ValveCommand current = tracker.Next(command.initial_V);
-  size_t knot = 0;
-  for (; knot < command.time_s.size() && command.time_s[knot] <= from; ++knot) {
-    current = tracker.Next(command.value_V[knot]);
-  }
-  SetLagStatesToEquilibrium(layout, c, current, y);
-  double t = from;
-  for (; knot < command.time_s.size() && command.time_s[knot] <= t0; ++knot) {
-    RelaxCommandLags(layout, c, current, command.time_s[knot] - t, y);
-    current = tracker.Next(command.value_V[knot]);
-    t = command.time_s[knot];
-  }
-  RelaxCommandLags(layout, c, current, t0 - t, y);
-}
-
-// The lag states of y at t0: settled for the initial command, or replayed.
-template <typename T>
-void InitialLagStates(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
-                      const CommandSignal& command, const ValveCommandTracker& fresh,
-                      const ValveCommand& initial_command, const InitialState& initial, double t0,
-                      T* y) {
-  if (std::isnan(initial.lag_history_from_s)) {
-    SetLagStatesToEquilibrium(layout, c, initial_command, y);
-  } else {
-    ReplayLagHistory(layout, c, command, fresh, initial.lag_history_from_s, t0, y);
-  }
-}
-
 SimulationSummary Failure(SimulationStatus status, std::string message) {
   SimulationSummary summary;
   summary.status = status;
@@ -589,140 +409,6 @@ void AppendSample(const ModelData& data, double t, double command_V, const doubl
   out->p2_Pa.push_back(chambers.p2_Pa);
   out->q1_kg_per_s.push_back(outputs.q1_kg_per_s);
   out->q2_kg_per_s.push_back(outputs.q2_kg_per_s);
-}
-
-// The coefficients with dc/dp_j of each free parameter in derivative j, by
-// central differences of the (algebraic) parameter -> coefficient map.
-template <typename Jet>
-ActuatorCoefficients<Jet> CoefficientsWithDerivatives(const Parameters& params,
-                                                      const SensitivityOptions& sensitivity,
-                                                      const ModelRegularization& regularization) {
-  auto base = MakeActuatorCoefficients<double>(params, regularization);
-  ActuatorCoefficients<Jet> result;
-  Jet* out = CoefficientArray(&result);
-  const double* value = CoefficientArray(&base);
-  for (int k = 0; k < kCoefficientCount<double>; ++k) out[k] = Jet(value[k]);
-  for (size_t j = 0; j < sensitivity.parameter_paths.size(); ++j) {
-    const std::string& path = sensitivity.parameter_paths[j];
-    double nominal = 0;
-    GetParameter(params, path, &nominal);
-    const double step = 1e-6 * sensitivity.parameter_scales[j];
-    Parameters up = params, down = params;
-    SetParameter(&up, path, nominal + step);
-    SetParameter(&down, path, nominal - step);
-    auto plus = MakeActuatorCoefficients<double>(up, regularization);
-    auto minus = MakeActuatorCoefficients<double>(down, regularization);
-    const double* p = CoefficientArray(&plus);
-    const double* m = CoefficientArray(&minus);
-    for (int k = 0; k < kCoefficientCount<double>; ++k) out[k].v[j] = (p[k] - m[k]) / (2 * step);
-  }
-  return result;
-}
-
-// ParameterJets with `Lanes` derivative lanes (at least the parameter count).
-template <int Lanes>
-class LanedJets final : public ParameterJets {
- public:
-  using Jet = ceres::Jet<double, Lanes>;
-
-  LanedJets(const Parameters& params, const SensitivityOptions& sensitivity,
-            const ModelRegularization& regularization)
-      : coefficients_(CoefficientsWithDerivatives<Jet>(params, sensitivity, regularization)),
-        initial_p1_lane_(sensitivity.initial_pressures
-                             ? static_cast<int>(sensitivity.parameter_paths.size())
-                             : -1) {}
-
-  int Rates(const ModelData& data, const double* y, const N_Vector* s,
-            N_Vector* rates) const override {
-    const int n = data.layout.size;
-    Jet state[kMaxStates];
-    Jet rate[kMaxStates];
-    Load(data, y, s, state);
-    ActuatorDerivatives(data.layout, coefficients_, data.command, data.motion, state, rate,
-                        static_cast<ActuatorOutputs<Jet>*>(nullptr));
-    for (int j = 0; j < data.parameter_count; ++j) {
-      double* out = N_VGetArrayPointer(rates[j]);
-      for (int i = 0; i < n; ++i) {
-        out[i] = rate[i].v[j];
-        if (!std::isfinite(out[i])) return 1;
-      }
-    }
-    return 0;
-  }
-
-  void SwitchingDerivatives(const ModelData& data, const double* y, const N_Vector* s, int fired,
-                            double* dg_dp) const override {
-    Jet carried[kMaxStates];
-    Load(data, y, s, carried);
-    Jet g[2];
-    SwitchingValues(data, coefficients_, carried, g);
-    for (int j = 0; j < data.parameter_count; ++j) dg_dp[j] = g[fired].v[j];
-  }
-
-  void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s, Eigen::Index row,
-                     TrajectorySensitivities* out) const override {
-    Jet state[kMaxStates];
-    Jet rate[kMaxStates];
-    Load(data, y, s, state);
-    ActuatorOutputs<Jet> outputs;
-    ActuatorDerivatives(data.layout, coefficients_, data.command, data.motion, state, rate,
-                        &outputs);
-    const ChamberPressures<Jet> chambers = DecodeChambers(coefficients_, state);
-    for (int j = 0; j < data.parameter_count; ++j) {
-      out->x(row, j) = state[kPosition].v[j];
-      out->p1(row, j) = chambers.p1_Pa.v[j];
-      out->p2(row, j) = chambers.p2_Pa.v[j];
-      out->q1(row, j) = outputs.q1_kg_per_s.v[j];
-      out->q2(row, j) = outputs.q2_kg_per_s.v[j];
-    }
-  }
-
-  std::vector<std::vector<double>> Initial(const ModelData& data, const InitialState& initial,
-                                           const CommandSignal& command,
-                                           const ValveCommandTracker& fresh,
-                                           const ValveCommand& initial_command,
-                                           double t0) const override {
-    Jet y[kMaxStates];
-    for (auto& value : y) value = Jet(0.0);
-    y[kPosition] = Jet(initial.position_m);
-    y[kVelocity] = Jet(data.motion == MotionMode::kStuck ? 0.0 : initial.velocity_m_per_s);
-    const bool seeded = initial_p1_lane_ >= 0;  // the initial pressures' own lanes
-    SetChamberPressures(coefficients_,
-                        seeded ? Jet(initial.p1_Pa, initial_p1_lane_) : Jet(initial.p1_Pa),
-                        seeded ? Jet(initial.p2_Pa, initial_p1_lane_ + 1) : Jet(initial.p2_Pa), y);
-    InitialLagStates(data.layout, coefficients_, command, fresh, initial_command, initial, t0, y);
-    std::vector<std::vector<double>> s(static_cast<size_t>(data.parameter_count),
-                                       std::vector<double>(static_cast<size_t>(data.layout.size)));
-    for (int j = 0; j < data.parameter_count; ++j) {
-      for (int i = 0; i < data.layout.size; ++i) s[j][i] = y[i].v[j];
-    }
-    return s;
-  }
-
- private:
-  // The state as Jets whose derivative j is the sensitivity s_j = dy/dp_j.
-  static void Load(const ModelData& data, const double* y, const N_Vector* s, Jet* jets) {
-    for (int i = 0; i < data.layout.size; ++i) {
-      jets[i] = Jet(y[i]);
-      for (int j = 0; j < data.parameter_count; ++j) jets[i].v[j] = N_VGetArrayPointer(s[j])[i];
-    }
-  }
-
-  ActuatorCoefficients<Jet> coefficients_;
-  int initial_p1_lane_;  // p2's follows; -1 without initial-pressure lanes
-};
-
-// The fewest lanes of those compiled that hold every free parameter.
-std::unique_ptr<const ParameterJets> MakeParameterJets(const Parameters& params,
-                                                       const SensitivityOptions& sensitivity,
-                                                       const ModelRegularization& regularization) {
-  static_assert(kMaxSensitivityParameters == 16, "compile a LanedJets for the new maximum");
-  const int count = sensitivity.Columns();
-  if (count <= 2) return std::make_unique<LanedJets<2>>(params, sensitivity, regularization);
-  if (count <= 4) return std::make_unique<LanedJets<4>>(params, sensitivity, regularization);
-  if (count <= 10) return std::make_unique<LanedJets<10>>(params, sensitivity, regularization);
-  if (count <= 12) return std::make_unique<LanedJets<12>>(params, sensitivity, regularization);
-  return std::make_unique<LanedJets<16>>(params, sensitivity, regularization);
 }
 
 // The run itself, once inputs are known to be valid. `sensitivity` and
