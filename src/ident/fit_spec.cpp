@@ -49,12 +49,13 @@ class FitSpecReader : internal::YamlReader {
       if (how != "fit" && how != "logged") Fail(start, "initial_pressures: expected fit or logged");
       spec.fit_initial_pressures = how == "fit";
     }
-    const int room = kMaxSensitivityParameters - (spec.fit_initial_pressures ? 2 : 0);
+    const int room =
+        kMaxSensitivityParameters - (spec.fit_initial_pressures ? kInitialPressureColumns : 0);
     if (spec.parameters.size() > static_cast<size_t>(room)) {
-      Fail(root["parameters"], "parameters: at most " + std::to_string(room) +
-                                   " free (with initial_pressures: fit, 2 of the " +
-                                   std::to_string(kMaxSensitivityParameters) +
-                                   " sensitivities are the start's)");
+      Fail(root["parameters"],
+           "parameters: at most " + std::to_string(room) + " free (with initial_pressures: fit, " +
+               std::to_string(kInitialPressureColumns) + " of the " +
+               std::to_string(kMaxSensitivityParameters) + " sensitivities are the start's)");
     }
     spec.multistart = Count(root["multistart"], "multistart", 0, 1000, spec.multistart);
     spec.seed = static_cast<std::uint64_t>(Count(root["seed"], "seed", 0, 1e15, 1));

@@ -103,6 +103,11 @@ struct Channel {
   double meter_tau_s;  // flows: the declared meter lag, 0 when none
 };
 
+// Nuisance coordinates of an estimated start: the offsets of p1(t0), p2(t0)
+// from their logged values in units of their standard errors (0: as logged).
+constexpr int kStartOffsets = kInitialPressureColumns;
+using StartOffsets = std::array<double, kStartOffsets>;
+
 struct FitExperiment {
   std::string id;
   Trajectory measured;
@@ -112,19 +117,23 @@ struct FitExperiment {
   std::string parent;  // a window's run (multiple shooting); empty for a whole run
   // Standard errors of the logged initial p1, p2 [Pa] when they are estimated
   // (FitSpec::fit_initial_pressures); {0, 0}: the start is taken as logged.
-  std::array<double, 2> start_sigma_Pa = {0, 0};
+  std::array<double, kStartOffsets> start_sigma_Pa = {0, 0};
 
   bool FitsStart() const { return start_sigma_Pa[0] > 0; }
   // Data rows, then one prior row per estimated initial pressure.
   long residuals() const {
-    return static_cast<long>(measured.size() * channels.size()) + (FitsStart() ? 2 : 0);
+    return static_cast<long>(measured.size() * channels.size()) + (FitsStart() ? kStartOffsets : 0);
   }
 };
 
-// Nuisance coordinates of an estimated start: the offsets of p1(t0), p2(t0)
-// from their logged values in units of their standard errors (0: as logged).
-using StartOffsets = std::array<double, 2>;
-constexpr int kStartOffsets = 2;
+// The coordinates z of an experiment's residual block: the free parameters'
+// theta, then its start offsets when it FitsStart (`offsets` unused otherwise).
+std::vector<double> Coordinates(const FitExperiment& e, const double* theta, int m,
+                                const double* offsets) {
+  std::vector<double> z(theta, theta + m);
+  if (e.FitsStart()) z.insert(z.end(), offsets, offsets + kStartOffsets);
+  return z;
+}
 
 // The run's start with the offsets applied.
 InitialState StartOf(const FitExperiment& e, const double* offsets) {
@@ -174,6 +183,23 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
   return chosen;
 }
 
+// A channel's noise sigma [SI]: the spec's when it gives one, else the one
+// declared under the manifest's `sensors` (0 when neither does).
+double ChannelSigma(const FitSpec& spec, const Unit& unit, const std::string& channel) {
+  const auto given = spec.channels.find(channel);
+  return given != spec.channels.end() && given->second.sigma > 0
+             ? given->second.sigma
+             : unit.manifest.DeclaredSigma(channel, 0.0);
+}
+
+// The noise sigmas of one logged sample of p1 and p2, when the spec estimates
+// starts and both are known; {0, 0} (the start is taken as logged) otherwise.
+std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Unit& unit) {
+  const double p1 = ChannelSigma(spec, unit, "p1"), p2 = ChannelSigma(spec, unit, "p2");
+  if (!spec.fit_initial_pressures || !(p1 > 0 && p2 > 0)) return {0, 0};
+  return {p1, p2};
+}
+
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
                       double half_stroke_m) {
   FitExperiment out;
@@ -182,24 +208,13 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
   out.command = SampledCommand(out.measured.t_s, out.measured.u_V);
   int averaged = 1;
   out.initial = LoggedInitialState(out.measured, half_stroke_m, &averaged);
-  if (spec.fit_initial_pressures) {
-    // The spec's sigma when it overrides the sensor's, as for the residuals.
-    const auto sigma = [&](const char* channel) {
-      const auto given = spec.channels.find(channel);
-      return given != spec.channels.end() && given->second.sigma > 0
-                 ? given->second.sigma
-                 : unit.manifest.DeclaredSigma(channel, 0.0);
-    };
-    const double root_n = std::sqrt(static_cast<double>(averaged));
-    if (sigma("p1") > 0 && sigma("p2") > 0) {
-      out.start_sigma_Pa = {sigma("p1") / root_n, sigma("p2") / root_n};
-    }
-  }
+  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit);
+  const double root_n = std::sqrt(static_cast<double>(averaged));
+  for (int k = 0; k < kStartOffsets; ++k) out.start_sigma_Pa[k] = sample_sigma[k] / root_n;
   for (const Channel& row : kChannelTable) {
     const auto wanted = spec.channels.find(row.name);
     if (wanted == spec.channels.end() || (out.measured.*row.values).empty()) continue;
-    const double sigma = wanted->second.sigma > 0 ? wanted->second.sigma
-                                                  : unit.manifest.DeclaredSigma(row.name, 0.0);
+    const double sigma = ChannelSigma(spec, unit, row.name);
     if (!(sigma > 0)) {
       throw InputError(spec.source, 0, 0,
                        "channel " + row.name +
@@ -245,7 +260,7 @@ Trajectory Slice(const Trajectory& run, std::size_t begin, std::size_t end) {
 // lags replayed from the start of the log. `band_m`: how far a stuck rod's
 // logged position may wander (noise and ADC step).
 std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m,
-                                   const std::array<double, 2>& sensor_sigma_Pa) {
+                                   const std::array<double, kStartOffsets>& sample_sigma_Pa) {
   const std::vector<double>& x = run.measured.x_m;
   const std::size_t n = x.size();
   std::vector<std::size_t> starts = {0};
@@ -275,7 +290,7 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, doub
       window.initial.p1_Pa = run.measured.p1_Pa[begin];
       window.initial.p2_Pa = run.measured.p2_Pa[begin];
       window.initial.lag_history_from_s = run.measured.t_s.front();
-      if (run.FitsStart()) window.start_sigma_Pa = sensor_sigma_Pa;  // one sample each
+      if (run.FitsStart()) window.start_sigma_Pa = sample_sigma_Pa;  // one sample each
     }
     windows.push_back(std::move(window));
   }
@@ -320,8 +335,8 @@ class ExperimentResidual final : public ceres::CostFunction {
 
   bool Evaluate(double const* const* blocks, double* residuals, double** jacobians) const override {
     try {
-      std::vector<double> z(blocks[0], blocks[0] + map_->size());
-      if (experiment_->FitsStart()) z.insert(z.end(), blocks[1], blocks[1] + kStartOffsets);
+      const std::vector<double> z = Coordinates(*experiment_, blocks[0], map_->size(),
+                                                experiment_->FitsStart() ? blocks[1] : nullptr);
       if (jacobians == nullptr) return EvaluateOrFail(z, residuals, nullptr);
       std::vector<double> jacobian(static_cast<size_t>(num_residuals() * columns()));
       if (!EvaluateOrFail(z, residuals, jacobian.data())) return false;
@@ -538,14 +553,6 @@ struct Problem {
   std::vector<const ExperimentResidual*> blocks;  // owned by problem
 };
 
-// The coordinates z of experiment k's residual block: theta, then its start.
-std::vector<double> CoordinatesOf(const std::vector<double>& theta, const StartOffsets& offsets,
-                                  const FitExperiment& e) {
-  std::vector<double> z = theta;
-  if (e.FitsStart()) z.insert(z.end(), offsets.begin(), offsets.end());
-  return z;
-}
-
 // J^T J of the free parameters from one experiment's Jacobian, its start
 // offsets (the last columns, when estimated) eliminated: the Schur complement
 // A^T A - A^T B (B^T B)^-1 B^T A, so their uncertainty widens the parameters'.
@@ -729,6 +736,7 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
   const double band = 4.0 * unit.manifest.DeclaredSigma("x", 5e-6) + 10e-6;
+  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit);
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
     FitExperiment run = Prepare(*e, unit, spec, half_stroke);
@@ -736,9 +744,7 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
       runs.push_back(std::move(run));
       continue;
     }
-    const std::array<double, 2> sensor_sigma = {unit.manifest.DeclaredSigma("p1", 0.0),
-                                                unit.manifest.DeclaredSigma("p2", 0.0)};
-    for (FitExperiment& window : Windows(run, band, half_stroke, sensor_sigma)) {
+    for (FitExperiment& window : Windows(run, band, half_stroke, sample_sigma)) {
       runs.push_back(std::move(window));
     }
   }
@@ -878,8 +884,9 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
     for (size_t k = 0; k < experiments.size(); ++k) {
       const EvaluationCache* at_best = nullptr;
-      if (!p.blocks[k]->ResidualsAndJacobian(CoordinatesOf(p.theta, p.offsets[k], experiments[k]),
-                                             &at_best)) {
+      const std::vector<double> z =
+          Coordinates(experiments[k], p.theta.data(), map.size(), p.offsets[k].data());
+      if (!p.blocks[k]->ResidualsAndJacobian(z, &at_best)) {
         normal.resize(0, 0);
         r.fitted[k].after = NAN;
         continue;

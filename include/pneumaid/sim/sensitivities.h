@@ -26,6 +26,8 @@
 namespace pneumaid {
 
 inline constexpr int kMaxSensitivityParameters = 16;
+// Columns for the initial chamber pressures, p1(t0) and p2(t0), when asked for.
+inline constexpr int kInitialPressureColumns = 2;
 
 struct SensitivityOptions {
   // Free parameters by params-v1 path ("friction.positive.Fs"), at most
@@ -50,7 +52,8 @@ struct SensitivityOptions {
   // Columns of the output sensitivities: the parameters, then the initial
   // pressures when asked for; at most kMaxSensitivityParameters.
   int Columns() const {
-    return static_cast<int>(parameter_paths.size()) + (initial_pressures ? 2 : 0);
+    return static_cast<int>(parameter_paths.size()) +
+           (initial_pressures ? kInitialPressureColumns : 0);
   }
 
   bool IsValid(const Parameters& params, std::string* error) const;
