@@ -13,96 +13,129 @@ namespace {
 constexpr sunindextype kMaxDenseSize = 32;
 
 inline double* Data(N_Vector v) { return NV_DATA_S(v); }
-inline sunindextype Length(N_Vector v) { return NV_LENGTH_S(v); }
 
-void LinearSum(double a, N_Vector x, double b, N_Vector y, N_Vector z) {
-  const double *xd = Data(x), *yd = Data(y);
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = a * xd[i] + b * yd[i];
+// The kernels are templates on the vector length: N > 0 is a length known at
+// compile time (the actuator's layouts, 4 to 14 states), which the compiler
+// unrolls without the aliasing checks and remainder loops that a run-time
+// length needs (the LU solve on 8 states: half the instructions). N = 0
+// reads the length from the object.
+template <int N>
+constexpr sunindextype FixedOr(sunindextype run_time_length) {
+  return N > 0 ? N : run_time_length;
 }
 
-void Const(double c, N_Vector z) {
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = c;
+template <int N>
+inline sunindextype Length(N_Vector v) {
+  return FixedOr<N>(NV_LENGTH_S(v));
 }
 
-void Scale(double c, N_Vector x, N_Vector z) {
-  const double* xd = Data(x);
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = c * xd[i];
-}
-
-void Prod(N_Vector x, N_Vector y, N_Vector z) {
-  const double *xd = Data(x), *yd = Data(y);
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = xd[i] * yd[i];
-}
-
-void Div(N_Vector x, N_Vector y, N_Vector z) {
-  const double *xd = Data(x), *yd = Data(y);
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = xd[i] / yd[i];
-}
-
-void Abs(N_Vector x, N_Vector z) {
-  const double* xd = Data(x);
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = std::fabs(xd[i]);
-}
-
-void Inv(N_Vector x, N_Vector z) {
-  const double* xd = Data(x);
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = 1.0 / xd[i];
-}
-
-void AddConst(N_Vector x, double b, N_Vector z) {
-  const double* xd = Data(x);
-  double* zd = Data(z);
-  for (sunindextype i = 0, n = Length(z); i < n; ++i) zd[i] = xd[i] + b;
-}
-
-double WSqrSumLocal(N_Vector x, N_Vector w) {
-  const double *xd = Data(x), *wd = Data(w);
-  double sum = 0;
-  for (sunindextype i = 0, n = Length(x); i < n; ++i) sum += (xd[i] * wd[i]) * (xd[i] * wd[i]);
-  return sum;
-}
-
-double WrmsNorm(N_Vector x, N_Vector w) {
-  return std::sqrt(WSqrSumLocal(x, w) / static_cast<double>(Length(x)));
-}
-
-double MaxNorm(N_Vector x) {
-  const double* xd = Data(x);
-  double max = 0;
-  for (sunindextype i = 0, n = Length(x); i < n; ++i) max = std::fmax(max, std::fabs(xd[i]));
-  return max;
-}
-
-int LinearCombination(int count, double* c, N_Vector* x, N_Vector z) {
-  double* zd = Data(z);
-  const sunindextype n = Length(z);
-  // z may alias x[0]; scale it in place first, then accumulate the rest.
-  const double* x0 = Data(x[0]);
-  for (sunindextype i = 0; i < n; ++i) zd[i] = c[0] * x0[i];
-  for (int k = 1; k < count; ++k) {
-    const double* xk = Data(x[k]);
-    for (sunindextype i = 0; i < n; ++i) zd[i] += c[k] * xk[i];
+template <int N>
+struct VectorKernels {
+  static void LinearSum(double a, N_Vector x, double b, N_Vector y, N_Vector z) {
+    const double *xd = Data(x), *yd = Data(y);
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = a * xd[i] + b * yd[i];
   }
-  return 0;
-}
 
-int ScaleAddMulti(int count, double* a, N_Vector x, N_Vector* y, N_Vector* z) {
-  const double* xd = Data(x);
-  const sunindextype n = Length(x);
-  for (int k = 0; k < count; ++k) {
-    const double* yd = Data(y[k]);
-    double* zd = Data(z[k]);
-    for (sunindextype i = 0; i < n; ++i) zd[i] = a[k] * xd[i] + yd[i];
+  static void Const(double c, N_Vector z) {
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = c;
   }
-  return 0;
-}
+
+  static void Scale(double c, N_Vector x, N_Vector z) {
+    const double* xd = Data(x);
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = c * xd[i];
+  }
+
+  static void Prod(N_Vector x, N_Vector y, N_Vector z) {
+    const double *xd = Data(x), *yd = Data(y);
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = xd[i] * yd[i];
+  }
+
+  static void Div(N_Vector x, N_Vector y, N_Vector z) {
+    const double *xd = Data(x), *yd = Data(y);
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = xd[i] / yd[i];
+  }
+
+  static void Abs(N_Vector x, N_Vector z) {
+    const double* xd = Data(x);
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = std::fabs(xd[i]);
+  }
+
+  static void Inv(N_Vector x, N_Vector z) {
+    const double* xd = Data(x);
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = 1.0 / xd[i];
+  }
+
+  static void AddConst(N_Vector x, double b, N_Vector z) {
+    const double* xd = Data(x);
+    double* zd = Data(z);
+    for (sunindextype i = 0, n = Length<N>(z); i < n; ++i) zd[i] = xd[i] + b;
+  }
+
+  static double WSqrSumLocal(N_Vector x, N_Vector w) {
+    const double *xd = Data(x), *wd = Data(w);
+    double sum = 0;
+    for (sunindextype i = 0, n = Length<N>(x); i < n; ++i) sum += (xd[i] * wd[i]) * (xd[i] * wd[i]);
+    return sum;
+  }
+
+  static double WrmsNorm(N_Vector x, N_Vector w) {
+    return std::sqrt(WSqrSumLocal(x, w) / static_cast<double>(Length<N>(x)));
+  }
+
+  static double MaxNorm(N_Vector x) {
+    const double* xd = Data(x);
+    double max = 0;
+    for (sunindextype i = 0, n = Length<N>(x); i < n; ++i) max = std::fmax(max, std::fabs(xd[i]));
+    return max;
+  }
+
+  static int LinearCombination(int count, double* c, N_Vector* x, N_Vector z) {
+    double* zd = Data(z);
+    const sunindextype n = Length<N>(z);
+    // z may alias x[0]; scale it in place first, then accumulate the rest.
+    const double* x0 = Data(x[0]);
+    for (sunindextype i = 0; i < n; ++i) zd[i] = c[0] * x0[i];
+    for (int k = 1; k < count; ++k) {
+      const double* xk = Data(x[k]);
+      for (sunindextype i = 0; i < n; ++i) zd[i] += c[k] * xk[i];
+    }
+    return 0;
+  }
+
+  static int ScaleAddMulti(int count, double* a, N_Vector x, N_Vector* y, N_Vector* z) {
+    const double* xd = Data(x);
+    const sunindextype n = Length<N>(x);
+    for (int k = 0; k < count; ++k) {
+      const double* yd = Data(y[k]);
+      double* zd = Data(z[k]);
+      for (sunindextype i = 0; i < n; ++i) zd[i] = a[k] * xd[i] + yd[i];
+    }
+    return 0;
+  }
+
+  static void Install(N_Vector_Ops ops) {
+    ops->nvlinearsum = LinearSum;
+    ops->nvconst = Const;
+    ops->nvscale = Scale;
+    ops->nvprod = Prod;
+    ops->nvdiv = Div;
+    ops->nvabs = Abs;
+    ops->nvinv = Inv;
+    ops->nvaddconst = AddConst;
+    ops->nvwrmsnorm = WrmsNorm;
+    ops->nvwsqrsumlocal = WSqrSumLocal;
+    ops->nvmaxnorm = MaxNorm;
+    ops->nvlinearcombination = LinearCombination;
+    ops->nvscaleaddmulti = ScaleAddMulti;
+  }
+};
 
 int MatrixCopy(SUNMatrix from, SUNMatrix to) {
   const double* a = SM_DATA_D(from);
@@ -129,7 +162,9 @@ int MatrixScaleAddIdentity(double c, SUNMatrix matrix) {
 // times per factorisation, where forming the inverse (n substitutions) would
 // cost more than it saves.
 struct DenseLu {
-  std::vector<sunindextype> pivots;
+  // Row i of P A is row permutation[i] of A (the row swaps of the
+  // factorisation composed, as LAPACK's getrs would apply them one by one).
+  std::vector<sunindextype> permutation;
   std::vector<double> inverse;  // row-major n x n, valid when inverse_formed
   bool inverse_formed = false;
   sunindextype solves_since_setup = 0;
@@ -145,122 +180,153 @@ int Initialize(SUNLinearSolver solver) {
   return SUNLS_SUCCESS;
 }
 
-// x = A^-1 b with the LU factors of A (pivots applied first, as LAPACK's
-// getrs does: the row swaps of the factorisation moved whole rows of L).
-void SolveWithFactors(const DenseLu& lu, const double* a, sunindextype n, double* x) {
-  for (sunindextype k = 0; k < n; ++k) {
-    const sunindextype pivot = lu.pivots[k];
-    if (pivot != k) std::swap(x[k], x[pivot]);
-  }
-  for (sunindextype k = 0; k < n; ++k) {  // forward: L y = P b
-    const double* col_k = a + k * n;
-    for (sunindextype i = k + 1; i < n; ++i) x[i] -= col_k[i] * x[k];
-  }
-  for (sunindextype k = n - 1; k >= 0; --k) {  // backward: U x = y
-    const double* col_k = a + k * n;
-    x[k] /= col_k[k];
-    for (sunindextype i = 0; i < k; ++i) x[i] -= col_k[i] * x[k];
-  }
-}
-
-// Column j of the inverse is A^-1 e_j; stored transposed (row-major).
-void FormInverse(DenseLu* lu, const double* a, sunindextype n) {
-  std::vector<double> column(static_cast<size_t>(n));
-  for (sunindextype j = 0; j < n; ++j) {
-    std::fill(column.begin(), column.end(), 0.0);
-    column[j] = 1.0;
-    SolveWithFactors(*lu, a, n, column.data());
-    for (sunindextype i = 0; i < n; ++i) lu->inverse[i * n + j] = column[i];
-  }
-}
-
-int Setup(SUNLinearSolver solver, SUNMatrix matrix) {
-  DenseLu* lu = Content(solver);
-  const sunindextype n = SM_ROWS_D(matrix);
-  double* a = SM_DATA_D(matrix);
-  for (sunindextype k = 0; k < n; ++k) {
-    double* col_k = a + k * n;
-    sunindextype pivot = k;
-    for (sunindextype i = k + 1; i < n; ++i) {
-      if (std::fabs(col_k[i]) > std::fabs(col_k[pivot])) pivot = i;
-    }
-    lu->pivots[k] = pivot;
-    if (col_k[pivot] == 0.0) {
-      lu->last_flag = k + 1;
-      return SUNLS_LUFACT_FAIL;  // recoverable: CVODE retries with a smaller step
-    }
-    if (pivot != k) {
-      for (sunindextype j = 0; j < n; ++j) std::swap(a[j * n + k], a[j * n + pivot]);
-    }
-    const double inverse = 1.0 / col_k[k];
-    for (sunindextype i = k + 1; i < n; ++i) col_k[i] *= inverse;
-    for (sunindextype j = k + 1; j < n; ++j) {
-      double* col_j = a + j * n;
-      const double factor = col_j[k];
-      if (factor == 0.0) continue;
-      for (sunindextype i = k + 1; i < n; ++i) col_j[i] -= factor * col_k[i];
-    }
-  }
-  lu->inverse_formed = false;
-  lu->solves_since_setup = 0;
-  lu->last_flag = 0;
-  return SUNLS_SUCCESS;
-}
-
-// result = inverse b for an n x n row-major inverse; fixed sizes unroll.
 template <int N>
-void MultiplyFixed(const double* inverse, const double* b, double* result) {
-  for (int i = 0; i < N; ++i) {
-    double sum = 0.0;
-    for (int j = 0; j < N; ++j) sum += inverse[i * N + j] * b[j];
-    result[i] = sum;
-  }
+inline sunindextype Rows(SUNMatrix matrix) {
+  return FixedOr<N>(SM_ROWS_D(matrix));
 }
 
-void Multiply(const double* inverse, sunindextype n, const double* b, double* result) {
-  switch (n) {  // the actuator's layouts: 4 states plus optional groups
-    case 4:
-      return MultiplyFixed<4>(inverse, b, result);
-    case 6:
-      return MultiplyFixed<6>(inverse, b, result);
-    case 8:
-      return MultiplyFixed<8>(inverse, b, result);
-    case 10:
-      return MultiplyFixed<10>(inverse, b, result);
-    case 12:
-      return MultiplyFixed<12>(inverse, b, result);
-    default:
-      for (sunindextype i = 0; i < n; ++i) {
-        double sum = 0.0;
-        for (sunindextype j = 0; j < n; ++j) sum += inverse[i * n + j] * b[j];
-        result[i] = sum;
-      }
+// Setup and solve for n x n matrices, n = N when N > 0 (see VectorKernels).
+template <int N>
+struct DenseKernels {
+  // x = A^-1 b with the LU factors of A.
+  static void SolveWithFactors(const DenseLu& lu, const double* a, sunindextype n, double* x) {
+    // On a local copy, which the compiler keeps in registers when N is fixed
+    // (x could alias the factors, so it would store and reload every update);
+    // the row permutation is gathered into it.
+    n = FixedOr<N>(n);
+    double local[N > 0 ? N : kMaxDenseSize];
+    for (sunindextype i = 0; i < n; ++i) local[i] = x[lu.permutation[i]];
+    Substitute(a, n, local);
+    for (sunindextype i = 0; i < n; ++i) x[i] = local[i];
   }
-}
 
-int Solve(SUNLinearSolver solver, SUNMatrix matrix, N_Vector x, N_Vector b, double) {
-  DenseLu* lu = Content(solver);
-  const sunindextype n = SM_ROWS_D(matrix);
-  const double* a = SM_DATA_D(matrix);
-  // The inverse pays for itself after about n solves with one factorisation.
-  if (!lu->inverse_formed && ++lu->solves_since_setup > n) {
-    FormInverse(lu, a, n);
-    lu->inverse_formed = true;
-  }
-  double* xd = Data(x);
-  if (lu->inverse_formed) {
-    double result[kMaxDenseSize];
-    Multiply(lu->inverse.data(), n, Data(b), result);
-    for (sunindextype i = 0; i < n; ++i) xd[i] = result[i];  // x may alias b
-  } else {
-    const double* bd = Data(b);
-    if (xd != bd) {
-      for (sunindextype i = 0; i < n; ++i) xd[i] = bd[i];
+  // The triangular solves L y = P b, U x = y on P b.
+  static void Substitute(const double* a, sunindextype n, double* x) {
+    n = FixedOr<N>(n);
+#pragma GCC unroll 16
+    for (sunindextype k = 0; k < n; ++k) {  // forward
+      const double* col_k = a + k * n;
+#pragma GCC unroll 16
+      for (sunindextype i = k + 1; i < n; ++i) x[i] -= col_k[i] * x[k];
     }
-    SolveWithFactors(*lu, a, n, xd);
+#pragma GCC unroll 16
+    for (sunindextype k = n - 1; k >= 0; --k) {  // backward
+      const double* col_k = a + k * n;
+      x[k] /= col_k[k];
+#pragma GCC unroll 16
+      for (sunindextype i = 0; i < k; ++i) x[i] -= col_k[i] * x[k];
+    }
   }
-  lu->last_flag = 0;
-  return SUNLS_SUCCESS;
+
+  // Column j of the inverse is A^-1 e_j; stored transposed (row-major).
+  static void FormInverse(DenseLu* lu, const double* a, sunindextype n) {
+    double column[kMaxDenseSize];
+    for (sunindextype j = 0; j < n; ++j) {
+      std::fill(column, column + n, 0.0);
+      column[j] = 1.0;
+      SolveWithFactors(*lu, a, n, column);
+      for (sunindextype i = 0; i < n; ++i) lu->inverse[i * n + j] = column[i];
+    }
+  }
+
+  static int Setup(SUNLinearSolver solver, SUNMatrix matrix) {
+    DenseLu* lu = Content(solver);
+    const sunindextype n = Rows<N>(matrix);
+    double* a = SM_DATA_D(matrix);
+    for (sunindextype i = 0; i < n; ++i) lu->permutation[i] = i;
+    for (sunindextype k = 0; k < n; ++k) {
+      double* col_k = a + k * n;
+      sunindextype pivot = k;
+      for (sunindextype i = k + 1; i < n; ++i) {
+        if (std::fabs(col_k[i]) > std::fabs(col_k[pivot])) pivot = i;
+      }
+      if (col_k[pivot] == 0.0) {
+        lu->last_flag = k + 1;
+        return SUNLS_LUFACT_FAIL;  // recoverable: CVODE retries with a smaller step
+      }
+      if (pivot != k) {
+        for (sunindextype j = 0; j < n; ++j) std::swap(a[j * n + k], a[j * n + pivot]);
+        std::swap(lu->permutation[k], lu->permutation[pivot]);
+      }
+      const double inverse = 1.0 / col_k[k];
+#pragma GCC unroll 16
+      for (sunindextype i = k + 1; i < n; ++i) col_k[i] *= inverse;
+      for (sunindextype j = k + 1; j < n; ++j) {
+        double* col_j = a + j * n;
+        const double factor = col_j[k];
+        if (factor == 0.0) continue;
+#pragma GCC unroll 16
+        for (sunindextype i = k + 1; i < n; ++i) col_j[i] -= factor * col_k[i];
+      }
+    }
+    lu->inverse_formed = false;
+    lu->solves_since_setup = 0;
+    lu->last_flag = 0;
+    return SUNLS_SUCCESS;
+  }
+
+  // result = inverse b for the row-major inverse.
+  static void Multiply(const double* inverse, sunindextype n, const double* b, double* result) {
+    n = FixedOr<N>(n);
+    for (sunindextype i = 0; i < n; ++i) {
+      double sum = 0.0;
+      for (sunindextype j = 0; j < n; ++j) sum += inverse[i * n + j] * b[j];
+      result[i] = sum;
+    }
+  }
+
+  static int Solve(SUNLinearSolver solver, SUNMatrix matrix, N_Vector x, N_Vector b, double) {
+    DenseLu* lu = Content(solver);
+    const sunindextype n = Rows<N>(matrix);
+    const double* a = SM_DATA_D(matrix);
+    // The inverse pays for itself after about n solves with one factorisation.
+    if (!lu->inverse_formed && ++lu->solves_since_setup > n) {
+      FormInverse(lu, a, n);
+      lu->inverse_formed = true;
+    }
+    double* xd = Data(x);
+    if (lu->inverse_formed) {
+      double result[kMaxDenseSize];
+      Multiply(lu->inverse.data(), n, Data(b), result);
+      for (sunindextype i = 0; i < n; ++i) xd[i] = result[i];  // x may alias b
+    } else {
+      const double* bd = Data(b);
+      if (xd != bd) {
+        for (sunindextype i = 0; i < n; ++i) xd[i] = bd[i];
+      }
+      SolveWithFactors(*lu, a, n, xd);
+    }
+    lu->last_flag = 0;
+    return SUNLS_SUCCESS;
+  }
+
+  static void Install(SUNLinearSolver solver) {
+    solver->ops->setup = Setup;
+    solver->ops->solve = Solve;
+  }
+};
+
+// Calls Kernels<n>::Install(target) for the actuator's layouts (4 states plus
+// optional groups of 2 or 4: every even size from 4 to 14), Kernels<0>
+// otherwise.
+template <template <int> class Kernels, typename Target>
+void InstallForLength(sunindextype n, Target target) {
+  switch (n) {
+    case 4:
+      return Kernels<4>::Install(target);
+    case 6:
+      return Kernels<6>::Install(target);
+    case 8:
+      return Kernels<8>::Install(target);
+    case 10:
+      return Kernels<10>::Install(target);
+    case 12:
+      return Kernels<12>::Install(target);
+    case 14:
+      return Kernels<14>::Install(target);
+    default:
+      return Kernels<0>::Install(target);
+  }
 }
 
 sunindextype LastFlag(SUNLinearSolver solver) { return Content(solver)->last_flag; }
@@ -276,20 +342,7 @@ int Free(SUNLinearSolver solver) {
 }  // namespace
 
 void InstallFastVectorKernels(N_Vector vector) {
-  N_Vector_Ops ops = vector->ops;
-  ops->nvlinearsum = LinearSum;
-  ops->nvconst = Const;
-  ops->nvscale = Scale;
-  ops->nvprod = Prod;
-  ops->nvdiv = Div;
-  ops->nvabs = Abs;
-  ops->nvinv = Inv;
-  ops->nvaddconst = AddConst;
-  ops->nvwrmsnorm = WrmsNorm;
-  ops->nvwsqrsumlocal = WSqrSumLocal;
-  ops->nvmaxnorm = MaxNorm;
-  ops->nvlinearcombination = LinearCombination;
-  ops->nvscaleaddmulti = ScaleAddMulti;
+  InstallForLength<VectorKernels>(NV_LENGTH_S(vector), vector->ops);
 }
 
 void InstallFastMatrixKernels(SUNMatrix matrix) {
@@ -303,8 +356,7 @@ SUNLinearSolver NewFastDenseSolver(sunindextype n, SUNContext context) {
   solver->ops->gettype = GetType;
   solver->ops->getid = GetId;
   solver->ops->initialize = Initialize;
-  solver->ops->setup = Setup;
-  solver->ops->solve = Solve;
+  InstallForLength<DenseKernels>(n, solver);
   solver->ops->lastflag = LastFlag;
   solver->ops->free = Free;
   if (n > kMaxDenseSize) {
@@ -312,7 +364,7 @@ SUNLinearSolver NewFastDenseSolver(sunindextype n, SUNContext context) {
     return nullptr;
   }
   auto* content = new DenseLu;
-  content->pivots.assign(static_cast<size_t>(n), 0);
+  content->permutation.assign(static_cast<size_t>(n), 0);
   content->inverse.assign(static_cast<size_t>(n * n), 0.0);
   solver->content = content;
   return solver;
