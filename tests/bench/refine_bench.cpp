@@ -40,7 +40,10 @@ void RunRefine(benchmark::State& state, JacobianMethod method) {
   RefineResult result;
   for (auto _ : state) {
     result = Refine(s.start, s.unit, s.spec, options);
-    benchmark::DoNotOptimize(result.cost_after);
+    // The address, not the double: Google Benchmark 1.7's DoNotOptimize on a
+    // double lvalue lets GCC 12 -O3 clobber it (the reported cost read 0;
+    // google/benchmark issue 903).
+    benchmark::DoNotOptimize(&result);
   }
   long samples = 0;
   for (const ExperimentCost& e : result.fitted) samples += e.residuals / 3;
