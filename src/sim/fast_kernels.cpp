@@ -9,7 +9,7 @@
 namespace pneumaid::internal {
 namespace {
 
-// Largest system the dense solver takes (the actuator has at most 14 states).
+// Largest system the dense solver takes (the actuator has at most 12 states).
 constexpr sunindextype kMaxDenseSize = 32;
 
 inline double* Data(N_Vector v) { return NV_DATA_S(v); }
@@ -120,6 +120,89 @@ struct VectorKernels {
     return 0;
   }
 
+  // The vector-array operations of CVODES' sensitivities, one vector of the
+  // array at a time (same results as SUNDIALS' own; element by element, so
+  // an output may alias an input of the same index).
+
+  // y += a x
+  static void Axpy(double a, N_Vector x, N_Vector y) {
+    const double* xd = Data(x);
+    double* yd = Data(y);
+    for (sunindextype i = 0, n = Length<N>(y); i < n; ++i) yd[i] += a * xd[i];
+  }
+
+  // Z[i] = a X[i] + b Y[i]; CVODES mostly asks for Y[i] += a X[i], one load
+  // and multiplication less per element.
+  static int LinearSumVectorArray(int count, double a, N_Vector* x, double b, N_Vector* y,
+                                  N_Vector* z) {
+    if (b == 1.0 && z == y) {
+      for (int i = 0; i < count; ++i) Axpy(a, x[i], y[i]);
+    } else if (a == 1.0 && z == x) {
+      for (int i = 0; i < count; ++i) Axpy(b, y[i], x[i]);
+    } else {
+      for (int i = 0; i < count; ++i) LinearSum(a, x[i], b, y[i], z[i]);
+    }
+    return 0;
+  }
+
+  // Z[i] = c[i] X[i]
+  static int ScaleVectorArray(int count, double* c, N_Vector* x, N_Vector* z) {
+    for (int i = 0; i < count; ++i) Scale(c[i], x[i], z[i]);
+    return 0;
+  }
+
+  static int ConstVectorArray(int count, double c, N_Vector* z) {
+    for (int i = 0; i < count; ++i) Const(c, z[i]);
+    return 0;
+  }
+
+  static int WrmsNormVectorArray(int count, N_Vector* x, N_Vector* w, double* norms) {
+    for (int i = 0; i < count; ++i) norms[i] = WrmsNorm(x[i], w[i]);
+    return 0;
+  }
+
+  // Z[j][i] = a[j] X[i] + Y[j][i]
+  static int ScaleAddMultiVectorArray(int count, int sums, double* a, N_Vector* x, N_Vector** y,
+                                      N_Vector** z) {
+    for (int i = 0; i < count; ++i) {
+      const double* xd = Data(x[i]);
+      const sunindextype n = Length<N>(x[i]);
+      for (int j = 0; j < sums; ++j) {
+        const double* yd = Data(y[j][i]);
+        double* zd = Data(z[j][i]);
+        for (sunindextype k = 0; k < n; ++k) zd[k] = a[j] * xd[k] + yd[k];
+      }
+    }
+    return 0;
+  }
+
+  // Z[i] = sum_j c[j] X[j][i]
+  static int LinearCombinationVectorArray(int count, int sums, double* c, N_Vector** x,
+                                          N_Vector* z) {
+    for (int i = 0; i < count; ++i) {
+      const sunindextype n = Length<N>(z[i]);
+      double sum[N > 0 ? N : 1];  // accumulated in registers when N is fixed
+      if constexpr (N > 0) {
+        const double* x0 = Data(x[0][i]);
+        for (int k = 0; k < N; ++k) sum[k] = c[0] * x0[k];
+        for (int j = 1; j < sums; ++j) {
+          const double* xj = Data(x[j][i]);
+          for (int k = 0; k < N; ++k) sum[k] += c[j] * xj[k];
+        }
+        double* zd = Data(z[i]);
+        for (int k = 0; k < N; ++k) zd[k] = sum[k];
+      } else {
+        double* zd = Data(z[i]);
+        for (sunindextype k = 0; k < n; ++k) {
+          double total = 0.0;
+          for (int j = 0; j < sums; ++j) total += c[j] * Data(x[j][i])[k];
+          zd[k] = total;
+        }
+      }
+    }
+    return 0;
+  }
+
   static void Install(N_Vector_Ops ops) {
     ops->nvlinearsum = LinearSum;
     ops->nvconst = Const;
@@ -134,6 +217,12 @@ struct VectorKernels {
     ops->nvmaxnorm = MaxNorm;
     ops->nvlinearcombination = LinearCombination;
     ops->nvscaleaddmulti = ScaleAddMulti;
+    ops->nvlinearsumvectorarray = LinearSumVectorArray;
+    ops->nvscalevectorarray = ScaleVectorArray;
+    ops->nvconstvectorarray = ConstVectorArray;
+    ops->nvwrmsnormvectorarray = WrmsNormVectorArray;
+    ops->nvscaleaddmultivectorarray = ScaleAddMultiVectorArray;
+    ops->nvlinearcombinationvectorarray = LinearCombinationVectorArray;
   }
 };
 
