@@ -36,8 +36,8 @@ ActuatorLayout ActuatorLayout::For(const Parameters& params) {
     next += count;
     return begin;
   };
-  layout.opening_begin = take(layout.valve_lag, kValveCount);
-  layout.conductance_begin = take(layout.conductance_lag, kValveCount);
+  layout.opening_begin = take(layout.valve_lag, kValvePairCount);
+  layout.conductance_begin = take(layout.conductance_lag, kValvePairCount);
   layout.flow_begin = take(layout.flow_lag, 2);
   layout.sensor_begin = take(layout.flow_sensor_lag, 2);
   layout.size = next;

@@ -48,17 +48,19 @@ void RelaxCommandLags(const ActuatorLayout& layout, const ActuatorCoefficients<T
   if (!(dt > 0)) return;
   if (layout.valve_lag) {
     const T keep = exp(T(-dt) / c.valve_lag_tau_s);
-    for (int i = 0; i < kValveCount; ++i) {
-      T& opening = y[layout.opening_begin + i];
-      opening = T(command.opening[i]) + (opening - T(command.opening[i])) * keep;
+    for (int pair = 0; pair < kValvePairCount; ++pair) {
+      T& opening = y[layout.opening_begin + pair];
+      const T target(command.opening[kValvePairs[pair].lead]);
+      opening = target + (opening - target) * keep;
     }
   }
   if (layout.conductance_lag) {
     const auto gain = ValveGains(c, command, ValveOpeningsInUse(layout, command, y));
     const T keep = exp(T(-dt) * c.pipeline_delta_per_s);
-    for (int i = 0; i < kValveCount; ++i) {
-      T& lagged = y[layout.conductance_begin + i];
-      lagged = gain[i] + (lagged - gain[i]) * keep;
+    for (int pair = 0; pair < kValvePairCount; ++pair) {
+      T& lagged = y[layout.conductance_begin + pair];
+      const T& target = gain[kValvePairs[pair].lead];
+      lagged = target + (lagged - target) * keep;
     }
   }
 }

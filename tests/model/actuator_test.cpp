@@ -23,14 +23,15 @@ Parameters WithAllSimulatedEffects() {
 
 TEST(ActuatorTest, LayoutCountsTheStatesOfEachOption) {
   Parameters p;
-  EXPECT_EQ(ActuatorLayout::For(p).size, 8);
+  // x, v, two chambers; a lag on the valves needs one state per valve pair.
+  EXPECT_EQ(ActuatorLayout::For(p).size, 6);
   p.pipeline.model = PipelineModel::kFlowLag;
   EXPECT_EQ(ActuatorLayout::For(p).size, 6);
   p.pipeline.model = PipelineModel::kNone;
   EXPECT_EQ(ActuatorLayout::For(p).size, 4);
   p.effects["pipeline_lag"] = {{"delta", 8.0}};
-  EXPECT_EQ(ActuatorLayout::For(p).size, 8);
-  EXPECT_EQ(ActuatorLayout::For(WithAllSimulatedEffects()).size, 14);
+  EXPECT_EQ(ActuatorLayout::For(p).size, 6);
+  EXPECT_EQ(ActuatorLayout::For(WithAllSimulatedEffects()).size, 10);
 }
 
 // The Jacobian CVODE uses (forward-mode autodiff) against central differences
@@ -55,7 +56,9 @@ TEST(ActuatorTest, AutodiffJacobianMatchesCentralDifferences) {
       SetChamberPressures(cd, 1.2e5 + 3e5 * unit(rng), 1.2e5 + 3e5 * unit(rng), y.data());
       for (int i = 4; i < layout.size; ++i) y[i] = 3e-5 * unit(rng);
       if (layout.valve_lag) {
-        for (int i = 0; i < 4; ++i) y[layout.opening_begin + i] = 0.2 + 0.6 * unit(rng);
+        for (int i = 0; i < kValvePairCount; ++i) {
+          y[layout.opening_begin + i] = 0.2 + 0.6 * unit(rng);
+        }
       }
       Jet yj[kMaxStates], fj[kMaxStates];
       for (int i = 0; i < layout.size; ++i) yj[i] = Jet(y[i], i);

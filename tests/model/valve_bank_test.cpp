@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
 
 namespace pneumaid {
@@ -59,6 +60,36 @@ TEST(ValveBankTest, SlowRampSwitchesDespiteSubThresholdSamples) {
   latch.Update(0.6);
   for (double u = 0.6; u > 0.3; u -= 0.001) latch.Update(u);  // 1 mV per sample
   EXPECT_TRUE(latch.decreasing());
+}
+
+// Why a lag needs one state per valve pair (actuator.h): the two valves a
+// command opens together see the same opening and, each with its own latch,
+// the same K_vp branch, whatever the command does (sign changes, noise,
+// ramps, saturation).
+TEST(ValveBankTest, TheTwoValvesOfAPairAlwaysAgree) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> level(-1.2, 1.2);
+  std::normal_distribution<double> noise(0.0, 0.004);
+  std::array<BranchLatch, kValveCount> latches{BranchLatch(0.01), BranchLatch(0.01),
+                                               BranchLatch(0.01), BranchLatch(0.01)};
+  double u = 0.0;
+  for (int step = 0; step < 20000; ++step) {
+    u = step % 500 == 0 ? level(rng) : u + noise(rng);
+    const ValveOpenings opening = OpeningsForCommand(u);
+    for (int i = 0; i < kValveCount; ++i) latches[i].Update(opening[i]);
+    for (const ValvePair& pair : kValvePairs) {
+      ASSERT_EQ(opening[pair.lead], opening[pair.partner]) << "step " << step;
+      ASSERT_EQ(latches[pair.lead].decreasing(), latches[pair.partner].decreasing())
+          << "step " << step;
+    }
+  }
+  // Every valve belongs to exactly one pair.
+  std::array<int, kValveCount> seen{};
+  for (const ValvePair& pair : kValvePairs) {
+    ++seen[pair.lead];
+    ++seen[pair.partner];
+  }
+  for (int count : seen) EXPECT_EQ(count, 1);
 }
 
 }  // namespace

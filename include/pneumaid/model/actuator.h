@@ -53,11 +53,11 @@ struct ModelRegularization {
 // ChamberPressures() / SetChamberPressures() to read and write pressures.
 enum StateIndex : int { kPosition = 0, kVelocity = 1, kChamber1 = 2, kChamber2 = 3 };
 
-inline constexpr int kMaxStates = 14;
+inline constexpr int kMaxStates = 12;  // 4 + 2 per optional group
 
 struct ActuatorLayout {
-  bool valve_lag = false;        // 4 states: lagged valve openings [V]
-  bool conductance_lag = false;  // 4 states: lagged K_vp of each valve [kg/s]
+  bool valve_lag = false;        // 2 states: lagged opening of each valve pair [V]
+  bool conductance_lag = false;  // 2 states: lagged K_vp of each valve pair [kg/s]
   bool flow_lag = false;         // 2 states: lagged mass flows into chambers [kg/s]
   bool flow_sensor_lag = false;  // 2 states: flows as the meters read them [kg/s]
   int opening_begin = -1, conductance_begin = -1, flow_begin = -1, sensor_begin = -1;
@@ -168,8 +168,12 @@ template <typename T>
 std::array<T, kValveCount> ValveOpeningsInUse(const ActuatorLayout& layout,
                                               const ValveCommand& command, const T* y) {
   std::array<T, kValveCount> opening;
-  for (int i = 0; i < kValveCount; ++i) {
-    opening[i] = layout.valve_lag ? y[layout.opening_begin + i] : T(command.opening[i]);
+  for (int i = 0; i < kValveCount; ++i) opening[i] = T(command.opening[i]);
+  if (layout.valve_lag) {
+    for (int pair = 0; pair < kValvePairCount; ++pair) {
+      const T& lagged = y[layout.opening_begin + pair];
+      opening[kValvePairs[pair].lead] = opening[kValvePairs[pair].partner] = lagged;
+    }
   }
   return opening;
 }
@@ -304,16 +308,19 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
 
   const auto opening = ValveOpeningsInUse(layout, command, y);
   if (layout.valve_lag) {
-    for (int i = 0; i < kValveCount; ++i) {
-      dydt[layout.opening_begin + i] = (T(command.opening[i]) - opening[i]) / c.valve_lag_tau_s;
+    for (int pair = 0; pair < kValvePairCount; ++pair) {
+      const int lead = kValvePairs[pair].lead;
+      dydt[layout.opening_begin + pair] =
+          (T(command.opening[lead]) - opening[lead]) / c.valve_lag_tau_s;
     }
   }
   auto gain = ValveGains(c, command, opening);
   if (layout.conductance_lag) {
-    for (int i = 0; i < kValveCount; ++i) {
-      const T& lagged = y[layout.conductance_begin + i];
-      dydt[layout.conductance_begin + i] = c.pipeline_delta_per_s * (gain[i] - lagged);
-      gain[i] = lagged;
+    for (int pair = 0; pair < kValvePairCount; ++pair) {
+      const T& lagged = y[layout.conductance_begin + pair];
+      const ValvePair valves = kValvePairs[pair];
+      dydt[layout.conductance_begin + pair] = c.pipeline_delta_per_s * (gain[valves.lead] - lagged);
+      gain[valves.lead] = gain[valves.partner] = lagged;
     }
   }
   auto flow = ValveFlows(c, gain, p1, p2);
@@ -347,13 +354,13 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
 template <typename T>
 void SetLagStatesToEquilibrium(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
                                const ValveCommand& command, T* y) {
-  if (layout.valve_lag) {
-    for (int i = 0; i < kValveCount; ++i) y[layout.opening_begin + i] = T(command.opening[i]);
+  for (int pair = 0; pair < kValvePairCount && layout.valve_lag; ++pair) {
+    y[layout.opening_begin + pair] = T(command.opening[kValvePairs[pair].lead]);
   }
   const auto opening = ValveOpeningsInUse(layout, command, y);
   const auto gain = ValveGains(c, command, opening);
-  if (layout.conductance_lag) {
-    for (int i = 0; i < kValveCount; ++i) y[layout.conductance_begin + i] = gain[i];
+  for (int pair = 0; pair < kValvePairCount && layout.conductance_lag; ++pair) {
+    y[layout.conductance_begin + pair] = gain[kValvePairs[pair].lead];
   }
   const ChamberPressures<T> chambers = DecodeChambers(c, y);
   const auto flow = ValveFlows(c, gain, chambers.p1_Pa, chambers.p2_Pa);

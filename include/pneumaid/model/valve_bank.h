@@ -19,6 +19,18 @@ enum ValveIndex : int {
 
 using ValveOpenings = std::array<double, kValveCount>;
 
+// The two valves a command opens together: u > 0 opens supply -> 1 and
+// 2 -> exhaust, u < 0 opens 1 -> exhaust and supply -> 2. The two always see
+// the same opening and the same K_vp branch, so a lag on their openings or
+// conductances needs one state per pair, not per valve (an effect that set
+// the two apart would need a state each again).
+struct ValvePair {
+  ValveIndex lead, partner;
+};
+inline constexpr int kValvePairCount = 2;
+inline constexpr std::array<ValvePair, kValvePairCount> kValvePairs = {
+    {{kSupplyToChamber1, kChamber2ToExhaust}, {kChamber1ToExhaust, kSupplyToChamber2}}};
+
 // Openings [V] of the four valves for a bidirectional command u [V].
 // |u| is clamped to 1, the end of the command range.
 inline ValveOpenings OpeningsForCommand(double command_V) {
