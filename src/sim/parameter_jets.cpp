@@ -48,8 +48,8 @@ class LanedJets final : public ParameterJets {
                              ? static_cast<int>(sensitivity.parameter_paths.size())
                              : -1) {}
 
-  int Rates(const ModelData& data, const double* y, const N_Vector* s,
-            N_Vector* rates) const override {
+  [[gnu::flatten]] int Rates(const ModelData& data, const double* y, const N_Vector* s,
+                             N_Vector* rates) const override {
     const int n = data.layout.size;
     Jet state[kMaxStates];
     Jet rate[kMaxStates];
@@ -75,8 +75,9 @@ class LanedJets final : public ParameterJets {
     for (int j = 0; j < data.parameter_count; ++j) dg_dp[j] = g[fired].v[j];
   }
 
-  void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s, Eigen::Index row,
-                     TrajectorySensitivities* out) const override {
+  [[gnu::flatten]] void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s,
+                                      Eigen::Index row,
+                                      TrajectorySensitivities* out) const override {
     Jet state[kMaxStates];
     Jet rate[kMaxStates];
     Load(data, y, s, state);

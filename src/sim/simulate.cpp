@@ -31,7 +31,7 @@ int SensitivityRightHandSide(int, sunrealtype, N_Vector y, N_Vector, N_Vector* s
 // CVODE right-hand side. Returns 1 (recoverable: CVODE retries with a smaller
 // step) on a non-finite rate; never throws. (Pressures are positive by
 // construction of the chamber state.)
-int RightHandSide(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
+[[gnu::flatten]] int RightHandSide(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
   const auto* data = static_cast<const ModelData*>(user_data);
   const double* state = N_VGetArrayPointer(y);
   double* rate = N_VGetArrayPointer(ydot);
@@ -44,8 +44,8 @@ int RightHandSide(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
 }
 
 // Exact dense Jacobian df/dy by forward-mode automatic differentiation.
-int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian, void* user_data, N_Vector,
-             N_Vector, N_Vector) {
+[[gnu::flatten]] int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian,
+                              void* user_data, N_Vector, N_Vector, N_Vector) {
   const auto* data = static_cast<const ModelData*>(user_data);
   const int n = data->layout.size;
   const double* state = N_VGetArrayPointer(y);
