@@ -84,11 +84,10 @@ class LanedJets final : public ParameterJets {
     ActuatorOutputs<Jet> outputs;
     ActuatorDerivatives(data.layout, coefficients_, data.command, data.motion, state, rate,
                         &outputs);
-    const ChamberPressures<Jet> chambers = DecodeChambers(coefficients_, state);
     for (int j = 0; j < data.parameter_count; ++j) {
       out->x(row, j) = state[kPosition].v[j];
-      out->p1(row, j) = chambers.p1_Pa.v[j];
-      out->p2(row, j) = chambers.p2_Pa.v[j];
+      out->p1(row, j) = outputs.p1_Pa.v[j];
+      out->p2(row, j) = outputs.p2_Pa.v[j];
       out->q1(row, j) = outputs.q1_kg_per_s.v[j];
       out->q2(row, j) = outputs.q2_kg_per_s.v[j];
     }

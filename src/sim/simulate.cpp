@@ -404,9 +404,8 @@ void AppendSample(const ModelData& data, double t, double command_V, const doubl
   out->u_V.push_back(command_V);
   out->x_m.push_back(y[kPosition]);
   out->v_m_per_s.push_back(y[kVelocity]);
-  const ChamberPressures<double> chambers = DecodeChambers(data.coefficients, y);
-  out->p1_Pa.push_back(chambers.p1_Pa);
-  out->p2_Pa.push_back(chambers.p2_Pa);
+  out->p1_Pa.push_back(outputs.p1_Pa);
+  out->p2_Pa.push_back(outputs.p2_Pa);
   out->q1_kg_per_s.push_back(outputs.q1_kg_per_s);
   out->q2_kg_per_s.push_back(outputs.q2_kg_per_s);
 }

@@ -94,6 +94,7 @@ struct ValveCommand {
 // What the sensors of a rig would see, besides the state itself.
 template <typename T>
 struct ActuatorOutputs {
+  T p1_Pa, p2_Pa;              // absolute chamber pressures
   T q1_kg_per_s, q2_kg_per_s;  // mass flows into the chambers at the valve side
 };
 
@@ -337,6 +338,8 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
     }
   }
   if (outputs != nullptr) {
+    outputs->p1_Pa = p1;
+    outputs->p2_Pa = p2;
     outputs->q1_kg_per_s = layout.flow_sensor_lag ? y[layout.sensor_begin] : flow[0];
     outputs->q2_kg_per_s = layout.flow_sensor_lag ? y[layout.sensor_begin + 1] : flow[1];
   }
