@@ -154,8 +154,9 @@ TEST(SyntheticRigTest, HiddenEffectActsWithoutBeingDeclared) {
   truth.effects["flow_sensor_lag"] = {{"tau", 0.05}};
   const Unit hidden =
       WriteAndReadUnit(Synthesize(truth, SmallProtocol(0.0), 1, "H"), "synth_hidden");
+  const Parameters without;  // named: GCC 12 warns falsely on a Parameters{} temporary here
   const Unit plain =
-      WriteAndReadUnit(Synthesize(Parameters{}, SmallProtocol(0.0), 1, "H"), "synth_plain");
+      WriteAndReadUnit(Synthesize(without, SmallProtocol(0.0), 1, "H"), "synth_plain");
   EXPECT_EQ(hidden.manifest.sensors.at("q1").tau_s, plain.manifest.sensors.at("q1").tau_s);
   const auto& q_hidden = Find(hidden, "pipe-038").column("q_in");
   const auto& q_plain = Find(plain, "pipe-038").column("q_in");
