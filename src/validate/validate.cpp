@@ -38,10 +38,8 @@ void CheckGeometry(const Unit& unit, const std::string& what, double from_manife
 void ApplyDeclaredLags(const Manifest& manifest, Trajectory* run) {
   for (const auto& [name, values] :
        {std::make_pair("q1", &run->q1_kg_per_s), std::make_pair("q2", &run->q2_kg_per_s)}) {
-    const auto sensor = manifest.sensors.find(name);
-    if (sensor != manifest.sensors.end() && sensor->second.tau_s) {
-      *values = FirstOrderLag(run->t_s, *values, *sensor->second.tau_s);
-    }
+    const double tau_s = manifest.DeclaredTau(name, 0.0);
+    if (tau_s > 0) *values = FirstOrderLag(run->t_s, *values, tau_s);
   }
 }
 
