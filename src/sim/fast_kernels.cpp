@@ -96,15 +96,26 @@ struct VectorKernels {
     return max;
   }
 
+  // z = sum_k c[k] x[k]; z may alias x[0]. With N fixed the sum is kept in
+  // registers (CVodeGetDky calls this at every output).
   static int LinearCombination(int count, double* c, N_Vector* x, N_Vector z) {
     double* zd = Data(z);
     const sunindextype n = Length<N>(z);
-    // z may alias x[0]; scale it in place first, then accumulate the rest.
     const double* x0 = Data(x[0]);
-    for (sunindextype i = 0; i < n; ++i) zd[i] = c[0] * x0[i];
-    for (int k = 1; k < count; ++k) {
-      const double* xk = Data(x[k]);
-      for (sunindextype i = 0; i < n; ++i) zd[i] += c[k] * xk[i];
+    if constexpr (N > 0) {
+      double sum[N];
+      for (int i = 0; i < N; ++i) sum[i] = c[0] * x0[i];
+      for (int k = 1; k < count; ++k) {
+        const double* xk = Data(x[k]);
+        for (int i = 0; i < N; ++i) sum[i] += c[k] * xk[i];
+      }
+      for (int i = 0; i < N; ++i) zd[i] = sum[i];
+    } else {
+      for (sunindextype i = 0; i < n; ++i) zd[i] = c[0] * x0[i];
+      for (int k = 1; k < count; ++k) {
+        const double* xk = Data(x[k]);
+        for (sunindextype i = 0; i < n; ++i) zd[i] += c[k] * xk[i];
+      }
     }
     return 0;
   }

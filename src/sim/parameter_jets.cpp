@@ -48,7 +48,7 @@ class LanedJets final : public ParameterJets {
                              ? static_cast<int>(sensitivity.parameter_paths.size())
                              : -1) {}
 
-  [[gnu::flatten]] int Rates(const ModelData& data, const double* y, const N_Vector* s,
+  PNEUMAID_FLATTEN int Rates(const ModelData& data, const double* y, const N_Vector* s,
                              N_Vector* rates) const override {
     const int n = data.layout.size;
     Jet state[kMaxStates];
@@ -75,7 +75,7 @@ class LanedJets final : public ParameterJets {
     for (int j = 0; j < data.parameter_count; ++j) dg_dp[j] = g[fired].v[j];
   }
 
-  [[gnu::flatten]] void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s,
+  PNEUMAID_FLATTEN void AppendOutputs(const ModelData& data, const double* y, const N_Vector* s,
                                       Eigen::Index row,
                                       TrajectorySensitivities* out) const override {
     Jet state[kMaxStates];

@@ -31,7 +31,7 @@ int SensitivityRightHandSide(int, sunrealtype, N_Vector y, N_Vector, N_Vector* s
 // CVODE right-hand side. Returns 1 (recoverable: CVODE retries with a smaller
 // step) on a non-finite rate; never throws. (Pressures are positive by
 // construction of the chamber state.)
-[[gnu::flatten]] int RightHandSide(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
+PNEUMAID_FLATTEN int RightHandSide(sunrealtype, N_Vector y, N_Vector ydot, void* user_data) {
   const auto* data = static_cast<const ModelData*>(user_data);
   const double* state = N_VGetArrayPointer(y);
   double* rate = N_VGetArrayPointer(ydot);
@@ -44,7 +44,7 @@ int SensitivityRightHandSide(int, sunrealtype, N_Vector y, N_Vector, N_Vector* s
 }
 
 // Exact dense Jacobian df/dy by forward-mode automatic differentiation.
-[[gnu::flatten]] int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian,
+PNEUMAID_FLATTEN int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacobian,
                               void* user_data, N_Vector, N_Vector, N_Vector) {
   const auto* data = static_cast<const ModelData*>(user_data);
   const int n = data->layout.size;
@@ -211,6 +211,14 @@ class Integrator {
   }
 
   long events() const { return events_; }
+
+  // Steps taken so far, restarts included (what Counters() says, cheaply:
+  // it is asked at every output).
+  long steps() const {
+    long value = 0;
+    CVodeGetNumSteps(memory_.get(), &value);
+    return banked_.steps + value;
+  }
 
   // Restarts at low order after a jump of the right-hand side at time t
   // (the sensitivities carry over, with any jump SwitchMotionMode applied).
@@ -466,6 +474,10 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   double t = t0;
   const double t_end = times.back();
   *out = Trajectory{};
+  for (std::vector<double>* column : {&out->t_s, &out->u_V, &out->x_m, &out->v_m_per_s, &out->p1_Pa,
+                                      &out->p2_Pa, &out->q1_kg_per_s, &out->q2_kg_per_s}) {
+    column->reserve(times.size());
+  }
   SimulationSummary summary;
   const auto fail = [&](const char* what) {
     summary = integrator.Counters();
@@ -500,7 +512,7 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
       if (integrator.AdvanceTo(t_out, stop) < 0) return fail("integration failed");
       t = t_out;
     }
-    if (integrator.Counters().steps > options.max_steps) return fail("step budget exhausted");
+    if (integrator.steps() > options.max_steps) return fail("step budget exhausted");
     if (integrator.events() > options.max_events) return fail("stick/slip event budget exhausted");
     if (sensitivity != nullptr) {
       const N_Vector* s = integrator.Sensitivities();
