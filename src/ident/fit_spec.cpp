@@ -173,17 +173,6 @@ class FitSpecReader : internal::YamlReader {
     for (const auto& item : node) names.push_back(Text(item));
     return names;
   }
-
-  int Count(const YAML::Node& node, const std::string& path, double lowest, double highest,
-            int fallback) const {
-    if (!node) return fallback;
-    const double value = Number(node, path);
-    if (value != std::floor(value) || value < lowest || value > highest) {
-      Fail(node, path + ": expected a whole number from " + std::to_string(int(lowest)) + " to " +
-                     std::to_string(static_cast<long long>(highest)));
-    }
-    return static_cast<int>(value);
-  }
 };
 
 }  // namespace

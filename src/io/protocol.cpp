@@ -2,7 +2,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <cmath>
 #include <cstdlib>
 #include <set>
 
@@ -60,13 +59,7 @@ class ProtocolReader : internal::YamlReader {
       p.stroke_levels_V = List(stroke["levels"], "stroke.levels");
       if (stroke["margin"]) p.stroke_margin_m = Positive(stroke["margin"], "stroke.margin");
       if (stroke["max_leg"]) p.stroke_max_leg_s = Positive(stroke["max_leg"], "stroke.max_leg");
-      if (stroke["cycles"]) {
-        const double cycles = Positive(stroke["cycles"], "stroke.cycles");
-        if (cycles != std::floor(cycles) || cycles > 100) {
-          Fail(stroke["cycles"], "stroke.cycles: expected a whole number of cycles from 1 to 100");
-        }
-        p.stroke_cycles = static_cast<int>(cycles);
-      }
+      p.stroke_cycles = Count(stroke["cycles"], "stroke.cycles", 1, 100, p.stroke_cycles);
     }
     if (const YAML::Node validation = root["validation"]) {
       Keys(validation, "validation.", {"paper_step", "rich_profile"});

@@ -69,6 +69,19 @@ class YamlReader {
     return value;
   }
 
+  // A whole number in [lowest, highest]; `fallback` when the key is absent.
+  int Count(const YAML::Node& node, const std::string& path, double lowest, double highest,
+            int fallback) const {
+    if (!node) return fallback;
+    const double value = Number(node, path);
+    if (value != std::floor(value) || value < lowest || value > highest) {
+      Fail(node, path + ": expected a whole number from " +
+                     std::to_string(static_cast<long long>(lowest)) + " to " +
+                     std::to_string(static_cast<long long>(highest)));
+    }
+    return static_cast<int>(value);
+  }
+
   bool Flag(const YAML::Node& node) const {
     const std::string text = Text(node);
     if (text != "true" && text != "false") Fail(node, "expected true | false");
