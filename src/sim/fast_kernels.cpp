@@ -15,7 +15,7 @@ constexpr sunindextype kMaxDenseSize = 32;
 inline double* Data(N_Vector v) { return NV_DATA_S(v); }
 
 // The kernels are templates on the vector length: N > 0 is a length known at
-// compile time (the actuator's layouts, 4 to 14 states), which the compiler
+// compile time (the actuator's layouts, 4 to 12 states), which the compiler
 // unrolls without the aliasing checks and remainder loops that a run-time
 // length needs (the LU solve on 8 states: half the instructions). N = 0
 // reads the length from the object.
@@ -257,7 +257,7 @@ int MatrixScaleAddIdentity(double c, SUNMatrix matrix) {
 // and, once a factorisation is reused often, the explicit inverse formed from
 // it. With sensitivities the staggered corrector solves with one Newton
 // matrix dozens of times (once per sensitivity and iteration), and for these
-// 4..14 states a row-major matrix-vector product is several times cheaper
+// 4..12 states a row-major matrix-vector product is several times cheaper
 // than forward and back substitution; a plain run solves only two or three
 // times per factorisation, where forming the inverse (n substitutions) would
 // cost more than it saves.
@@ -407,7 +407,7 @@ struct DenseKernels {
 };
 
 // Calls Kernels<n>::Install(target) for the actuator's layouts (4 states plus
-// optional groups of 2 or 4: every even size from 4 to 14), Kernels<0>
+// optional groups of 2 states: every even size from 4 to 12), Kernels<0>
 // otherwise.
 template <template <int> class Kernels, typename Target>
 void InstallForLength(sunindextype n, Target target) {
@@ -422,8 +422,6 @@ void InstallForLength(sunindextype n, Target target) {
       return Kernels<10>::Install(target);
     case 12:
       return Kernels<12>::Install(target);
-    case 14:
-      return Kernels<14>::Install(target);
     default:
       return Kernels<0>::Install(target);
   }

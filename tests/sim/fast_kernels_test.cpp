@@ -1,6 +1,6 @@
 // The kernels fast_kernels.cpp installs into SUNDIALS against SUNDIALS' own
 // serial and dense implementations: every operation CVODES calls, at each
-// state count compiled in (even sizes 4..14) and on the run-time-length path
+// state count compiled in (even sizes 4..12) and on the run-time-length path
 // (other sizes), with the aliasing CVODES uses (outputs that are inputs).
 #include "../../src/sim/fast_kernels.h"
 
@@ -178,7 +178,7 @@ TEST_P(KernelsTest, SingularMatrixIsARecoverableFailure) {
   EXPECT_EQ(SUNLinSolLastFlag(ours.get()), n_);
 }
 
-// 4..14: the compiled sizes; 5 and 17: the run-time-length path.
+// 4..12: the compiled sizes; 5, 14 and 17: the run-time-length path.
 INSTANTIATE_TEST_SUITE_P(StateCounts, KernelsTest, ::testing::Values(4, 5, 6, 8, 10, 12, 14, 17));
 
 }  // namespace
