@@ -9,6 +9,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -95,7 +96,7 @@ TEST_P(KernelsTest, ElementwiseOperationsMatchSundials) {
 
 TEST_P(KernelsTest, FusedOperationsMatchSundials) {
   for (int count = 1; count <= 6; ++count) {
-    std::vector<double> c(static_cast<size_t>(count));
+    std::vector<double> c(static_cast<size_t>(std::max(count, 2)));  // ScaleAddMulti takes 2
     for (double& value : c) value = Random() - 1.0;
     for (int kind = 0; kind < 2; ++kind) {
       std::vector<N_Vector> x;
