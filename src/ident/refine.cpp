@@ -200,17 +200,18 @@ std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Un
   return {p1, p2};
 }
 
+// `sample_sigma_Pa`: StartSampleSigma(spec, unit).
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
-                      double half_stroke_m) {
+                      double half_stroke_m,
+                      const std::array<double, kStartOffsets>& sample_sigma_Pa) {
   FitExperiment out;
   out.id = e.entry.id;
   out.measured = e.AsTrajectory();
   out.command = SampledCommand(out.measured.t_s, out.measured.u_V);
   int averaged = 1;
   out.initial = LoggedInitialState(out.measured, half_stroke_m, &averaged);
-  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit);
   const double root_n = std::sqrt(static_cast<double>(averaged));
-  for (int k = 0; k < kStartOffsets; ++k) out.start_sigma_Pa[k] = sample_sigma[k] / root_n;
+  for (int k = 0; k < kStartOffsets; ++k) out.start_sigma_Pa[k] = sample_sigma_Pa[k] / root_n;
   for (const Channel& row : kChannelTable) {
     const auto wanted = spec.channels.find(row.name);
     if (wanted == spec.channels.end() || (out.measured.*row.values).empty()) continue;
@@ -739,7 +740,7 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit);
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
-    FitExperiment run = Prepare(*e, unit, spec, half_stroke);
+    FitExperiment run = Prepare(*e, unit, spec, half_stroke, sample_sigma);
     if (!windows) {
       runs.push_back(std::move(run));
       continue;

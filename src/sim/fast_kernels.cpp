@@ -96,27 +96,33 @@ struct VectorKernels {
     return max;
   }
 
-  // z = sum_k c[k] x[k]; z may alias x[0]. With N fixed the sum is kept in
-  // registers (CVodeGetDky calls this at every output).
-  static int LinearCombination(int count, double* c, N_Vector* x, N_Vector z) {
+  // z = sum_k c[k] x_k with x_k = Data(vector(k)); z may alias x_0. With N
+  // fixed the sum is kept in registers (CVodeGetDky calls this at every output).
+  template <typename Vector>
+  static void Combine(int count, const double* c, Vector vector, N_Vector z) {
     double* zd = Data(z);
-    const sunindextype n = Length<N>(z);
-    const double* x0 = Data(x[0]);
+    const double* x0 = Data(vector(0));
     if constexpr (N > 0) {
       double sum[N];
       for (int i = 0; i < N; ++i) sum[i] = c[0] * x0[i];
       for (int k = 1; k < count; ++k) {
-        const double* xk = Data(x[k]);
+        const double* xk = Data(vector(k));
         for (int i = 0; i < N; ++i) sum[i] += c[k] * xk[i];
       }
       for (int i = 0; i < N; ++i) zd[i] = sum[i];
     } else {
+      const sunindextype n = Length<N>(z);
       for (sunindextype i = 0; i < n; ++i) zd[i] = c[0] * x0[i];
       for (int k = 1; k < count; ++k) {
-        const double* xk = Data(x[k]);
+        const double* xk = Data(vector(k));
         for (sunindextype i = 0; i < n; ++i) zd[i] += c[k] * xk[i];
       }
     }
+  }
+
+  static int LinearCombination(int count, double* c, N_Vector* x, N_Vector z) {
+    Combine(
+        count, c, [x](int k) { return x[k]; }, z);
     return 0;
   }
 
@@ -190,27 +196,9 @@ struct VectorKernels {
   // Z[i] = sum_j c[j] X[j][i]
   static int LinearCombinationVectorArray(int count, int sums, double* c, N_Vector** x,
                                           N_Vector* z) {
-    for (int i = 0; i < count; ++i) {
-      const sunindextype n = Length<N>(z[i]);
-      double sum[N > 0 ? N : 1];  // accumulated in registers when N is fixed
-      if constexpr (N > 0) {
-        const double* x0 = Data(x[0][i]);
-        for (int k = 0; k < N; ++k) sum[k] = c[0] * x0[k];
-        for (int j = 1; j < sums; ++j) {
-          const double* xj = Data(x[j][i]);
-          for (int k = 0; k < N; ++k) sum[k] += c[j] * xj[k];
-        }
-        double* zd = Data(z[i]);
-        for (int k = 0; k < N; ++k) zd[k] = sum[k];
-      } else {
-        double* zd = Data(z[i]);
-        for (sunindextype k = 0; k < n; ++k) {
-          double total = 0.0;
-          for (int j = 0; j < sums; ++j) total += c[j] * Data(x[j][i])[k];
-          zd[k] = total;
-        }
-      }
-    }
+    for (int i = 0; i < count; ++i)
+      Combine(
+          sums, c, [x, i](int j) { return x[j][i]; }, z[i]);
     return 0;
   }
 
