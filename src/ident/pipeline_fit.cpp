@@ -2,6 +2,8 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -11,73 +13,195 @@
 namespace pneumaid {
 namespace {
 
-// Residuals of both meters for theta = (flow amplitude [kg/s], delta [1/s]):
-// the valve's flow is a step at the command's step time; q_in is it through
-// the inlet meter, q_out through Eq. 5 and the outlet meter.
-struct TubeStepResiduals {
-  const std::vector<double>* t;
-  const std::vector<double>* q_in;
-  const std::vector<double>* q_out;
-  double step_time_s, tau_in_s, tau_out_s, sigma_in, sigma_out;
+// The held levels of a command: the first sample of each run of samples
+// whose command stays within `change` of the run's first value.
+std::vector<std::size_t> LevelStarts(const std::vector<double>& u, double change) {
+  std::vector<std::size_t> starts = {0};
+  for (std::size_t i = 1; i < u.size(); ++i) {
+    if (std::fabs(u[i] - u[starts.back()]) > change) starts.push_back(i);
+  }
+  return starts;
+}
+
+// What one tube log's fit needs: samples, the level each sample belongs to,
+// meter lags and the channels' noise.
+struct TubeLog {
+  const std::vector<double>* t = nullptr;
+  const std::vector<double>* q_in = nullptr;
+  const std::vector<double>* q_out = nullptr;
+  std::vector<int> level;  // per sample
+  int levels = 0;
+  double tau_in_s = 0, tau_out_s = 0, sigma_in = 1, sigma_out = 1;
+
+  double Interval(std::size_t i) const { return (*t)[i] - (*t)[i - 1]; }
+
+  // Both meters' readings for valve flows `flow` (one per level), delta and
+  // the valve's own opening lag: the flow held per level, through the valve's
+  // lag and the inlet meter; through Eq. 5 and the outlet meter. The record
+  // starts settled.
+  template <typename T>
+  void Predict(const T* flow, const T& delta, const T& valve_tau_s, std::vector<T>* inlet,
+               std::vector<T>* outlet) const {
+    const std::size_t n = t->size();
+    outlet->resize(n);
+    for (std::size_t i = 0; i < n; ++i) (*outlet)[i] = flow[level[i]];
+    const auto interval = [this](std::size_t i) { return Interval(i); };
+    if (valve_tau_s > T(0.0)) ApplyFirstOrderLag(interval, valve_tau_s, outlet);
+    *inlet = *outlet;
+    if (tau_in_s > 0) ApplyFirstOrderLag(interval, T(tau_in_s), inlet);
+    ApplyFirstOrderLag(interval, T(1.0) / delta, outlet);
+    if (tau_out_s > 0) ApplyFirstOrderLag(interval, T(tau_out_s), outlet);
+  }
+};
+
+// Residuals of both meters for the blocks (valve flow per level [kg/s],
+// delta [1/s]) and (valve lag [s]).
+struct TubeResiduals {
+  const TubeLog* log;
 
   template <typename T>
   bool operator()(T const* const* parameters, T* residuals) const {
     const T* theta = parameters[0];
-    const std::size_t n = t->size();
-    std::vector<T> flow(n);
-    for (std::size_t i = 0; i < n; ++i) flow[i] = (*t)[i] >= step_time_s ? theta[0] : T(0.0);
-    const auto interval = [this](std::size_t i) { return (*t)[i] - (*t)[i - 1]; };
-    std::vector<T> inlet = flow;
-    if (tau_in_s > 0) ApplyFirstOrderLag(interval, T(tau_in_s), &inlet);
-    ApplyFirstOrderLag(interval, T(1.0) / theta[1], &flow);
-    if (tau_out_s > 0) ApplyFirstOrderLag(interval, T(tau_out_s), &flow);
+    std::vector<T> inlet, outlet;
+    log->Predict(theta, theta[log->levels], parameters[1][0], &inlet, &outlet);
+    const std::size_t n = log->t->size();
     for (std::size_t i = 0; i < n; ++i) {
-      residuals[i] = (inlet[i] - (*q_in)[i]) / sigma_in;
-      residuals[n + i] = (flow[i] - (*q_out)[i]) / sigma_out;
+      residuals[i] = (inlet[i] - (*log->q_in)[i]) / log->sigma_in;
+      residuals[n + i] = (outlet[i] - (*log->q_out)[i]) / log->sigma_out;
     }
     return true;
   }
 };
 
-double Spread(const std::vector<double>& v, std::size_t end) {
-  // Noise level from the samples before the step (flow should be zero there).
-  double mean = 0, sq = 0;
-  for (std::size_t i = 0; i < end; ++i) mean += v[i];
-  mean /= static_cast<double>(end);
-  for (std::size_t i = 0; i < end; ++i) sq += (v[i] - mean) * (v[i] - mean);
-  return std::sqrt(sq / static_cast<double>(end - 1));
+// For a fixed delta (and no valve lag) the readings are linear in the level
+// flows: the flows that fit best (least squares) and the cost they leave.
+double BestLevels(const TubeLog& log, double delta, std::vector<double>* flow) {
+  const std::size_t n = log.t->size();
+  const int m = log.levels;
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+  std::vector<std::vector<double>> inlet(m), outlet(m);
+  std::vector<double> unit(m, 0.0);
+  for (int k = 0; k < m; ++k) {
+    unit.assign(m, 0.0);
+    unit[k] = 1.0;
+    log.Predict(unit.data(), delta, 0.0, &inlet[k], &outlet[k]);
+  }
+  const double w_in = 1 / (log.sigma_in * log.sigma_in), w_out = 1 / (log.sigma_out * log.sigma_out);
+  for (int a = 0; a < m; ++a) {
+    for (int b = a; b < m; ++b) {
+      double sum = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        sum += w_in * inlet[a][i] * inlet[b][i] + w_out * outlet[a][i] * outlet[b][i];
+      }
+      normal(a, b) = normal(b, a) = sum;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      rhs(a) += w_in * inlet[a][i] * (*log.q_in)[i] + w_out * outlet[a][i] * (*log.q_out)[i];
+    }
+  }
+  const Eigen::VectorXd solution = normal.completeOrthogonalDecomposition().solve(rhs);
+  flow->assign(solution.data(), solution.data() + m);
+  std::vector<double> in, out;
+  log.Predict(flow->data(), delta, 0.0, &in, &out);
+  double cost = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    cost += std::pow((in[i] - (*log.q_in)[i]) / log.sigma_in, 2) +
+            std::pow((out[i] - (*log.q_out)[i]) / log.sigma_out, 2);
+  }
+  return 0.5 * cost;
+}
+
+// A channel's noise when the manifest declares none: the spread of its
+// sample-to-sample differences (robust: a level change is a few outliers).
+double NoiseFromDifferences(const std::vector<double>& v) {
+  std::vector<double> d;
+  for (std::size_t i = 1; i < v.size(); ++i) d.push_back(std::fabs(v[i] - v[i - 1]));
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
+}
+
+// How much wider than the noise alone the errors are when the model misses
+// the data: the reduced chi-square, times the variance inflation of residuals
+// correlated from sample to sample (AR(1): (1 + r) / (1 - r), r the lag-one
+// autocorrelation of each channel's residuals). 1 when the residuals are the
+// sensors' white noise.
+double ModelErrorFactor(const std::vector<double>& residuals, std::size_t n, double chi_square) {
+  double worst = 0;
+  for (std::size_t channel = 0; channel < 2; ++channel) {
+    const double* r = residuals.data() + channel * n;
+    double lagged = 0, squares = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      squares += r[i] * r[i];
+      if (i > 0) lagged += r[i] * r[i - 1];
+    }
+    worst = std::max(worst, squares > 0 ? lagged / squares : 0.0);
+  }
+  const double rho = std::min(worst, 0.99);
+  return std::max(1.0, chi_square * (1 + rho) / (1 - rho));
 }
 
 TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFitOptions& options) {
   TubeFit fit;
   fit.experiment = e.entry.id;
   fit.tube_length_m = e.entry.tube_length_m.value_or(0.0);
-  const auto &t = e.column("t"), &u = e.column("u");
-  std::size_t step = 0;
-  while (step < u.size() && u[step] <= 0) ++step;
-  if (step < 10 || step + 10 >= u.size()) {
-    fit.note = "no step of the command with samples before and after it";
+  TubeLog log;
+  log.t = &e.column("t");
+  log.q_in = &e.column("q_in");
+  log.q_out = &e.column("q_out");
+  const std::vector<std::size_t> starts = LevelStarts(e.column("u"), options.level_change_V);
+  const std::size_t n = log.t->size();
+  fit.levels = log.levels = static_cast<int>(starts.size());
+  if (starts.size() < 2 || n < 20) {
+    fit.note = "the command never changes: a step response is needed";
     return fit;
   }
-  for (std::size_t i = step; i < u.size(); ++i) {
-    if (u[i] != u[step]) {
-      fit.note = "the command must be one step and then held";
-      return fit;
-    }
+  if (log.levels > options.max_levels) {
+    char note[200];
+    std::snprintf(note, sizeof(note),
+                  "the command takes %d held levels (more than %d: a ramp or a sampled signal?); "
+                  "each level is an unknown valve flow",
+                  log.levels, options.max_levels);
+    fit.note = note;
+    return fit;
   }
-  const double sigma_in = manifest.DeclaredSigma("q_in", Spread(e.column("q_in"), step));
-  const double sigma_out = manifest.DeclaredSigma("q_out", Spread(e.column("q_out"), step));
-  const std::size_t n = t.size();
-  const double tail_flow = e.column("q_in").back();
-  double theta[2] = {tail_flow, options.initial_delta_per_s};
+  log.level.resize(n);
+  for (std::size_t k = 0; k < starts.size(); ++k) {
+    const std::size_t end = k + 1 < starts.size() ? starts[k + 1] : n;
+    for (std::size_t i = starts[k]; i < end; ++i) log.level[i] = static_cast<int>(k);
+  }
+  log.tau_in_s = manifest.DeclaredTau("q_in", 0.0);
+  log.tau_out_s = manifest.DeclaredTau("q_out", 0.0);
+  log.sigma_in = std::max(manifest.DeclaredSigma("q_in", NoiseFromDifferences(*log.q_in)), 1e-12);
+  log.sigma_out =
+      std::max(manifest.DeclaredSigma("q_out", NoiseFromDifferences(*log.q_out)), 1e-12);
+
+  // Start: the best of the prior's delta and a log-spaced scan, each with
+  // its best level flows.
+  std::vector<double> flow, best_flow;
+  double best_delta = options.initial_delta_per_s;
+  double best_cost = BestLevels(log, best_delta, &best_flow);
+  const double decades = std::log10(options.max_delta_per_s / options.min_delta_per_s);
+  const int points = std::max(2, static_cast<int>(std::ceil(decades * options.scan_points_per_decade)));
+  for (int k = 0; k <= points; ++k) {
+    const double delta = options.min_delta_per_s * std::pow(10.0, decades * k / points);
+    const double cost = BestLevels(log, delta, &flow);
+    if (cost < best_cost) best_cost = cost, best_delta = delta, best_flow = flow;
+  }
+  std::vector<double> theta = best_flow;
+  theta.push_back(best_delta);
+  // The valve's lag: a nuisance that would bias delta low (it also takes up a
+  // lag common to both meters that the manifest does not declare). It starts
+  // off zero: there its derivative would vanish.
+  double valve_tau_s = 0.5 * log.Interval(1);
   ceres::Problem problem;
-  auto* cost = new ceres::DynamicAutoDiffCostFunction<TubeStepResiduals, 4>(new TubeStepResiduals{
-      &t, &e.column("q_in"), &e.column("q_out"), t[step], manifest.DeclaredTau("q_in", 0.0),
-      manifest.DeclaredTau("q_out", 0.0), std::max(sigma_in, 1e-12), std::max(sigma_out, 1e-12)});
-  cost->AddParameterBlock(2);
+  auto* cost = new ceres::DynamicAutoDiffCostFunction<TubeResiduals, 4>(new TubeResiduals{&log});
+  cost->AddParameterBlock(static_cast<int>(theta.size()));
+  cost->AddParameterBlock(1);
   cost->SetNumResiduals(static_cast<int>(2 * n));
-  problem.AddResidualBlock(cost, nullptr, theta);
-  problem.SetParameterLowerBound(theta, 1, 1e-3);  // delta > 0
+  problem.AddResidualBlock(cost, nullptr, theta.data(), &valve_tau_s);
+  problem.SetParameterLowerBound(theta.data(), log.levels, 1e-3);  // delta > 0
+  problem.SetParameterLowerBound(&valve_tau_s, 0, 0.0);
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_QR;
   solver_options.max_num_iterations = options.max_iterations;
@@ -89,17 +213,44 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
     fit.note = "Ceres did not converge: " + summary.message;
     return fit;
   }
+  const double delta = theta[log.levels];
+  const int m = static_cast<int>(theta.size());
+  const double dof = std::max(1.0, 2.0 * static_cast<double>(n) - m - 1);
+  fit.reduced_chi_square = 2 * summary.final_cost / dof;
+  fit.valve_lag_s = valve_tau_s;
+  std::vector<double> residuals;
+  problem.Evaluate(ceres::Problem::EvaluateOptions(), nullptr, &residuals, nullptr, nullptr);
+  // A valve lag at its bound (none) has no derivative: it is held there.
+  if (!(valve_tau_s > 0)) problem.SetParameterBlockConstant(&valve_tau_s);
   ceres::Covariance covariance{ceres::Covariance::Options{}};
-  double c[4];
-  std::vector<std::pair<const double*, const double*>> blocks = {{theta, theta}};
-  if (!covariance.Compute(blocks, &problem) || !covariance.GetCovarianceBlock(theta, theta, c)) {
-    fit.note = "delta is not identifiable from this log (singular covariance)";
+  std::vector<double> c(static_cast<std::size_t>(m * m));
+  const std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()}};
+  char note[200];
+  if (!covariance.Compute(blocks, &problem) ||
+      !covariance.GetCovarianceBlock(theta.data(), theta.data(), c.data())) {
+    std::snprintf(note, sizeof(note),
+                  "delta is not determined by this log (singular covariance at delta %.3g 1/s)",
+                  delta);
+    fit.note = note;
+    return fit;
+  }
+  // Model error counts: a fit worse than the noise widens its error.
+  const double error =
+      std::sqrt(c.back() * ModelErrorFactor(residuals, n, fit.reduced_chi_square));
+  if (!(error < options.determined_relative_error * delta)) {
+    std::snprintf(note, sizeof(note),
+                  "delta is not determined by this log (%.3g +- %.2g 1/s; the sample rate or the "
+                  "level changes do not resolve the tube's lag)",
+                  delta, error);
+    fit.note = note;
     return fit;
   }
   fit.fitted = true;
-  fit.flow_kg_per_s = theta[0];
-  fit.delta_per_s = theta[1];
-  fit.delta_standard_error = std::sqrt(c[3]);
+  fit.delta_per_s = delta;
+  fit.delta_standard_error = error;
+  for (int k = 0; k < log.levels; ++k) {
+    if (std::fabs(theta[k]) > std::fabs(fit.flow_kg_per_s)) fit.flow_kg_per_s = theta[k];
+  }
   return fit;
 }
 
@@ -142,10 +293,18 @@ void FitLaw(double rig_length_m, PipelineFitResult* result) {
 }  // namespace
 
 bool PipelineFitOptions::IsValid(std::string* error) const {
-  if (max_iterations < 1 || !(initial_delta_per_s > 0)) {
-    if (error) *error = "max_iterations must be >= 1 and initial_delta_per_s > 0";
+  const auto fail = [error](const char* what) {
+    if (error != nullptr) *error = what;
     return false;
-  }
+  };
+  if (!(initial_delta_per_s > 0)) return fail("initial_delta_per_s must be > 0");
+  if (!(min_delta_per_s > 0) || !(max_delta_per_s > min_delta_per_s))
+    return fail("expected 0 < min_delta_per_s < max_delta_per_s");
+  if (scan_points_per_decade < 1) return fail("scan_points_per_decade must be >= 1");
+  if (!(level_change_V > 0)) return fail("level_change_V must be > 0");
+  if (max_levels < 2) return fail("max_levels must be >= 2");
+  if (!(determined_relative_error > 0)) return fail("determined_relative_error must be > 0");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
   return true;
 }
 
@@ -169,9 +328,11 @@ std::string PipelineFitResult::BriefReport() const {
       out << "  " << tube.experiment << ": not fitted (" << tube.note << ")\n";
       continue;
     }
-    std::snprintf(line, sizeof(line), "  %s: L %.3g m, delta %.4g +- %.2g 1/s (%d iterations)\n",
+    std::snprintf(line, sizeof(line),
+                  "  %s: L %.3g m, delta %.4g +- %.2g 1/s (%d levels, %d iterations, reduced "
+                  "chi-square %.3g)\n",
                   tube.experiment.c_str(), tube.tube_length_m, tube.delta_per_s,
-                  tube.delta_standard_error, tube.iterations);
+                  tube.delta_standard_error, tube.levels, tube.iterations, tube.reduced_chi_square);
     out << line;
   }
   if (fitted) {

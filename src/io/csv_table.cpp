@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "pneumaid/io/files.h"
+#include "parse_number.h"
 #include "pneumaid/io/input_error.h"
 
 namespace pneumaid {
@@ -138,11 +139,8 @@ class CsvParser {
 
   double ParseNumber(std::string_view field, int line, std::size_t column) const {
     double value = 0;
-    const char* begin = field.data();
-    const char* end = begin + field.size();
-    if (!field.empty() && *begin == '+') ++begin;  // from_chars rejects a leading '+'
-    const auto result = std::from_chars(begin, end, value);
-    if (field.empty() || result.ec != std::errc() || result.ptr != end || !std::isfinite(value)) {
+    const char* end = field.data() + field.size();
+    if (internal::ParseNumber(field.data(), end, &value) != end || !std::isfinite(value)) {
       Fail(line, static_cast<int>(column),
            "column '" + table_.columns[column - 1].name + "': expected a finite number, got '" +
                std::string(field) + "'");

@@ -54,9 +54,9 @@ class ParamsReader : internal::YamlReader {
 
   double Number(const YAML::Node& node, const std::string& path) const {
     const std::string text = ScalarText(node, path);
-    char* end = nullptr;
-    const double value = std::strtod(text.c_str(), &end);
-    if (text.empty() || end == nullptr || *end != '\0' || !std::isfinite(value)) {
+    const char* end = text.c_str() + text.size();
+    double value = 0;
+    if (internal::ParseNumber(text.c_str(), end, &value) != end || !std::isfinite(value)) {
       Fail(node, path + ": expected a finite number in SI units, got '" + text + "'");
     }
     return value;

@@ -27,7 +27,7 @@ class ProtocolReader : internal::YamlReader {
         LoadMapping(text, "expected a mapping starting with format: pneumaid-protocol/1");
     Keys(root, "",
          {"format", "sample_rate", "position_origin", "units", "sensors", "valve", "pipeline",
-          "stroke", "validation"});
+          "stroke", "validation", "mismatch"});
     if (!root["format"] || Text(root["format"]) != kProtocolFormat) {
       Fail(root, std::string("expected format: ") + kProtocolFormat);
     }
@@ -47,17 +47,19 @@ class ProtocolReader : internal::YamlReader {
       if (valve["hold"]) p.valve_hold_s = Positive(valve["hold"], "valve.hold");
     }
     if (const YAML::Node pipe = root["pipeline"]) {
-      Keys(pipe, "pipeline.", {"tube_lengths", "command", "step_time", "duration"});
+      Keys(pipe, "pipeline.", {"tube_lengths", "command", "step_time", "duration", "schedule"});
       p.tube_lengths_m = List(pipe["tube_lengths"], "pipeline.tube_lengths");
       if (pipe["command"]) p.pipeline_command_V = Positive(pipe["command"], "pipeline.command");
       if (pipe["step_time"])
         p.pipeline_step_time_s = Positive(pipe["step_time"], "pipeline.step_time");
       if (pipe["duration"]) p.pipeline_duration_s = Positive(pipe["duration"], "pipeline.duration");
+      if (pipe["schedule"]) p.pipeline_schedule = Schedule(pipe["schedule"], "pipeline.schedule");
     }
     if (const YAML::Node stroke = root["stroke"]) {
-      Keys(stroke, "stroke.", {"levels", "cycles", "margin", "max_leg"});
+      Keys(stroke, "stroke.", {"levels", "cycles", "margin", "max_leg", "dwell"});
       p.stroke_levels_V = List(stroke["levels"], "stroke.levels");
-      if (stroke["margin"]) p.stroke_margin_m = Positive(stroke["margin"], "stroke.margin");
+      if (stroke["margin"]) p.stroke_margin_m = NonNegative(stroke["margin"], "stroke.margin");
+      if (stroke["dwell"]) p.stroke_dwell_s = NonNegative(stroke["dwell"], "stroke.dwell");
       if (stroke["max_leg"]) p.stroke_max_leg_s = Positive(stroke["max_leg"], "stroke.max_leg");
       p.stroke_cycles = Count(stroke["cycles"], "stroke.cycles", 1, 100, p.stroke_cycles);
     }
@@ -66,7 +68,46 @@ class ProtocolReader : internal::YamlReader {
       p.paper_step = validation["paper_step"] && Flag(validation["paper_step"]);
       p.rich_profile = validation["rich_profile"] && Flag(validation["rich_profile"]);
     }
+    if (const YAML::Node mismatch = root["mismatch"]) {
+      Keys(mismatch, "mismatch.", {"friction", "stick_velocity", "relative_tolerance"});
+      if (const YAML::Node friction = mismatch["friction"]) {
+        const std::string text = Text(friction);
+        if (text != "events" && text != "regularized")
+          Fail(friction, "mismatch.friction: expected events | regularized");
+        p.mismatch.regularized_friction = text == "regularized";
+      }
+      if (mismatch["stick_velocity"]) {
+        p.mismatch.stick_velocity_m_per_s =
+            Positive(mismatch["stick_velocity"], "mismatch.stick_velocity");
+      }
+      if (mismatch["relative_tolerance"]) {
+        p.mismatch.relative_tolerance =
+            Positive(mismatch["relative_tolerance"], "mismatch.relative_tolerance");
+      }
+    }
     return p;
+  }
+
+  double NonNegative(const YAML::Node& node, const std::string& path) const {
+    const double value = Number(node, path);
+    if (!(value >= 0)) Fail(node, path + ": expected a number >= 0");
+    return value;
+  }
+
+  // [[time, level], ...] with times increasing.
+  std::vector<std::pair<double, double>> Schedule(const YAML::Node& node,
+                                                  const std::string& path) const {
+    const char* expected = ": expected a list of [time, level] pairs with increasing times >= 0";
+    if (!node.IsSequence() || node.size() == 0) Fail(node, path + expected);
+    std::vector<std::pair<double, double>> knots;
+    for (const YAML::Node& knot : node) {
+      if (!knot.IsSequence() || knot.size() != 2) Fail(knot, path + expected);
+      const double time = Number(knot[0], path);
+      if (!(time >= 0) || (!knots.empty() && !(time > knots.back().first)))
+        Fail(knot, path + expected);
+      knots.emplace_back(time, Number(knot[1], path));
+    }
+    return knots;
   }
 
   void ReadUnits(const YAML::Node& units, Protocol* p) const {

@@ -130,9 +130,9 @@ class ManifestReader : internal::YamlReader {
                     const std::vector<Quantity>& quantities, double atmospheric_Pa,
                     bool scale_only = false) const {
     const std::string text = Text(node, path);
-    char* end = nullptr;
-    const double number = std::strtod(text.c_str(), &end);
-    if (end == text.c_str()) Fail(node, path + ": expected a number or '<number> <unit>'");
+    double number = 0;
+    const char* end = internal::ParseNumber(text.c_str(), text.c_str() + text.size(), &number);
+    if (end == nullptr) Fail(node, path + ": expected a number or '<number> <unit>'");
     std::string rest(end);
     while (!rest.empty() && rest.front() == ' ') rest.erase(rest.begin());
     if (!std::isfinite(number)) Fail(node, path + ": expected a finite number");

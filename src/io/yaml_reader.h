@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "parse_number.h"
 #include "pneumaid/io/input_error.h"
 
 namespace pneumaid::internal {
@@ -54,9 +55,9 @@ class YamlReader {
 
   double Number(const YAML::Node& node, const std::string& path) const {
     const std::string text = Text(node);
-    char* end = nullptr;
-    const double value = std::strtod(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || !std::isfinite(value)) {
+    const char* end = text.c_str() + text.size();
+    double value = 0;
+    if (ParseNumber(text.c_str(), end, &value) != end || !std::isfinite(value)) {
       Fail(node, path + ": expected a finite number in SI units");
     }
     return value;

@@ -189,6 +189,19 @@ class RigBuilder {
     return log;
   }
 
+  // The pipeline test's command at time t: the schedule's last knot at or
+  // before t (0 V before the first), or the one step.
+  double PipelineCommand(double t) const {
+    if (protocol_.pipeline_schedule.empty()) {
+      return t >= protocol_.pipeline_step_time_s ? protocol_.pipeline_command_V : 0.0;
+    }
+    double level = 0.0;
+    for (const auto& [time, value] : protocol_.pipeline_schedule) {
+      if (t >= time) level = value;
+    }
+    return level;
+  }
+
   // delta at a tube length: the truth's measured law when it has one
   // (linear between its points, flat outside), else pipeline.delta.
   double DeltaAt(double length_m) const {
@@ -211,11 +224,13 @@ class RigBuilder {
     std::vector<double> u(t.size()), q_in(t.size());
     const double p_up = truth_.supply.supply_pressure_Pa,
                  p_down = truth_.supply.atmospheric_pressure_Pa;
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      u[i] = t[i] >= protocol_.pipeline_step_time_s ? protocol_.pipeline_command_V : 0.0;
-    }
+    for (std::size_t i = 0; i < t.size(); ++i) u[i] = PipelineCommand(t[i]);
     const auto opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
-    for (std::size_t i = 0; i < t.size(); ++i) q_in[i] = ValveFlow(opening[i], false, p_up, p_down);
+    BranchLatch latch(kHysteresisThreshold_V);
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      latch.Update(u[i]);
+      q_in[i] = ValveFlow(opening[i], latch.decreasing(), p_up, p_down);
+    }
     // Eq. 5 between the tube's ends, exact for the flow held between samples.
     const std::vector<double> q_out = Lag(q_in, Period(), 1.0 / DeltaAt(length_m));
     char id[32];
@@ -261,9 +276,15 @@ class RigBuilder {
 
   Trajectory Run(const CommandSignal& command, double duration_s) const {
     Trajectory run;
+    SimulationOptions options;
+    options.relative_tolerance = protocol_.mismatch.relative_tolerance;
+    if (protocol_.mismatch.regularized_friction) {
+      options.stick_slip = StickSlipTreatment::kRegularized;
+      options.regularization.stick_velocity_m_per_s = protocol_.mismatch.stick_velocity_m_per_s;
+    }
     const SimulationSummary summary =
         Simulate(truth_, command, RetractedAtRest(truth_),
-                 SampleTimes(duration_s, protocol_.sample_rate_Hz), SimulationOptions{}, &run);
+                 SampleTimes(duration_s, protocol_.sample_rate_Hz), options, &run);
     if (summary.status == SimulationStatus::kInvalidInput) {
       throw InputError("--truth", 0, 0, summary.message);
     }
@@ -286,7 +307,9 @@ class RigBuilder {
       for (std::size_t i = 0; i < run.size(); ++i) {
         const bool reached = levels[leg] > 0 ? run.x_m[i] >= limit : run.x_m[i] <= -limit;
         if (run.t_s[i] > start && reached) {
-          end = static_cast<double>(i + 1) / protocol_.sample_rate_Hz;  // a sample time exactly
+          // a sample time exactly (the controller acts on the next sample)
+          const double dwell = std::round(protocol_.stroke_dwell_s * protocol_.sample_rate_Hz);
+          end = std::min(horizon, static_cast<double>(i + 1 + dwell) / protocol_.sample_rate_Hz);
           break;
         }
       }

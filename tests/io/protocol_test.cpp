@@ -36,5 +36,43 @@ TEST(ProtocolTest, StrokeCyclesMustBeAWholeNumberFromOneToAHundred) {
             4);
 }
 
+TEST(ProtocolTest, ATubeScheduleAStrokeDwellAndAMismatchAreRead) {
+  const Protocol p = ParseProtocol(
+      "format: pneumaid-protocol/1\n"
+      "pipeline: {tube_lengths: [0.38], schedule: [[0.1, 1.0], [1.2, 0]], duration: 2}\n"
+      "stroke: {levels: [0.3], margin: 0, dwell: 0.2}\n"
+      "mismatch: {friction: regularized, stick_velocity: 2.0e-4, relative_tolerance: 1.0e-9}\n",
+      "p");
+  ASSERT_EQ(p.pipeline_schedule.size(), 2u);
+  EXPECT_EQ(p.pipeline_schedule[1].first, 1.2);
+  EXPECT_EQ(p.pipeline_schedule[1].second, 0.0);
+  EXPECT_EQ(p.stroke_margin_m, 0.0);
+  EXPECT_EQ(p.stroke_dwell_s, 0.2);
+  EXPECT_TRUE(p.mismatch.regularized_friction);
+  EXPECT_EQ(p.mismatch.stick_velocity_m_per_s, 2.0e-4);
+  EXPECT_EQ(p.mismatch.relative_tolerance, 1.0e-9);
+}
+
+TEST(ProtocolTest, ABadScheduleOrMismatchNamesItsLine) {
+  for (const char* bad : {"pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5, 1], [0.2, 0]]}\n",
+                          "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5]]}\n",
+                          "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n"}) {
+    try {
+      ParseProtocol(std::string("format: pneumaid-protocol/1\n") + bad, "p.yaml");
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_GE(e.line(), 2) << bad;
+    }
+  }
+}
+
+TEST(ProtocolTest, NumbersAreReadTheSameWhateverTheHostsLocale) {
+  // std::from_chars: a host program's setlocale cannot change what is read.
+  const Protocol p = ParseProtocol("format: pneumaid-protocol/1\nsample_rate: +2.5e3\n", "p");
+  EXPECT_EQ(p.sample_rate_Hz, 2500.0);
+  EXPECT_THROW(ParseProtocol("format: pneumaid-protocol/1\nsample_rate: 2,5\n", "p"), InputError);
+  EXPECT_THROW(ParseProtocol("format: pneumaid-protocol/1\nsample_rate: +-2\n", "p"), InputError);
+}
+
 }  // namespace
 }  // namespace pneumaid

@@ -1,8 +1,12 @@
 // Identification of the tube lag delta (seed paper Eq. 5) from pipeline logs:
-// a valve step from supply into a tube open at its far end, flows logged at
-// both ends. Per tube length one Ceres problem fits the flow amplitude and
-// delta by output error through the declared flow-meter lags (a meter lag
-// that is ignored biases delta low), then a law delta(L) across lengths.
+// the valve feeds a tube open at its far end, flows logged at both ends. The
+// command may take any sequence of held levels (one step; on, hold, off; a
+// staircase; valve left open or closed at the end): the valve's flow is one
+// unknown constant per held level. Per tube log, delta is fitted by output
+// error over the whole record through the declared flow-meter lags (a meter
+// lag that is ignored biases delta low): a scan over delta with the levels
+// solved exactly (linear least squares) gives the start, then one Ceres
+// problem fits levels and delta together. Then a law delta(L) across lengths.
 #pragma once
 
 #include <string>
@@ -13,8 +17,23 @@
 namespace pneumaid {
 
 struct PipelineFitOptions {
-  // Where the search for delta starts (identify passes the prior's).
+  // Where the search for delta starts (identify passes the prior's); the scan
+  // over [min_delta_per_s, max_delta_per_s] replaces it when the scan's best
+  // point explains the log better.
   double initial_delta_per_s = 5.0;
+  // The scan's range and its points per decade (log-spaced).
+  double min_delta_per_s = 0.2;
+  double max_delta_per_s = 2000.0;
+  int scan_points_per_decade = 12;
+  // A change of the logged command larger than this starts a new held level;
+  // smaller changes are the logger's noise.
+  double level_change_V = 0.01;
+  // A log with more held levels than this (a ramp, a sampled signal) is not
+  // used: each level is an unknown flow.
+  int max_levels = 60;
+  // delta counts as determined when its standard error is below this fraction
+  // of its value; otherwise the tube is reported as not fitted.
+  double determined_relative_error = 0.25;
   int max_iterations = 100;
   bool IsValid(std::string* error) const;
 };
@@ -25,7 +44,10 @@ struct TubeFit {
   bool fitted = false;
   std::string note;
   double delta_per_s = 0, delta_standard_error = 0;
-  double flow_kg_per_s = 0;  // the step's steady mass flow
+  double flow_kg_per_s = 0;  // the steady valve flow at the largest held level
+  int levels = 0;            // held command levels in the log
+  double valve_lag_s = 0;    // the valve's own opening lag, fitted as a nuisance
+  double reduced_chi_square = 0;  // final cost per degree of freedom (1: noise alone)
   double final_cost = 0;
   int iterations = 0;
 };

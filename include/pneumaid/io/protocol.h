@@ -4,6 +4,7 @@
 #pragma once
 
 #include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -34,11 +35,14 @@ struct Protocol {
   double valve_step_V = 0.05;
   double valve_hold_s = 0.3;
 
-  // Pipeline tests: a step to pipeline_command_V at pipeline_step_time_s, per tube length.
+  // Pipeline tests: a step to pipeline_command_V at pipeline_step_time_s, per
+  // tube length; or, when pipeline_schedule is given, the command held at
+  // each (time [s], level [V]) knot from its time on (0 V before the first).
   std::vector<double> tube_lengths_m;
   double pipeline_command_V = 1.0;
   double pipeline_step_time_s = 0.1;
   double pipeline_duration_s = 1.5;
+  std::vector<std::pair<double, double>> pipeline_schedule;
 
   // Stroke tests: per level, extend until stroke_margin_m before the end, then
   // retract; stroke_cycles such cycles in each level's log.
@@ -46,6 +50,19 @@ struct Protocol {
   int stroke_cycles = 1;
   double stroke_margin_m = 1e-3;
   double stroke_max_leg_s = 3.0;
+  // Each leg goes on this long after the rod reached `margin` before the end
+  // (with margin 0: the rod is pushed into the end stop).
+  double stroke_dwell_s = 0.0;
+
+  // How the rig's physics differs from the model the fits use (none by
+  // default): a real rig is not the fitting model.
+  struct Mismatch {
+    // Stick as a smooth law (creep below stick_velocity) instead of events.
+    bool regularized_friction = false;
+    double stick_velocity_m_per_s = 1e-4;
+    // The rig's integration tolerance (the fits use 1e-5 to 1e-6).
+    double relative_tolerance = 1e-6;
+  } mismatch;
 
   // Validation runs.
   bool paper_step = false;    // u = +1 then -1, each until 1 mm before the stroke limit
