@@ -18,7 +18,8 @@ struct IdentifyArgs {
   std::string prior_path = PNEUMAID_DEFAULT_PRIOR;
   std::string out_path;
   bool refine = false;
-  bool fit_u_sat = false;
+  bool fit_u_sat = false;  // accepted: fitting u_sat is the default
+  bool fix_u_sat = false;
   std::string spec_path = PNEUMAID_DEFAULT_FIT_SPEC;
   int threads = 1;
 };
@@ -55,7 +56,7 @@ int RunIdentify(const IdentifyArgs& args) {
     options.components = ParseComponents(args.only);
     options.components_explicit = true;
   }
-  options.valve.fit_u_sat = args.fit_u_sat;
+  options.valve.fit_u_sat = !args.fix_u_sat;
   options.tool_version = PNEUMAID_VERSION;
   options.date = UtcNow();
   IdentifyReport report;
@@ -82,8 +83,10 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
   app->add_option("--prior", args->prior_path, "parameter set for what is not fitted")
       ->capture_default_str();
   app->add_option("--out", args->out_path, "identified parameter set (params-v1)")->required();
-  app->add_flag("--fit-u-sat", args->fit_u_sat,
-                "also fit each valve branch's saturation opening u_sat (default: fixed)");
+  auto* fit = app->add_flag("--fit-u-sat", args->fit_u_sat,
+                            "fit each valve branch's saturation opening u_sat (the default)");
+  app->add_flag("--fix-u-sat", args->fix_u_sat, "keep the prior's u_sat instead of fitting it")
+      ->excludes(fit);
   app->add_flag("--refine", args->refine,
                 "after the component fits, refine through the simulator (see --spec)");
   app->add_option("--spec", args->spec_path, "fit spec for --refine")->capture_default_str();

@@ -37,8 +37,9 @@ void ApplyBranch(const BranchFit& fit, const std::string& prefix, Parameters* pa
   if (fit.fitted && fit.u_sat_fitted) {
     report->fitted.push_back(prefix + ".u_sat");
     params->uncertainty[prefix + ".u_sat"] = fit.standard_errors.at("u_sat");
-  } else {
-    report->priors.push_back(prefix + ".u_sat (fixed)");
+  } else if (fit.fitted) {
+    report->priors.push_back(prefix + ".u_sat (" +
+                             (fit.note.empty() ? std::string("fixed") : fit.note) + ")");
   }
 }
 

@@ -8,20 +8,11 @@
 #include <cstdio>
 #include <sstream>
 
+#include "held_levels.h"
 #include "pneumaid/eval/lag.h"
 
 namespace pneumaid {
 namespace {
-
-// The held levels of a command: the first sample of each run of samples
-// whose command stays within `change` of the run's first value.
-std::vector<std::size_t> LevelStarts(const std::vector<double>& u, double change) {
-  std::vector<std::size_t> starts = {0};
-  for (std::size_t i = 1; i < u.size(); ++i) {
-    if (std::fabs(u[i] - u[starts.back()]) > change) starts.push_back(i);
-  }
-  return starts;
-}
 
 // What one tube log's fit needs: samples, the level each sample belongs to,
 // meter lags and the channels' noise.
@@ -149,10 +140,10 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   log.t = &e.column("t");
   log.q_in = &e.column("q_in");
   log.q_out = &e.column("q_out");
-  const std::vector<std::size_t> starts = LevelStarts(e.column("u"), options.level_change_V);
+  const auto held = internal::HeldLevels(e.column("u"), options.level_change_V);
   const std::size_t n = log.t->size();
-  fit.levels = log.levels = static_cast<int>(starts.size());
-  if (starts.size() < 2 || n < 20) {
+  fit.levels = log.levels = static_cast<int>(held.size());
+  if (held.size() < 2 || n < 20) {
     fit.note = "the command never changes: a step response is needed";
     return fit;
   }
@@ -166,9 +157,8 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
     return fit;
   }
   log.level.resize(n);
-  for (std::size_t k = 0; k < starts.size(); ++k) {
-    const std::size_t end = k + 1 < starts.size() ? starts[k + 1] : n;
-    for (std::size_t i = starts[k]; i < end; ++i) log.level[i] = static_cast<int>(k);
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    for (std::size_t i = held[k].first; i < held[k].second; ++i) log.level[i] = static_cast<int>(k);
   }
   log.tau_in_s = manifest.DeclaredTau("q_in", 0.0);
   log.tau_out_s = manifest.DeclaredTau("q_out", 0.0);

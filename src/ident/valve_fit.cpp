@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "held_levels.h"
 #include "pneumaid/model/kvp.h"
 #include "pneumaid/model/orifice.h"
 
@@ -151,6 +152,23 @@ double ContinuousSaturation(const KvpBranchParams& p, double low, double high) {
   return 0.5 * (low + high);
 }
 
+// Do the plateaus above `opening` look saturated: each within `flatness`
+// (relative) of their mean K_vp?
+bool FlatAbove(const std::vector<const ValvePlateau*>& plateaus, double opening, double flatness) {
+  double sum = 0;
+  int count = 0;
+  for (const ValvePlateau* p : plateaus) {
+    if (p->u_V > opening) sum += p->kvp_kg_per_s, ++count;
+  }
+  if (count == 0) return false;
+  const double mean = sum / count;
+  for (const ValvePlateau* p : plateaus) {
+    if (p->u_V > opening && std::fabs(p->kvp_kg_per_s - mean) > flatness * std::fabs(mean))
+      return false;
+  }
+  return true;
+}
+
 // FitBranch with u_sat free (ValveFitOptions::fit_u_sat).
 BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateaus,
                                  const KvpBranchParams& prior, const ValveFitOptions& options) {
@@ -160,7 +178,9 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   openings.erase(std::unique(openings.begin(), openings.end()), openings.end());
   BranchFit best;
   double gap_low = 0, gap_high = 0;
-  for (size_t k = 0; k + 1 < openings.size(); ++k) {
+  const std::size_t saturated = static_cast<std::size_t>(options.min_saturated_openings);
+  for (size_t k = 0; k + saturated < openings.size(); ++k) {
+    if (!FlatAbove(plateaus, openings[k], options.saturation_flatness)) continue;
     KvpBranchParams candidate = prior;
     candidate.u_sat_V = 0.5 * (openings[k] + openings[k + 1]);
     const BranchFit fit = FitBranch(plateaus, candidate, options);
@@ -172,7 +192,9 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   }
   if (!best.fitted) {
     best = FitBranch(plateaus, prior, options);
-    best.note += (best.note.empty() ? "" : "; ") + std::string("u_sat could not be fitted");
+    best.note += (best.note.empty() ? "" : "; ") +
+                 std::string("u_sat held at the prior's: the staircase shows no saturation (no ") +
+                 std::to_string(saturated) + " or more top openings with one flat K_vp)";
     return best;
   }
   // Same split, same cost: only the value inside the gap changes.
@@ -182,19 +204,6 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   best.standard_errors["u_sat"] = (gap_high - gap_low) / std::sqrt(12.0);
   best.u_sat_fitted = true;
   return best;
-}
-
-// Indices [begin, end) of the runs of equal command in `u`.
-std::vector<std::pair<std::size_t, std::size_t>> ConstantSegments(const std::vector<double>& u) {
-  std::vector<std::pair<std::size_t, std::size_t>> segments;
-  std::size_t begin = 0;
-  for (std::size_t i = 1; i <= u.size(); ++i) {
-    if (i == u.size() || u[i] != u[begin]) {
-      segments.push_back({begin, i});
-      begin = i;
-    }
-  }
-  return segments;
 }
 
 double Mean(const std::vector<double>& v, std::size_t begin, std::size_t end) {
@@ -215,6 +224,9 @@ bool ValveFitOptions::IsValid(std::string* error) const {
   if (min_plateau_samples < 2) return fail("min_plateau_samples must be >= 2");
   if (!(band_sigmas > 0)) return fail("band_sigmas must be > 0");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (min_saturated_openings < 1) return fail("min_saturated_openings must be >= 1");
+  if (!(saturation_flatness > 0)) return fail("saturation_flatness must be > 0");
+  if (!(level_change_V > 0)) return fail("level_change_V must be > 0");
   return true;
 }
 
@@ -230,9 +242,9 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
     if (e.entry.kind != ExperimentKind::kValve) continue;
     const auto &t = e.column("t"), &u = e.column("u"), &q = e.column("q");
     const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
-    double previous_u = 0.0;
-    for (const auto& [begin, end] : ConstantSegments(u)) {
-      const double level = u[begin];
+    double previous_u = 0.0;  // the level before, for the branch
+    for (const auto& [begin, end] : internal::HeldLevels(u, options.level_change_V)) {
+      const double level = Mean(u, begin, end);
       const bool decreasing = level < previous_u;
       previous_u = level;
       if (level <= 0) continue;  // a closed valve says nothing about K_vp

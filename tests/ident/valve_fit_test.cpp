@@ -42,27 +42,95 @@ ValveParams Perturbed(const ValveParams& truth) {
   return prior;
 }
 
+// The largest |K_vp fitted - K_vp true| / q_max over u in [0, 1] outside the
+// gap (gap_low, gap_high] of the staircase that holds the true u_sat: no
+// plateau there tells where the polynomial ends.
+double WorstKvpError(const KvpBranchParams& fitted, const KvpBranchParams& real,
+                     double gap_low = 1, double gap_high = 1) {
+  const auto c_fit = MakeKvpCoefficients<double>(fitted);
+  const auto c_true = MakeKvpCoefficients<double>(real);
+  double worst = 0;
+  for (int k = 0; k <= 1000; ++k) {
+    const double u = k / 1000.0;
+    if (u > gap_low && u <= gap_high) continue;
+    worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real.q_max_kg_per_s);
+  }
+  return worst;
+}
+
 TEST(ValveFitTest, RecoversKvpWithinOnePercentOfQmaxOnTheBundledUnit) {
   const std::string dir = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig";
   const Parameters truth = LoadParams(dir + "/truth.yaml");
-  const ValveFitResult fit = FitValve(ReadUnit(dir), Perturbed(truth.valve), ValveFitOptions{});
-  std::cout << fit.BriefReport();
-  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
-                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+  ValveFitOptions fixed;
+  fixed.fit_u_sat = false;  // u_sat known (the prior's is the truth's)
+  const ValveFitResult fit = FitValve(ReadUnit(dir), Perturbed(truth.valve), fixed);
+  const ValveFitResult free = FitValve(ReadUnit(dir), Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << fit.BriefReport() << free.BriefReport();
+  for (const auto& [fitted, free_fit, real] :
+       {std::make_tuple(&fit.increasing, &free.increasing, &truth.valve.increasing),
+        std::make_tuple(&fit.decreasing, &free.decreasing, &truth.valve.decreasing)}) {
     ASSERT_TRUE(fitted->fitted) << fitted->note;
-    const auto c_fit = MakeKvpCoefficients<double>(fitted->params);
-    const auto c_true = MakeKvpCoefficients<double>(*real);
-    double worst = 0;
-    for (int k = 0; k <= 1000; ++k) {
-      const double u = k / 1000.0;
-      worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real->q_max_kg_per_s);
-    }
-    EXPECT_LT(worst, 0.01);  // issue 4: within 1 % of q_max at every u in [0, 1]
+    // issue 4: within 1 % of q_max at every u in [0, 1]
+    EXPECT_LT(WorstKvpError(fitted->params, *real), 0.01);
+    // u_sat fitted: in the staircase's gap (0.70, 0.75] that holds the
+    // truth's, and K_vp within 1 % outside that gap.
+    ASSERT_TRUE(free_fit->u_sat_fitted) << free_fit->note;
+    EXPECT_GT(free_fit->params.u_sat_V, 0.70);
+    EXPECT_LE(free_fit->params.u_sat_V, 0.75);
+    EXPECT_LT(WorstKvpError(free_fit->params, *real, 0.70, 0.75), 0.01);
   }
   EXPECT_EQ(fit.plateaus.size(), 39u);  // 20 up (0.05 .. 1) + 19 down (0.95 .. 0.05); u = 0 skipped
 }
 
-// --fit-u-sat: a unit saturating at 0.67 V while the prior says 0.75 V. The
+// A valve saturating at 0.62 V (prior 0.75 V) logged by a staircase of
+// 0.04 V steps held 0.25 s, with a valve that opens with a lag of its own
+// (not in the fitted model) and a quantised flow meter: u_sat in the gap
+// (0.60, 0.64] and K_vp within 1 % of q_max outside it, both branches.
+TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
+  Parameters truth;
+  truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.62;
+  truth.effects["valve_lag"] = {{"tau", 0.01}};
+  ValveParams prior = Perturbed(truth.valve);
+  prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
+  Protocol protocol;
+  protocol.valve = true;
+  protocol.valve_step_V = 0.04;
+  protocol.valve_hold_s = 0.25;
+  protocol.sensors["q"] = {2e-7, 0.03, 1e-7, true};
+  protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
+  protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
+  const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 62, "V"), "valve_062");
+  const ValveFitResult fit = FitValve(unit, prior, ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+    ASSERT_TRUE(fitted->fitted) << fitted->note;
+    ASSERT_TRUE(fitted->u_sat_fitted) << fitted->note;
+    EXPECT_GT(fitted->params.u_sat_V, 0.60);
+    EXPECT_LE(fitted->params.u_sat_V, 0.64);
+    EXPECT_LT(WorstKvpError(fitted->params, *real, 0.60, 0.64), 0.01);
+  }
+}
+
+// A staircase that stops below saturation shows none: u_sat stays the prior's
+// and the report says why.
+TEST(ValveFitTest, AStaircaseWithoutSaturationKeepsThePriorsSaturation) {
+  Parameters truth;
+  Protocol protocol;
+  protocol.valve = true;
+  protocol.sensors["q"] = {2e-7, 0.03, 0.0, true};
+  Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 3, "V"), "valve_low");
+  // Cut the staircase at 0.5 V: the log keeps only the samples below.
+  Experiment& e = unit.experiments.at(0);
+  std::size_t keep = 0;
+  while (keep < e.column("u").size() && e.column("u")[keep] <= 0.5) ++keep;
+  for (auto& column : e.columns) column.second.resize(keep);
+  const ValveFitResult fit = FitValve(unit, truth.valve, ValveFitOptions{});
+  EXPECT_FALSE(fit.increasing.u_sat_fitted);
+  EXPECT_EQ(fit.increasing.params.u_sat_V, 0.75);
+}
+
+// u_sat fitted (the default): a unit saturating at 0.67 V while the prior says 0.75 V. The
 // staircase's plateaus are 0.05 V apart, so u_sat is determined to the gap
 // (0.65, 0.70] that holds the truth and reported with that resolution; K_vp
 // is recovered within 1 % of q_max outside that gap (inside it no plateau
@@ -72,9 +140,7 @@ TEST(ValveFitTest, FitsTheSaturationOpeningToThePlateauGapThatHoldsIt) {
   truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.67;
   ValveParams prior = Perturbed(truth.valve);
   prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
-  ValveFitOptions options;
-  options.fit_u_sat = true;
-  const ValveFitResult fit = FitValve(SyntheticValveUnit(truth, 41), prior, options);
+  const ValveFitResult fit = FitValve(SyntheticValveUnit(truth, 41), prior, ValveFitOptions{});
   std::cout << fit.BriefReport();
   for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
                                      std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
@@ -83,18 +149,13 @@ TEST(ValveFitTest, FitsTheSaturationOpeningToThePlateauGapThatHoldsIt) {
     EXPECT_GT(fitted->params.u_sat_V, 0.65);
     EXPECT_LE(fitted->params.u_sat_V, 0.70);
     EXPECT_NEAR(fitted->standard_errors.at("u_sat"), 0.05 / std::sqrt(12.0), 1e-12);
-    const auto c_fit = MakeKvpCoefficients<double>(fitted->params);
-    const auto c_true = MakeKvpCoefficients<double>(*real);
-    double worst = 0;
-    for (int k = 0; k <= 1000; ++k) {
-      const double u = k / 1000.0;
-      if (u > 0.65 && u <= 0.70) continue;
-      worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real->q_max_kg_per_s);
-    }
-    EXPECT_LT(worst, 0.01);
+    EXPECT_LT(WorstKvpError(fitted->params, *real, 0.65, 0.70), 0.01);
   }
-  // Without the option the prior's 0.75 V is kept, and the fit pays for it.
-  const ValveFitResult fixed = FitValve(SyntheticValveUnit(truth, 41), prior, ValveFitOptions{});
+  // With u_sat fixed (identify --fix-u-sat) the prior's 0.75 V is kept, and
+  // the fit pays for it.
+  ValveFitOptions fixed_options;
+  fixed_options.fit_u_sat = false;
+  const ValveFitResult fixed = FitValve(SyntheticValveUnit(truth, 41), prior, fixed_options);
   EXPECT_DOUBLE_EQ(fixed.increasing.params.u_sat_V, 0.75);
   EXPECT_FALSE(fixed.increasing.u_sat_fitted);
   EXPECT_GT(fixed.increasing.final_cost, fit.increasing.final_cost + 1.0);  // chi^2 up by > 2

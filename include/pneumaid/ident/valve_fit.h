@@ -26,12 +26,21 @@ struct ValveFitOptions {
   double band_sigmas = 2.0;
   // Ceres Levenberg-Marquardt iterations.
   int max_iterations = 200;
-  // Also fit u_sat (identify --fit-u-sat). u_sat only decides which plateaus
-  // are saturated, so the cost is piecewise constant in it: every split of
-  // the plateau openings is fitted and the cheapest kept; inside its gap u_sat
-  // is where the fitted polynomial reaches 1 (K_vp continuous at saturation),
-  // or the gap's middle; its standard error is the gap / sqrt(12).
-  bool fit_u_sat = false;
+  // Fit u_sat (the default; identify --fix-u-sat keeps the prior's). u_sat
+  // only decides which plateaus are saturated, so the cost is piecewise
+  // constant in it: every split of the plateau openings that leaves at least
+  // min_saturated_openings above it is fitted and the cheapest kept; inside
+  // its gap u_sat is where the fitted polynomial reaches 1 (K_vp continuous at
+  // saturation), or the gap's middle; its standard error is the gap /
+  // sqrt(12). A split counts only when the plateaus above it are flat: each
+  // within saturation_flatness (relative) of their mean. A staircase that
+  // shows no saturation keeps the prior's u_sat.
+  bool fit_u_sat = true;
+  int min_saturated_openings = 2;
+  double saturation_flatness = 0.005;
+  // A change of the logged command larger than this starts a new plateau;
+  // smaller changes are the logger's noise.
+  double level_change_V = 0.01;
 
   bool IsValid(std::string* error) const;
 };
@@ -56,7 +65,7 @@ struct BranchFit {
   std::string note;     // why not, or warnings
   KvpBranchParams params;
   std::map<std::string, double> standard_errors;  // "a" .. "q_max" (and "u_sat" when fitted)
-  bool u_sat_fitted = false;                      // ValveFitOptions::fit_u_sat
+  bool u_sat_fitted = false;  // ValveFitOptions::fit_u_sat and the staircase shows saturation
   std::map<std::string, double> correlations;     // "a,b" -> r, |r| > 0.95 flagged
   int plateaus = 0;
   double initial_cost = 0, final_cost = 0;
