@@ -11,6 +11,8 @@
 #include <numeric>
 #include <sstream>
 
+#include "determination.h"
+#include "friction_slides.h"
 #include "pneumaid/ident/rod_replay.h"
 #include "pneumaid/model/load.h"
 
@@ -22,6 +24,9 @@ constexpr int kDirectionParameters = 4;  // Fs, Fd, b, vs
 const char* const kParameterNames[kDirectionParameters] = {"Fs", "Fd", "b", "vs"};
 // Lower bounds: forces and damping are magnitudes; vs > 0 keeps Eq. 12 defined.
 const double kLowerBounds[kDirectionParameters] = {0.0, 0.0, 0.0, 1e-4};
+// Standard errors below these count as determined whatever the value (the
+// identification's tolerances: 0.1 N, 0.5 N s/m, 1 mm/s).
+const double kDeterminedFloor[kDirectionParameters] = {0.1, 0.1, 0.5, 1e-3};
 
 using Block = std::array<double, kDirectionParameters>;
 
@@ -223,9 +228,44 @@ class SegmentCost : public ceres::CostFunction {
 
 using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
 
+// Slope [per sample] and curvature (second derivative, per sample^2) of
+// x[from, to) by a least-squares quadratic.
+std::pair<double, double> SlopeAndCurvature(const std::vector<double>& x, std::size_t from,
+                                            std::size_t to) {
+  const double n = static_cast<double>(to - from), mid = 0.5 * (n - 1);
+  double sxy = 0, sxx = 0, m2 = 0;
+  for (std::size_t i = from; i < to; ++i) m2 += std::pow(static_cast<double>(i - from) - mid, 2);
+  m2 /= n;
+  double sqy = 0, sqq = 0;
+  for (std::size_t i = from; i < to; ++i) {
+    const double j = static_cast<double>(i - from) - mid, q = j * j - m2;
+    sxy += j * x[i];
+    sxx += j * j;
+    sqy += q * x[i];
+    sqq += q * q;
+  }
+  return {sxx > 0 ? sxy / sxx : 0.0, sqq > 0 ? 2 * sqy / sqq : 0.0};
+}
+
+// The noise of SlopeAndCurvature over n samples of position noise sigma.
+std::pair<double, double> SlopeAndCurvatureNoise(double sigma, double n) {
+  const double mid = 0.5 * (n - 1);
+  double sxx = 0, m2 = 0, sqq = 0;
+  for (int i = 0; i < n; ++i) sxx += (i - mid) * (i - mid);
+  m2 = sxx / n;
+  for (int i = 0; i < n; ++i) sqq += std::pow((i - mid) * (i - mid) - m2, 2);
+  return {sigma / std::sqrt(sxx), 2 * sigma / std::sqrt(sqq)};
+}
+
 // Runs [begin, end) of at least `min_samples` samples whose values stay
-// within `band` of each other.
-Runs StuckRuns(const std::vector<double>& x, double band, int min_samples) {
+// within `band` of each other, and whose motion over the run's first four
+// fifths (the last samples may already be the slide) is that of a rod at
+// rest: slope below `max_speed` [per sample] and curvature below `max_accel`
+// [per sample^2], or within 4 x what the position noise gives. At a high
+// sample rate a slow slide stays inside the band for many samples, and the
+// apex of a reversal without stick looks still for a while: neither is stuck.
+Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, double max_speed,
+               double max_accel, double sigma) {
   Runs runs;
   std::size_t begin = 0;
   while (begin < x.size()) {
@@ -236,7 +276,17 @@ Runs StuckRuns(const std::vector<double>& x, double band, int min_samples) {
       high = std::max(high, x[end]);
       ++end;
     }
-    if (static_cast<int>(end - begin) >= min_samples) {
+    const std::size_t length = end - begin;
+    bool still = static_cast<int>(length) >= min_samples;
+    if (still) {
+      const std::size_t fitted = std::max<std::size_t>(3, length * 4 / 5);
+      const auto [slope, curvature] = SlopeAndCurvature(x, begin, begin + fitted);
+      const auto [slope_noise, curvature_noise] =
+          SlopeAndCurvatureNoise(sigma, static_cast<double>(fitted));
+      still = std::fabs(slope) <= std::max(max_speed, 4 * slope_noise) &&
+              std::fabs(curvature) <= std::max(max_accel, 4 * curvature_noise);
+    }
+    if (still) {
       runs.push_back({begin, end});
       begin = end;
     } else {
@@ -251,6 +301,10 @@ Runs StuckRuns(const std::vector<double>& x, double band, int min_samples) {
 struct StrokeData {
   std::vector<std::vector<double>> force_N, position_m;
   std::vector<Segment> segments;
+  std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers
+  // Breakaway forces (magnitudes) of stuck phases at the stroke ends, which
+  // start no segment: positive direction first.
+  std::vector<double> end_breakaway_N[2];
   int excluded = 0;
   std::string skipped;  // logs that could not be used, why
 };
@@ -329,9 +383,23 @@ void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
   s->arrest = arrest;
 }
 
+double Median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+// Where the rod may touch an end stop: within `contact_m` of either end.
+// +1 at the extended end, -1 at the retracted one, 0 elsewhere.
+int EndContact(double x, double half_stroke_m, double contact_m) {
+  if (x > half_stroke_m - contact_m) return +1;
+  if (x < -half_stroke_m + contact_m) return -1;
+  return 0;
+}
+
 void CutSegments(const std::vector<double>& force, const std::vector<double>& x, const Runs& runs,
-                 double band, double half_stroke_m, double period_s, double sigma_x_m,
-                 double drift_m, const FrictionFitOptions& options, StrokeData* data) {
+                 double band, double half_stroke_m, double contact_m, double period_s,
+                 double sigma_x_m, double drift_m, const FrictionFitOptions& options,
+                 StrokeData* data) {
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const auto [stuck_begin, stuck_end] = runs[k];
     Segment s{};
@@ -340,6 +408,26 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
     s.period_s = period_s;
     s.begin = std::max(stuck_begin + 1,
                        stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
+    // A rod stuck at an end may rest on the stop, and the pressures there
+    // change faster than a replay between samples follows (the chamber at
+    // the end is nearly its dead volume): no segment starts there. Its
+    // breakaway force still tells Fs.
+    if (EndContact(x[stuck_end - 1], half_stroke_m, contact_m) != 0) {
+      const std::size_t after = std::min(x.size() - 1, stuck_end + options.min_stuck_samples);
+      const double travel = x[after] - x[stuck_end - 1];
+      if (std::fabs(travel) > band) {
+        const int direction = travel > 0 ? +1 : -1;
+        // The breakaway: the last sample still within 3 sigma of where the
+        // rod rested (the band's edge is crossed later, at a higher force).
+        std::vector<double> rest(x.begin() + stuck_begin, x.begin() + stuck_end);
+        const double rested = Median(rest);
+        std::size_t at = stuck_end - 1;
+        while (at > stuck_begin && std::fabs(x[at] - rested) > 3 * sigma_x_m) --at;
+        data->end_breakaway_N[direction > 0 ? 0 : 1].push_back(direction * force[at]);
+      }
+      ++data->excluded;
+      continue;
+    }
     // The run's last sample may already be the first of the slide.
     const std::size_t settled_end = std::max(s.begin + 1, stuck_end - 1);
     s.initial_position_m = std::accumulate(x.begin() + s.begin, x.begin() + settled_end, 0.0) /
@@ -348,17 +436,32 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
                 ? runs[k + 1].first + std::min<std::size_t>(options.arrest_samples,
                                                             runs[k + 1].second - runs[k + 1].first)
                 : stuck_end;
-    if (s.end - s.begin < 2) continue;
-    const auto [low, high] = std::minmax_element(x.begin() + s.begin, x.begin() + s.end);
-    if (*high > half_stroke_m - options.end_margin_m ||
-        *low < -half_stroke_m + options.end_margin_m) {
+    // The slide ends where the rod may touch a stop (end-stop forces are not
+    // friction): the segment is cut there and loses its arrest.
+    // A replay over a long slide integrates any bias of the force twice: the
+    // rest of such a slide is left to the force balance (friction_slides.h).
+    const std::size_t max_slide = std::max<std::size_t>(
+        options.min_stuck_samples, static_cast<std::size_t>(options.max_slide_s / period_s));
+    bool cut = false;
+    if (s.end > stuck_end + max_slide) {
+      s.end = stuck_end + max_slide;
+      cut = true;
+    }
+    for (std::size_t i = stuck_end; i < s.end; ++i) {
+      if (EndContact(x[i], half_stroke_m, contact_m) != 0) {
+        s.end = i;
+        cut = true;
+        break;
+      }
+    }
+    if (s.end < stuck_end + options.min_stuck_samples) {
       ++data->excluded;
       continue;
     }
     const double travel = x[s.end - 1] - s.initial_position_m;
     s.direction = travel > band ? +1 : (travel < -band ? -1 : 0);
     s.slide_begin = stuck_end - 1;
-    if (s.direction != 0 && k + 1 < runs.size())
+    if (s.direction != 0 && k + 1 < runs.size() && !cut)
       MarkArrest(x, stuck_end, runs[k + 1], period_s, &s);
     SetWeights(sigma_x_m, drift_m, &s);
     data->segments.push_back(s);
@@ -394,25 +497,46 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
                                           rig.area_1_m2(), rig.area_2_m2(), weight_N);
     }
     const auto& x = e.column("x");
-    const Runs runs = StuckRuns(x, band, options.min_stuck_samples);
+    const int min_samples = std::max(options.min_stuck_samples,
+                                     static_cast<int>(std::ceil(options.min_stuck_s / period)));
+    const Runs runs =
+        StuckRuns(x, band, min_samples, options.max_stuck_speed_m_per_s * period,
+                  options.max_stuck_acceleration_m_per_s2 * period * period, sigma_x_m);
     SmoothStuckForce(runs, options.stuck_force_samples, &force);
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
     const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
-    CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m, period,
-                sigma_x_m, drift_m, options, &data);
+    const std::size_t first_segment = data.segments.size();
+    CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m,
+                options.end_margin_m + 4 * sigma_x_m, period, sigma_x_m, drift_m, options, &data);
+    if (!options.force_balance) continue;
+    std::vector<bool> covered(x.size(), false);
+    for (const auto& [begin, end] : runs) std::fill(covered.begin() + begin, covered.begin() + end, true);
+    for (std::size_t k = first_segment; k < data.segments.size(); ++k) {
+      const Segment& segment = data.segments[k];
+      std::fill(covered.begin() + segment.begin, covered.begin() + segment.end, true);
+    }
+    internal::SlideSampling sampling;
+    sampling.period_s = period;
+    sampling.mass_kg = rig.load_mass_kg;
+    sampling.sigma_x_m = sigma_x_m;
+    sampling.sigma_force_N = std::max(force_sigma_N, 1e-3);
+    sampling.half_stroke_m = 0.5 * rig.stroke_m;
+    sampling.end_zone_m = options.end_margin_m + 4 * sigma_x_m;
+    sampling.window_s = options.smoothing_window_s;
+    for (auto& cluster : internal::SlidingSamples(data.position_m.back(), data.force_N.back(),
+                                                  covered, sampling)) {
+      data.clusters.push_back(std::move(cluster));
+    }
   }
   return data;
 }
 
-double Median(std::vector<double> values) {
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
 
 // Median over the slides of `direction` of the force on the last sample
 // before the rod has covered a quarter of the segment's travel: about where
-// it broke away, a starting point for Fs.
+// it broke away, a starting point for Fs; without three such slides, the
+// median breakaway force at the stroke ends.
 double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
   std::vector<double> forces;
   for (const Segment& s : data.segments) {
@@ -424,13 +548,21 @@ double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
     }
     forces.push_back(direction * (*s.force_N)[i]);
   }
-  return forces.size() < 3 ? fallback : Median(forces);
+  if (forces.size() >= 3) return Median(forces);
+  const std::vector<double>& at_ends = data.end_breakaway_N[direction > 0 ? 0 : 1];
+  return at_ends.size() >= 3 ? Median(at_ends) : fallback;
 }
 
 int SegmentsOf(const StrokeData& data, int direction) {
   return static_cast<int>(
       std::count_if(data.segments.begin(), data.segments.end(),
                     [direction](const Segment& s) { return s.direction == direction; }));
+}
+
+int ClustersOf(const StrokeData& data, int direction) {
+  return static_cast<int>(std::count_if(
+      data.clusters.begin(), data.clusters.end(),
+      [direction](const internal::SlideCluster& c) { return c.direction == direction; }));
 }
 
 // The Ceres problem over the segments: friction blocks shared, one arrest
@@ -460,6 +592,17 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
     } else {
       p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data());
     }
+    p->rows.push_back(rows);
+  }
+  for (std::size_t c = 0; c < data.clusters.size(); ++c) {
+    const int rows = static_cast<int>(data.clusters[c].speed_m_per_s.size());
+    auto* cost = new ceres::AutoDiffCostFunction<internal::SlideResidual, ceres::DYNAMIC,
+                                                 kDirectionParameters, kDirectionParameters>(
+        new internal::SlideResidual{&data.clusters[c]}, rows);
+    const std::size_t k = data.segments.size() + c;
+    ceres::LossFunction* loss =
+        huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
+    p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data());
     p->rows.push_back(rows);
   }
   for (Block* block : {positive, negative}) {
@@ -514,9 +657,10 @@ bool Evaluate(const StrokeData& data, const std::vector<double*>& free_blocks, S
   ceres::CRSMatrix crs;
   if (!p->problem.Evaluate(evaluate, nullptr, &r, nullptr, &crs)) return false;
   const int friction_columns = static_cast<int>(free_blocks.size()) * kDirectionParameters;
-  out->assign(data.segments.size(), {});
+  out->assign(p->rows.size(), {});
+  stop_column.resize(p->rows.size(), -1);  // force-balance clusters have none
   int row = 0;
-  for (std::size_t k = 0; k < data.segments.size(); ++k) {
+  for (std::size_t k = 0; k < p->rows.size(); ++k) {
     const int n = p->rows[k];
     SegmentJacobian& j = (*out)[k];
     j.residuals = Eigen::Map<Eigen::VectorXd>(r.data() + row, n);
@@ -551,12 +695,16 @@ bool SegmentMeanSquares(SegmentProblem* p, std::vector<double>* out) {
   return true;
 }
 
-// Cluster-robust covariance of the friction columns, segments being the
-// clusters and each arrest time eliminated inside its own segment (the Schur
-// complement); false when the information matrix is singular.
-bool SandwichCovariance(const std::vector<SegmentJacobian>& segments, Eigen::MatrixXd* covariance) {
+// The information J'J of the friction columns and the sum of the clusters'
+// score outer products (J_k' r_k)(J_k' r_k)', segments and force-balance
+// slides being the clusters and each arrest time eliminated inside its own
+// segment (the Schur complement): the bread and meat of the cluster-robust
+// covariance (J'J)^-1 meat (J'J)^-1.
+void Information(const std::vector<SegmentJacobian>& segments, Eigen::MatrixXd* information,
+                 Eigen::MatrixXd* meat) {
   const Eigen::Index m = segments.front().friction.cols();
-  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(m, m), meat = Eigen::MatrixXd::Zero(m, m);
+  *information = Eigen::MatrixXd::Zero(m, m);
+  *meat = Eigen::MatrixXd::Zero(m, m);
   for (const SegmentJacobian& j : segments) {
     Eigen::MatrixXd a = j.friction;
     Eigen::VectorXd r = j.residuals;
@@ -565,17 +713,10 @@ bool SandwichCovariance(const std::vector<SegmentJacobian>& segments, Eigen::Mat
       a -= j.stop_time * (j.stop_time.transpose() * a) / norm;
       r -= j.stop_time * (j.stop_time.dot(r) / norm);
     }
-    information += a.transpose() * a;
+    *information += a.transpose() * a;
     const Eigen::VectorXd score = a.transpose() * r;
-    meat += score * score.transpose();
+    *meat += score * score.transpose();
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(information);
-  if (eigen.eigenvalues().minCoeff() <= 1e-12 * eigen.eigenvalues().maxCoeff()) return false;
-  const double clusters = static_cast<double>(segments.size());
-  meat *= clusters / std::max(clusters - 1.0, 1.0);
-  const Eigen::MatrixXd bread = information.inverse();
-  *covariance = bread * meat * bread;
-  return true;
 }
 
 std::string ColumnName(int column) {
@@ -583,22 +724,64 @@ std::string ColumnName(int column) {
          kParameterNames[column % kDirectionParameters];
 }
 
-void Report(const Block& block, const std::vector<int>& free, const Eigen::MatrixXd& covariance,
-            int offset, double relative_limit, DirectionFit* fit) {
-  fit->params = Unpack(block);
-  for (std::size_t c = 0; c < free.size(); ++c) {
-    const int column = free[c];
-    if (column < offset || column >= offset + kDirectionParameters) continue;
-    const int i = column - offset;
-    const double error = std::sqrt(std::max(covariance(c, c), 0.0));
-    fit->standard_errors[kParameterNames[i]] = error;
-    if (error > relative_limit * std::fabs(block[i])) {
-      char line[160];
-      std::snprintf(line, sizeof(line),
-                    "%s = %.4g has a standard error of %.2g: not identifiable from these logs",
-                    kParameterNames[i], block[i], error);
-      fit->warnings.push_back(line);
-    }
+std::array<double, kDirectionParameters> PriorSigmas(const FrictionFitOptions& options) {
+  return {options.prior_static_sigma_N, options.prior_dynamic_sigma_N,
+          options.prior_viscous_sigma_N_s_per_m, options.prior_stribeck_log_sigma};
+}
+
+// The weak prior: (theta - prior) / sigma per coefficient, vs on a log scale.
+// It keeps a coefficient the logs do not determine near the prior instead of
+// letting it wander (or the fit fail on a singular J'J), and is negligible
+// against the logs wherever they determine one.
+struct PriorResidual {
+  Block prior;
+  std::array<double, kDirectionParameters> sigma;
+
+  template <typename T>
+  bool operator()(const T* theta, T* residual) const {
+    using std::log;
+    for (int i = 0; i < 3; ++i) residual[i] = (theta[i] - T(prior[i])) / T(sigma[i]);
+    residual[3] = (log(theta[3]) - T(std::log(prior[3]))) / T(sigma[3]);
+    return true;
+  }
+};
+
+// Fd, b, vs of one direction from its force-balance samples with Fs given
+// (the breakaways): for each vs on a log grid (1 mm/s to 0.1 m/s) the
+// magnitude Fs e + Fd (1 - e) + b v, e = exp(-(v/vs)^2), is linear in
+// (Fd, b); the grid point that fits best, Fd in [0, Fs] and b >= 0. Leaves
+// `block` as it is with fewer than 20 samples.
+void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
+  std::size_t samples = 0;
+  for (const auto& c : data.clusters) {
+    if (c.direction == direction) samples += c.speed_m_per_s.size();
+  }
+  if (samples < 20) return;
+  const double fs = (*block)[0];
+  double best = HUGE_VAL;
+  for (int g = 0; g <= 24; ++g) {
+    const double vs = 1e-3 * std::pow(100.0, g / 24.0);
+    Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+    const auto each = [&](const auto& use) {
+      for (const auto& c : data.clusters) {
+        if (c.direction != direction) continue;
+        for (std::size_t i = 0; i < c.speed_m_per_s.size(); ++i) {
+          const double v = c.speed_m_per_s[i], e = std::exp(-(v / vs) * (v / vs));
+          use(Eigen::Vector2d(1 - e, v), c.friction_N[i] - fs * e, c.weight[i] * c.weight[i]);
+        }
+      }
+    };
+    each([&](const Eigen::Vector2d& x, double y, double w) {
+      normal += w * x * x.transpose();
+      rhs += w * y * x;
+    });
+    Eigen::Vector2d theta = normal.ldlt().solve(rhs);
+    if (!(theta(1) >= 0)) theta = Eigen::Vector2d(rhs(0) / normal(0, 0), 0.0);
+    theta(0) = std::clamp(theta(0), 0.0, fs);
+    double cost = 0;
+    each([&](const Eigen::Vector2d& x, double y, double w) { cost += w * std::pow(y - x.dot(theta), 2); });
+    if (cost < best) best = cost, *block = {fs, theta(0), theta(1), vs};
   }
 }
 
@@ -619,6 +802,14 @@ bool FrictionFitOptions::IsValid(std::string* error) const {
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(outlier_ratio > 1)) return fail("outlier_ratio must be > 1");
   if (!(identifiable_relative_error > 0)) return fail("identifiable_relative_error must be > 0");
+  if (!(prior_static_sigma_N > 0) || !(prior_dynamic_sigma_N > 0) ||
+      !(prior_viscous_sigma_N_s_per_m > 0) || !(prior_stribeck_log_sigma > 0))
+    return fail("prior_*_sigma must be > 0");
+  if (!(min_stuck_s >= 0)) return fail("min_stuck_s must be >= 0");
+  if (!(max_stuck_speed_m_per_s > 0)) return fail("max_stuck_speed_m_per_s must be > 0");
+  if (!(max_stuck_acceleration_m_per_s2 > 0))
+    return fail("max_stuck_acceleration_m_per_s2 must be > 0");
+  if (!(max_slide_s > 0)) return fail("max_slide_s must be > 0");
   return true;
 }
 
@@ -633,57 +824,77 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   result.excluded_segments = data.excluded;
   result.positive.segments = SegmentsOf(data, +1);
   result.negative.segments = SegmentsOf(data, -1);
-  if (result.positive.segments + result.negative.segments == 0) {
+  result.positive.smooth_slides = ClustersOf(data, +1);
+  result.negative.smooth_slides = ClustersOf(data, -1);
+  result.smooth_samples = 0;
+  for (const auto& c : data.clusters) result.smooth_samples += static_cast<int>(c.speed_m_per_s.size());
+  if (result.positive.segments + result.negative.segments + result.positive.smooth_slides +
+          result.negative.smooth_slides ==
+      0) {
     result.note = "no slide found in the stroke logs " + data.skipped + "; the prior is kept";
     return result;
   }
-  Block positive = Pack(prior.positive), negative = Pack(prior.negative);
+  // Starts from the data: Fs from the breakaways, Fd, b, vs from the force
+  // balance of the smooth slides; the prior where the logs give none.
+  const Block prior_blocks[2] = {Pack(prior.positive), Pack(prior.negative)};
+  Block positive = prior_blocks[0], negative = prior_blocks[1];
   positive[0] = BreakawayMedian(data, +1, positive[0]);
   negative[0] = BreakawayMedian(data, -1, negative[0]);
+  ForceBalanceStart(data, +1, &positive);
+  ForceBalanceStart(data, -1, &negative);
+  Block* const blocks[2] = {&positive, &negative};
   const double mass_kg = unit.manifest.rig.load_mass_kg;
-  // A direction without slides keeps the prior: its block stays constant.
+  // A direction without slides keeps the prior whole (its block constant).
   std::vector<double*> free_blocks;
   std::vector<int> free;  // columns 0-3 positive, 4-7 negative
-  for (const auto& [segments, block, offset] :
-       {std::make_tuple(result.positive.segments, &positive, 0),
-        std::make_tuple(result.negative.segments, &negative, kDirectionParameters)}) {
-    if (segments == 0) continue;
-    free_blocks.push_back(block->data());
-    for (int i = 0; i < kDirectionParameters; ++i) free.push_back(offset + i);
+  for (int d = 0; d < 2; ++d) {
+    const DirectionFit& fit = d == 0 ? result.positive : result.negative;
+    if (fit.segments + fit.smooth_slides == 0) {
+      *blocks[d] = prior_blocks[d];
+      continue;
+    }
+    free_blocks.push_back(blocks[d]->data());
+    for (int i = 0; i < kDirectionParameters; ++i) free.push_back(d * kDirectionParameters + i);
   }
 
   std::vector<double> stop_time_s;
   for (const Segment& s : data.segments) stop_time_s.push_back(s.stop_time_guess_s);
   std::vector<SegmentJacobian> jacobians;
-  int iterations = 0;
   std::vector<double> huber_scale;  // empty: plain least squares
   for (int pass = 0; pass < 2; ++pass) {
     SegmentProblem problem;
     problem.stop_time_s = &stop_time_s;
     BuildProblem(data, mass_kg, options, huber_scale, &positive, &negative, &problem);
-    for (double* block : {positive.data(), negative.data()}) {
-      if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end())
+    for (int d = 0; d < 2; ++d) {
+      double* block = blocks[d]->data();
+      if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end()) {
         problem.problem.SetParameterBlockConstant(block);
+      } else {
+        problem.problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<PriorResidual, kDirectionParameters,
+                                            kDirectionParameters>(
+                new PriorResidual{prior_blocks[d], PriorSigmas(options)}),
+            nullptr, block);
+      }
     }
     const ceres::Solver::Summary summary = Solve(options, &problem.problem);
     if (pass == 0) result.initial_cost = summary.initial_cost;
     result.final_cost = summary.final_cost;
-    iterations += static_cast<int>(summary.iterations.size());
+    result.iterations += static_cast<int>(summary.iterations.size());
     const auto failed = [&] {
       result.note = "Ceres did not converge (" + summary.message + "); the prior is kept";
       return result;
     };
     if (!summary.IsSolutionUsable()) return failed();
     if (pass == 0) {
-      // Segments far worse than the typical one (a disturbed stroke, a bump on
-      // the rod): refit with each segment's influence bounded (Huber).
+      // Segments far worse than the typical one (a disturbed stroke, a bump
+      // on the rod): refit with each segment's influence bounded (Huber).
       std::vector<double> mean_squares;
       if (!SegmentMeanSquares(&problem, &mean_squares)) return failed();
       const double typical = Median(mean_squares);
-      result.outlier_segments =
-          static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
-            return m > options.outlier_ratio * typical;
-          }));
+      result.outlier_segments = static_cast<int>(
+          std::count_if(mean_squares.begin(), mean_squares.end(),
+                        [&](double m) { return m > options.outlier_ratio * typical; }));
       if (result.outlier_segments > 0) {
         for (int n : problem.rows) huber_scale.push_back(options.outlier_ratio * typical * n);
         continue;  // the Jacobians are taken after the refit
@@ -692,10 +903,55 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     if (!Evaluate(data, free_blocks, &problem, &jacobians)) return failed();
     break;
   }
-  result.iterations = iterations;
+  // The robust covariance: the data's information plus the prior's in the
+  // bread, the clusters' scores in the meat.
+  Eigen::MatrixXd information, meat;
+  Information(jacobians, &information, &meat);
+  // The prior is one more independent observation of each coefficient: its
+  // information enters the bread and, as its own variance, the meat (where
+  // the logs say nothing, the error is then the prior's, not zero).
+  const std::array<double, kDirectionParameters> sigma = PriorSigmas(options);
+  const double clusters = static_cast<double>(jacobians.size());
+  meat *= clusters / std::max(clusters - 1.0, 1.0);
+  for (std::size_t a = 0; a < free.size(); ++a) {
+    const int i = free[a] % kDirectionParameters;
+    const double value = (*blocks[free[a] / kDirectionParameters])[i];
+    const double slope = i == 3 ? 1.0 / (value * sigma[i]) : 1.0 / sigma[i];  // vs: ln scale
+    information(a, a) += slope * slope;
+    meat(a, a) += slope * slope;
+  }
+  const Eigen::MatrixXd bread = information.inverse();
+  const Eigen::MatrixXd covariance = bread * meat * bread;
+  // What the logs determine (determination.h): the rest is reported as held,
+  // its value the prior's pull against no evidence.
+  std::vector<bool> determined(free.size(), true);
+  for (std::size_t a = 0; a < free.size(); ++a) {
+    const int i = free[a] % kDirectionParameters;
+    const double value = (*blocks[free[a] / kDirectionParameters])[i];
+    const double error = std::sqrt(std::max(covariance(a, a), 0.0));
+    determined[a] = internal::IsDetermined(value, error, kDeterminedFloor[i],
+                                           options.identifiable_relative_error);
+    if (!determined[a]) {
+      char why[200];
+      std::snprintf(why, sizeof(why),
+                    "not determined by these logs (%.4g +- %.2g); regularised toward the prior",
+                    value, error);
+      (free[a] < kDirectionParameters ? result.positive : result.negative)
+          .held[kParameterNames[i]] = why;
+    }
+  }
+  // vs means something only through the Stribeck drop Fs - Fd: with Fs not
+  // determined, a "determined" vs is the prior's Fs speaking.
+  for (std::size_t a = 0; a + 3 < free.size(); a += kDirectionParameters) {
+    if (determined[a] || !determined[a + 3]) continue;
+    determined[a + 3] = false;
+    (free[a] < kDirectionParameters ? result.positive : result.negative).held["vs"] =
+        "not determined by these logs: Fs, which sets the Stribeck drop, is not; regularised "
+        "toward the prior";
+  }
   result.segments = static_cast<int>(data.segments.size());
   double squares = 0;
-  for (std::size_t k = 0; k < jacobians.size(); ++k) {
+  for (std::size_t k = 0; k < data.segments.size(); ++k) {
     const Eigen::VectorXd& r = jacobians[k].residuals;
     result.samples += static_cast<int>(r.size());
     for (Eigen::Index i = 0; i < r.size(); ++i) {
@@ -703,18 +959,20 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     }
   }
   result.position_rms_m = std::sqrt(squares / std::max(result.samples, 1));
-  Eigen::MatrixXd covariance;
-  if (!SandwichCovariance(jacobians, &covariance)) {
-    result.note =
-        "the coefficients are not identifiable from these logs (singular J'J); the prior is kept";
-    return result;
-  }
   result.fitted = true;
-  result.positive.fitted = result.positive.segments > 0;
-  result.negative.fitted = result.negative.segments > 0;
-  Report(positive, free, covariance, 0, options.identifiable_relative_error, &result.positive);
-  Report(negative, free, covariance, kDirectionParameters, options.identifiable_relative_error,
-         &result.negative);
+  for (int d = 0; d < 2; ++d) {
+    DirectionFit& fit = d == 0 ? result.positive : result.negative;
+    fit.params = Unpack(*blocks[d]);
+    for (int i = 0; i < kDirectionParameters; ++i) {
+      const auto at = std::find(free.begin(), free.end(), d * kDirectionParameters + i) - free.begin();
+      if (at == static_cast<long>(free.size())) {
+        fit.held[kParameterNames[i]] = "no slide this way";
+      } else if (determined[at]) {
+        fit.standard_errors[kParameterNames[i]] = std::sqrt(std::max(covariance(at, at), 0.0));
+      }
+    }
+    fit.fitted = !fit.standard_errors.empty();
+  }
   for (std::size_t a = 0; a < free.size(); ++a) {
     for (std::size_t b = a + 1; b < free.size(); ++b) {
       result.correlations[ColumnName(free[a]) + "," + ColumnName(free[b])] =
@@ -734,27 +992,34 @@ std::string FrictionFitResult::BriefReport() const {
   }
   char line[320];
   std::snprintf(line, sizeof(line),
-                "%d segments (%d samples, %d near the stroke ends left out, %d outliers), cost "
-                "%.4g -> %.4g in %d iterations, position RMS %.3g mm\n",
-                segments, samples, excluded_segments, outlier_segments, initial_cost, final_cost,
-                iterations, position_rms_m * 1e3);
+                "%d segments (%d samples, %d near the stroke ends left out, %d outliers), %d "
+                "force-balance samples, cost %.4g -> %.4g in %d iterations, position RMS %.3g mm\n",
+                segments, samples, excluded_segments, outlier_segments, smooth_samples,
+                initial_cost, final_cost, iterations, position_rms_m * 1e3);
   out << line;
+  const char* const units[] = {"N", "N", "N s/m", "m/s"};
   for (const auto& [name, fit] :
        {std::make_pair("positive", &positive), std::make_pair("negative", &negative)}) {
-    out << "  " << name << ": ";
-    if (!fit->fitted) {
-      out << "no slide this way; the prior is kept\n";
-      continue;
-    }
-    const auto& e = fit->standard_errors;
-    std::snprintf(line, sizeof(line),
-                  "%d slides; Fs %.4g +- %.2g N, Fd %.4g +- %.2g N, b %.4g +- %.2g N s/m, vs "
-                  "%.4g +- %.2g m/s\n",
-                  fit->segments, fit->params.static_force_N, e.at("Fs"),
-                  fit->params.dynamic_force_N, e.at("Fd"), fit->params.viscous_N_s_per_m, e.at("b"),
-                  fit->params.stribeck_velocity_m_per_s, e.at("vs"));
+    std::snprintf(line, sizeof(line), "  %s: %d slides replayed, %d smooth slides;", name,
+                  fit->segments, fit->smooth_slides);
     out << line;
-    for (const auto& warning : fit->warnings) out << "    warning: " << warning << "\n";
+    const double values[] = {fit->params.static_force_N, fit->params.dynamic_force_N,
+                             fit->params.viscous_N_s_per_m, fit->params.stribeck_velocity_m_per_s};
+    for (int i = 0; i < kDirectionParameters; ++i) {
+      const auto error = fit->standard_errors.find(kParameterNames[i]);
+      if (error == fit->standard_errors.end()) {
+        std::snprintf(line, sizeof(line), " %s %.4g %s (held)", kParameterNames[i], values[i],
+                      units[i]);
+      } else {
+        std::snprintf(line, sizeof(line), " %s %.4g +- %.2g %s", kParameterNames[i], values[i],
+                      error->second, units[i]);
+      }
+      out << line << (i + 1 < kDirectionParameters ? "," : "\n");
+    }
+    for (const auto& [coefficient, why] : fit->held) {
+      if (why != "no slide this way" || coefficient == "Fs")
+        out << "    held " << coefficient << ": " << why << "\n";
+    }
   }
   for (const auto& [pair, r] : correlations) {
     if (std::fabs(r) > 0.95) out << "  poorly separable: " << pair << " correlation " << r << "\n";

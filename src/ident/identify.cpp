@@ -151,8 +151,8 @@ void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyO
        {std::make_tuple("positive", &fit.positive, &params->friction.positive),
         std::make_tuple("negative", &fit.negative, &params->friction.negative)}) {
     const std::string prefix = std::string("friction.") + name + ".";
-    if (!fit.fitted || !direction->fitted) {
-      AddPriorsUnder(prefix, fit.fitted ? "no slide in this direction" : fit.note, report);
+    if (!fit.fitted) {
+      AddPriorsUnder(prefix, fit.note, report);
       continue;
     }
     *target = direction->params;
@@ -160,6 +160,8 @@ void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyO
       report->fitted.push_back(prefix + coefficient);
       params->uncertainty[prefix + coefficient] = error;
     }
+    for (const auto& [coefficient, why] : direction->held)
+      report->priors.push_back(prefix + coefficient + " (" + why + ")");
   }
 }
 

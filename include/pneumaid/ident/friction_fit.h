@@ -32,6 +32,15 @@ struct FrictionFitOptions {
   // than min_stuck_samples are not stuck phases.
   double stuck_band_m = 2.5e-5;
   int min_stuck_samples = 5;
+  // ... and last at least min_stuck_s, and move like a rod at rest (least
+  // squares over the run): slower than max_stuck_speed_m_per_s, with less
+  // curvature than max_stuck_acceleration_m_per_s2 (or within 4 x what the
+  // position noise gives). At a high sample rate a slow slide stays inside
+  // the band for many samples, and the apex of a reversal that does not
+  // stick looks still for a while: neither is stuck.
+  double min_stuck_s = 0.004;
+  double max_stuck_speed_m_per_s = 2e-3;
+  double max_stuck_acceleration_m_per_s2 = 0.5;
   // Of a long stuck phase only its last samples before breakaway enter the
   // segment; a segment also keeps this many samples of the next stuck phase,
   // where the replay must have arrested the rod at the right place.
@@ -40,9 +49,19 @@ struct FrictionFitOptions {
   // The force while stuck is replaced by a quadratic fitted to this many of
   // the stuck phase's last samples (its noise would trigger breakaway early).
   int stuck_force_samples = 20;
-  // Segments with a logged position closer than this to a stroke end [m] are
-  // left out: end-stop forces are not part of the friction model.
-  double end_margin_m = 1e-3;
+  // Within this distance of a stroke end [m] (plus 4 x the declared position
+  // noise) the rod may touch the end stop, whose forces are not friction: a
+  // slide is cut where it enters that zone, and a rod stuck there starts its
+  // segment once the force points away from the stop.
+  double end_margin_m = 3e-4;
+  // A slide replayed from its breakaway is cut after this long [s] (the
+  // replay integrates any bias of the measured force twice); the rest of it
+  // enters as force balance.
+  double max_slide_s = 0.1;
+  // Also fit the force balance of smoothly sliding samples (friction(v) =
+  // F - M a, v and a by a local quadratic over smoothing_window_s).
+  bool force_balance = true;
+  double smoothing_window_s = 0.01;
   // RK4 substeps per sample interval while sliding.
   int substeps = 8;
   // Ceres Levenberg-Marquardt iterations.
@@ -51,9 +70,18 @@ struct FrictionFitOptions {
   // segment's is treated as an outlier: the fit is repeated with a Huber loss
   // that bounds each segment's influence.
   double outlier_ratio = 25.0;
-  // A parameter whose standard error exceeds this fraction of its value is
-  // reported as not identifiable from the data (the value is still written,
-  // with its large standard error).
+  // The stated prior uncertainty of each coefficient: a weak Gaussian prior
+  // around the prior set's value (vs: on a log scale, a factor e^sigma)
+  // keeps what the logs do not determine near the prior; against logs that
+  // determine a coefficient it is negligible. Wide enough for Fs 2-20 N,
+  // Fd 0.1-10 N, b 1-15 N s/m, vs 2-25 mm/s.
+  double prior_static_sigma_N = 10.0;
+  double prior_dynamic_sigma_N = 5.0;
+  double prior_viscous_sigma_N_s_per_m = 7.0;
+  double prior_stribeck_log_sigma = 1.1;  // ln 3
+  // A coefficient whose standard error exceeds this fraction of its value
+  // and its tolerance (0.1 N, 0.5 N s/m, 1 mm/s) is not determined by the
+  // logs: it is reported as held, by name with why (determination.h).
   double identifiable_relative_error = 0.5;
 
   bool IsValid(std::string* error) const;
@@ -61,11 +89,12 @@ struct FrictionFitOptions {
 
 // The fit of one direction's coefficients.
 struct DirectionFit {
-  bool fitted = false;  // false: no slide in this direction, the prior is kept
+  bool fitted = false;  // false: no coefficient of this direction fitted
   StribeckParams params;
-  std::map<std::string, double> standard_errors;  // "Fs", "Fd", "b", "vs"
-  std::vector<std::string> warnings;              // parameters not identifiable, why
-  int segments = 0;                               // segments whose slide goes this way
+  std::map<std::string, double> standard_errors;  // the fitted of "Fs", "Fd", "b", "vs"
+  std::map<std::string, std::string> held;        // the others, at the prior: why
+  int segments = 0;       // replayed segments whose slide goes this way
+  int smooth_slides = 0;  // force-balance clusters (smooth slides) this way
 };
 
 struct FrictionFitResult {
@@ -74,6 +103,7 @@ struct FrictionFitResult {
   DirectionFit positive, negative;
   std::map<std::string, double> correlations;  // "positive.Fs,negative.b" -> r
   int segments = 0, samples = 0, excluded_segments = 0, outlier_segments = 0;
+  int smooth_samples = 0;  // force-balance samples
   double initial_cost = 0, final_cost = 0;
   int iterations = 0;
   double position_rms_m = 0;  // replay vs log over all fitted samples
