@@ -11,8 +11,7 @@ namespace pneumaid::internal {
 
 // `floor`: below this standard error a coefficient is determined whatever its
 // value (a force near zero is determined to 0.1 N, not to 50 % of itself).
-inline bool IsDetermined(double value, double standard_error, double floor,
-                         double relative_limit) {
+inline bool IsDetermined(double value, double standard_error, double floor, double relative_limit) {
   const double limit = relative_limit * (value < 0 ? -value : value);
   return standard_error <= (limit > floor ? limit : floor);  // NaN: not determined
 }

@@ -511,7 +511,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
                 options.end_margin_m + 4 * sigma_x_m, period, sigma_x_m, drift_m, options, &data);
     if (!options.force_balance) continue;
     std::vector<bool> covered(x.size(), false);
-    for (const auto& [begin, end] : runs) std::fill(covered.begin() + begin, covered.begin() + end, true);
+    for (const auto& [begin, end] : runs)
+      std::fill(covered.begin() + begin, covered.begin() + end, true);
     for (std::size_t k = first_segment; k < data.segments.size(); ++k) {
       const Segment& segment = data.segments[k];
       std::fill(covered.begin() + segment.begin, covered.begin() + segment.end, true);
@@ -524,14 +525,13 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     sampling.half_stroke_m = 0.5 * rig.stroke_m;
     sampling.end_zone_m = options.end_margin_m + 4 * sigma_x_m;
     sampling.window_s = options.smoothing_window_s;
-    for (auto& cluster : internal::SlidingSamples(data.position_m.back(), data.force_N.back(),
-                                                  covered, sampling)) {
+    for (auto& cluster :
+         internal::SlidingSamples(data.position_m.back(), data.force_N.back(), covered, sampling)) {
       data.clusters.push_back(std::move(cluster));
     }
   }
   return data;
 }
-
 
 // Median over the slides of `direction` of the force on the last sample
 // before the rod has covered a quarter of the segment's travel: about where
@@ -780,7 +780,9 @@ void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
     if (!(theta(1) >= 0)) theta = Eigen::Vector2d(rhs(0) / normal(0, 0), 0.0);
     theta(0) = std::clamp(theta(0), 0.0, fs);
     double cost = 0;
-    each([&](const Eigen::Vector2d& x, double y, double w) { cost += w * std::pow(y - x.dot(theta), 2); });
+    each([&](const Eigen::Vector2d& x, double y, double w) {
+      cost += w * std::pow(y - x.dot(theta), 2);
+    });
     if (cost < best) best = cost, *block = {fs, theta(0), theta(1), vs};
   }
 }
@@ -827,7 +829,8 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   result.positive.smooth_slides = ClustersOf(data, +1);
   result.negative.smooth_slides = ClustersOf(data, -1);
   result.smooth_samples = 0;
-  for (const auto& c : data.clusters) result.smooth_samples += static_cast<int>(c.speed_m_per_s.size());
+  for (const auto& c : data.clusters)
+    result.smooth_samples += static_cast<int>(c.speed_m_per_s.size());
   if (result.positive.segments + result.negative.segments + result.positive.smooth_slides +
           result.negative.smooth_slides ==
       0) {
@@ -892,9 +895,10 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
       std::vector<double> mean_squares;
       if (!SegmentMeanSquares(&problem, &mean_squares)) return failed();
       const double typical = Median(mean_squares);
-      result.outlier_segments = static_cast<int>(
-          std::count_if(mean_squares.begin(), mean_squares.end(),
-                        [&](double m) { return m > options.outlier_ratio * typical; }));
+      result.outlier_segments =
+          static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
+            return m > options.outlier_ratio * typical;
+          }));
       if (result.outlier_segments > 0) {
         for (int n : problem.rows) huber_scale.push_back(options.outlier_ratio * typical * n);
         continue;  // the Jacobians are taken after the refit
@@ -964,7 +968,8 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     DirectionFit& fit = d == 0 ? result.positive : result.negative;
     fit.params = Unpack(*blocks[d]);
     for (int i = 0; i < kDirectionParameters; ++i) {
-      const auto at = std::find(free.begin(), free.end(), d * kDirectionParameters + i) - free.begin();
+      const auto at =
+          std::find(free.begin(), free.end(), d * kDirectionParameters + i) - free.begin();
       if (at == static_cast<long>(free.size())) {
         fit.held[kParameterNames[i]] = "no slide this way";
       } else if (determined[at]) {

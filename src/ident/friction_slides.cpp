@@ -47,8 +47,7 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
       for (int j = -k; j <= k; ++j) {
         const std::size_t at = i + j;
         // The whole window must be free: no stuck or replayed sample, no end.
-        if (covered[at] ||
-            std::fabs(x_m[at]) > sampling.half_stroke_m - sampling.end_zone_m) {
+        if (covered[at] || std::fabs(x_m[at]) > sampling.half_stroke_m - sampling.end_zone_m) {
           usable = false;
           break;
         }
@@ -59,7 +58,8 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
       a *= 2 / (s4 * h * h);
     }
     const int direction = v > 0 ? +1 : -1;
-    if (!usable || std::fabs(v) < min_speed || (current.direction != 0 && direction != current.direction)) {
+    if (!usable || std::fabs(v) < min_speed ||
+        (current.direction != 0 && direction != current.direction)) {
       close();
       since_start = 0;
       if (!usable || std::fabs(v) < min_speed) continue;

@@ -9,8 +9,8 @@
 // friction-velocity map of the seed paper's Figs. 8 and 9, sample by sample.
 // Samples near a stuck phase, a reversal or a stroke end are left out (the
 // window would straddle them, or the acceleration still changes within it),
-// and so are samples that a replay segment already covers. Consecutive samples share a window, so their residuals are
-// correlated: each slide is one cluster of the fit's robust covariance.
+// and so are samples that a replay segment already covers. Consecutive samples share a window, so
+// their residuals are correlated: each slide is one cluster of the fit's robust covariance.
 #pragma once
 
 #include <cmath>
@@ -22,10 +22,10 @@
 namespace pneumaid::internal {
 
 struct SlideCluster {
-  int direction = 0;                     // +1 or -1 for every sample
-  std::vector<double> speed_m_per_s;     // |v| > 0
-  std::vector<double> friction_N;        // dir (F - M a): the friction magnitude
-  std::vector<double> weight;            // 1 / its standard error [1/N]
+  int direction = 0;                  // +1 or -1 for every sample
+  std::vector<double> speed_m_per_s;  // |v| > 0
+  std::vector<double> friction_N;     // dir (F - M a): the friction magnitude
+  std::vector<double> weight;         // 1 / its standard error [1/N]
 };
 
 struct SlideSampling {
@@ -34,8 +34,8 @@ struct SlideSampling {
   double sigma_x_m = 5e-6;     // position noise
   double sigma_force_N = 0.1;  // the driving force's noise
   double half_stroke_m = 0.025;
-  double end_zone_m = 1e-3;   // samples this close to an end are left out
-  double window_s = 0.01;     // the smoothing window (at least 7 samples)
+  double end_zone_m = 1e-3;         // samples this close to an end are left out
+  double window_s = 0.01;           // the smoothing window (at least 7 samples)
   double min_speed_m_per_s = 2e-3;  // slower samples count as not sliding
   int min_cluster_samples = 5;
 };
@@ -56,8 +56,9 @@ struct SlideResidual {
     const T* theta = cluster->direction > 0 ? positive : negative;
     const StribeckCoefficients<T> c{theta[0], theta[1], theta[2], theta[3]};
     for (std::size_t i = 0; i < cluster->speed_m_per_s.size(); ++i) {
-      residual[i] = (T(cluster->friction_N[i]) - StribeckMagnitude(T(cluster->speed_m_per_s[i]), c)) *
-                    T(cluster->weight[i]);
+      residual[i] =
+          (T(cluster->friction_N[i]) - StribeckMagnitude(T(cluster->speed_m_per_s[i]), c)) *
+          T(cluster->weight[i]);
     }
     return true;
   }

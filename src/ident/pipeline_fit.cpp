@@ -78,7 +78,8 @@ double BestLevels(const TubeLog& log, double delta, std::vector<double>* flow) {
     unit[k] = 1.0;
     log.Predict(unit.data(), delta, 0.0, &inlet[k], &outlet[k]);
   }
-  const double w_in = 1 / (log.sigma_in * log.sigma_in), w_out = 1 / (log.sigma_out * log.sigma_out);
+  const double w_in = 1 / (log.sigma_in * log.sigma_in),
+               w_out = 1 / (log.sigma_out * log.sigma_out);
   for (int a = 0; a < m; ++a) {
     for (int b = a; b < m; ++b) {
       double sum = 0;
@@ -172,7 +173,8 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   double best_delta = options.initial_delta_per_s;
   double best_cost = BestLevels(log, best_delta, &best_flow);
   const double decades = std::log10(options.max_delta_per_s / options.min_delta_per_s);
-  const int points = std::max(2, static_cast<int>(std::ceil(decades * options.scan_points_per_decade)));
+  const int points =
+      std::max(2, static_cast<int>(std::ceil(decades * options.scan_points_per_decade)));
   for (int k = 0; k <= points; ++k) {
     const double delta = options.min_delta_per_s * std::pow(10.0, decades * k / points);
     const double cost = BestLevels(log, delta, &flow);
@@ -214,7 +216,8 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   if (!(valve_tau_s > 0)) problem.SetParameterBlockConstant(&valve_tau_s);
   ceres::Covariance covariance{ceres::Covariance::Options{}};
   std::vector<double> c(static_cast<std::size_t>(m * m));
-  const std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()}};
+  const std::vector<std::pair<const double*, const double*>> blocks = {
+      {theta.data(), theta.data()}};
   char note[200];
   if (!covariance.Compute(blocks, &problem) ||
       !covariance.GetCovarianceBlock(theta.data(), theta.data(), c.data())) {
@@ -225,8 +228,7 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
     return fit;
   }
   // Model error counts: a fit worse than the noise widens its error.
-  const double error =
-      std::sqrt(c.back() * ModelErrorFactor(residuals, n, fit.reduced_chi_square));
+  const double error = std::sqrt(c.back() * ModelErrorFactor(residuals, n, fit.reduced_chi_square));
   if (!(error < options.determined_relative_error * delta)) {
     std::snprintf(note, sizeof(note),
                   "delta is not determined by this log (%.3g +- %.2g 1/s; the sample rate or the "

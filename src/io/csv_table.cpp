@@ -5,8 +5,8 @@
 #include <set>
 #include <string_view>
 
-#include "pneumaid/io/files.h"
 #include "parse_number.h"
+#include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
 
 namespace pneumaid {

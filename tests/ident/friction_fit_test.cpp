@@ -197,7 +197,8 @@ void ExpectWithinToleranceOrHeld(const DirectionFit& fit, const StribeckParams& 
 // segment): the sliding friction comes from the force balance, Fs and vs
 // (never slower than a few mm/s away from the ends) are held and say so.
 TEST(FrictionFitTest, AHeavyLoadThatNeverSticksGetsItsSlidingFrictionAndSaysWhatIsHeld) {
-  Parameters truth = LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
+  Parameters truth =
+      LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
   truth.cylinder.load_mass_kg = 1.5;
   truth.friction.positive = {8.0, 2.0, 6.0, 0.012};
   truth.friction.negative = {12.0, 4.0, 12.0, 0.006};
@@ -212,7 +213,8 @@ TEST(FrictionFitTest, AHeavyLoadThatNeverSticksGetsItsSlidingFrictionAndSaysWhat
 }
 
 TEST(FrictionFitTest, ADirectionWithAnUndeterminedVsStillGetsItsSlidingFriction) {
-  Parameters truth = LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
+  Parameters truth =
+      LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
   truth.friction.negative = {6.0, 5.95, 3.0, 0.02};
   const Unit unit = MismatchedStrokes(truth, 6, 1000, {0.5, 0.7, 1.0}, 2);
   const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});

@@ -116,13 +116,15 @@ TEST_P(TubeProtocolTest, DeltaWithinFivePercentWithMismatch) {
 
 INSTANTIATE_TEST_SUITE_P(
     Shapes, TubeProtocolTest,
-    ::testing::Values(
-        TubeProtocolCase{"OnHoldOff", {{0.1, 1.0}, {1.2, 0.0}}, 1000, 3.5, 2.5},
-        TubeProtocolCase{"TwoLevels", {{0.05, 0.4}, {0.7, 1.0}}, 500, 12.0, 1.4},
-        TubeProtocolCase{"StaircaseUpAndDown",
-                         {{0.1, 0.3}, {0.4, 0.7}, {0.7, 1.0}, {1.0, 0.5}, {1.3, 0.0}}, 5000, 20.0,
-                         1.6},
-        TubeProtocolCase{"OffStepAtLowRate", {{0.2, 0.8}, {1.0, 0.0}}, 250, 5.0, 2.0}),
+    ::testing::Values(TubeProtocolCase{"OnHoldOff", {{0.1, 1.0}, {1.2, 0.0}}, 1000, 3.5, 2.5},
+                      TubeProtocolCase{"TwoLevels", {{0.05, 0.4}, {0.7, 1.0}}, 500, 12.0, 1.4},
+                      TubeProtocolCase{"StaircaseUpAndDown",
+                                       {{0.1, 0.3}, {0.4, 0.7}, {0.7, 1.0}, {1.0, 0.5}, {1.3, 0.0}},
+                                       5000,
+                                       20.0,
+                                       1.6},
+                      TubeProtocolCase{
+                          "OffStepAtLowRate", {{0.2, 0.8}, {1.0, 0.0}}, 250, 5.0, 2.0}),
     [](const ::testing::TestParamInfo<TubeProtocolCase>& info) { return info.param.name; });
 
 TEST(PipelineFitTest, ACommandThatNeverHoldsSaysWhy) {

@@ -45,8 +45,8 @@ ValveParams Perturbed(const ValveParams& truth) {
 // The largest |K_vp fitted - K_vp true| / q_max over u in [0, 1] outside the
 // gap (gap_low, gap_high] of the staircase that holds the true u_sat: no
 // plateau there tells where the polynomial ends.
-double WorstKvpError(const KvpBranchParams& fitted, const KvpBranchParams& real,
-                     double gap_low = 1, double gap_high = 1) {
+double WorstKvpError(const KvpBranchParams& fitted, const KvpBranchParams& real, double gap_low = 1,
+                     double gap_high = 1) {
   const auto c_fit = MakeKvpCoefficients<double>(fitted);
   const auto c_true = MakeKvpCoefficients<double>(real);
   double worst = 0;

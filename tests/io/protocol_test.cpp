@@ -54,9 +54,10 @@ TEST(ProtocolTest, ATubeScheduleAStrokeDwellAndAMismatchAreRead) {
 }
 
 TEST(ProtocolTest, ABadScheduleOrMismatchNamesItsLine) {
-  for (const char* bad : {"pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5, 1], [0.2, 0]]}\n",
-                          "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5]]}\n",
-                          "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n"}) {
+  for (const char* bad :
+       {"pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5, 1], [0.2, 0]]}\n",
+        "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5]]}\n",
+        "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n"}) {
     try {
       ParseProtocol(std::string("format: pneumaid-protocol/1\n") + bad, "p.yaml");
       ADD_FAILURE() << bad << " accepted";

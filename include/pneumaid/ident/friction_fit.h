@@ -93,8 +93,8 @@ struct DirectionFit {
   StribeckParams params;
   std::map<std::string, double> standard_errors;  // the fitted of "Fs", "Fd", "b", "vs"
   std::map<std::string, std::string> held;        // the others, at the prior: why
-  int segments = 0;       // replayed segments whose slide goes this way
-  int smooth_slides = 0;  // force-balance clusters (smooth slides) this way
+  int segments = 0;                               // replayed segments whose slide goes this way
+  int smooth_slides = 0;                          // force-balance clusters (smooth slides) this way
 };
 
 struct FrictionFitResult {

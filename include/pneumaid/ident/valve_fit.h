@@ -66,7 +66,7 @@ struct BranchFit {
   KvpBranchParams params;
   std::map<std::string, double> standard_errors;  // "a" .. "q_max" (and "u_sat" when fitted)
   bool u_sat_fitted = false;  // ValveFitOptions::fit_u_sat and the staircase shows saturation
-  std::map<std::string, double> correlations;     // "a,b" -> r, |r| > 0.95 flagged
+  std::map<std::string, double> correlations;  // "a,b" -> r, |r| > 0.95 flagged
   int plateaus = 0;
   double initial_cost = 0, final_cost = 0;
   int iterations = 0;

@@ -4,8 +4,8 @@
 #pragma once
 
 #include <map>
-#include <utility>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pneumaid/io/rig_data.h"

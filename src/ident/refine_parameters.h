@@ -1,0 +1,74 @@
+// Refinement (refine.h), its free parameters: the bounds map between the
+// solver's unconstrained coordinates and the parameters' values, and the
+// Latin-hypercube starting points inside the bounds.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "pneumaid/ident/fit_spec.h"
+#include "pneumaid/model/parameter_table.h"
+#include "pneumaid/model/parameters.h"
+
+namespace pneumaid::refine_internal {
+
+// The solver's coordinates theta for the free parameters. Each parameter's
+// scale coordinate w (w = p for a linear scale, w = ln p for a log scale) is
+// mapped onto its bounds by a logistic function,
+//   w = w_lo + (w_hi - w_lo) / (1 + exp(-theta)),
+// so the problem Ceres sees is unconstrained: no step is ever rejected for
+// leaving the bounds, and no projected line search (which would evaluate a
+// Jacobian, a sensitivity run, at every trial point) is needed. Near a lower
+// bound of 0 a linear parameter moves multiplicatively, like a log scale.
+struct ParameterMap {
+  std::vector<FreeParameter> free;
+
+  bool IsLog(int j) const { return free[j].scale == ParameterScale::kLog; }
+  double Low(int j) const { return IsLog(j) ? std::log(free[j].lower) : free[j].lower; }
+  double Span(int j) const { return (IsLog(j) ? std::log(free[j].upper) : free[j].upper) - Low(j); }
+  static double Logistic(double theta) { return 1.0 / (1.0 + std::exp(-theta)); }
+
+  double ToValue(int j, double theta) const {
+    const double w = Low(j) + Span(j) * Logistic(theta);
+    return IsLog(j) ? std::exp(w) : w;
+  }
+  double ToTheta(int j, double value) const {
+    const double w = IsLog(j) ? std::log(value) : value;
+    // A start on a bound is moved just inside (theta would be infinite).
+    const double f = std::clamp((w - Low(j)) / Span(j), 1e-9, 1.0 - 1e-9);
+    return std::log(f / (1.0 - f));
+  }
+  double Derivative(int j, double theta) const {  // dp/dtheta
+    const double s = Logistic(theta);
+    const double dw = Span(j) * s * (1.0 - s);
+    return IsLog(j) ? ToValue(j, theta) * dw : dw;
+  }
+  // The coordinates of the free parameters' values in `params`.
+  std::vector<double> ThetaOf(const Parameters& params) const {
+    std::vector<double> theta;
+    for (int j = 0; j < size(); ++j) {
+      double value = 0;
+      GetParameter(params, free[j].path, &value);
+      theta.push_back(ToTheta(j, value));
+    }
+    return theta;
+  }
+  int size() const { return static_cast<int>(free.size()); }
+};
+
+// The map of spec.parameters; InputError for a parameter `start` lacks or a
+// start outside its bounds.
+ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec);
+
+// `base` with the free parameters at coordinates theta.
+Parameters WithValues(const Parameters& base, const ParameterMap& map, const double* theta);
+
+// Latin-hypercube points inside the bounds: each parameter's range (in its
+// scale coordinate) cut into `count` strata, one point per stratum, strata
+// shuffled per axis.
+std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int count,
+                                                std::uint64_t seed);
+
+}  // namespace pneumaid::refine_internal

@@ -1,0 +1,218 @@
+#include "refine_runs.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/validate/validate.h"
+
+namespace pneumaid::refine_internal {
+
+std::string ManifestPath(const Unit& unit) { return unit.directory + "/unit.yaml"; }
+
+// The run's start with the offsets applied.
+InitialState StartOf(const FitExperiment& e, const double* offsets) {
+  InitialState initial = e.initial;
+  if (e.FitsStart()) {
+    initial.p1_Pa += offsets[0] * e.start_sigma_Pa[0];
+    initial.p2_Pa += offsets[1] * e.start_sigma_Pa[1];
+  }
+  return initial;
+}
+
+const Channel kChannelTable[5] = {
+    {"x", &Trajectory::x_m, &TrajectorySensitivities::x, 0, 0},
+    {"p1", &Trajectory::p1_Pa, &TrajectorySensitivities::p1, 0, 0},
+    {"p2", &Trajectory::p2_Pa, &TrajectorySensitivities::p2, 0, 0},
+    {"q1", &Trajectory::q1_kg_per_s, &TrajectorySensitivities::q1, 0, 0},
+    {"q2", &Trajectory::q2_kg_per_s, &TrajectorySensitivities::q2, 0, 0}};
+
+bool IsSimulable(const Experiment& e) {
+  return e.entry.kind == ExperimentKind::kStroke || e.entry.kind == ExperimentKind::kValidation;
+}
+
+// Experiments named by id or kind; InputError for a name that matches none.
+std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
+                                      const FitSpec& spec, bool must_match) {
+  std::vector<const Experiment*> chosen;
+  for (const std::string& name : names) {
+    bool matched = false;
+    for (const Experiment& e : unit.experiments) {
+      const bool by_kind = name == ToString(e.entry.kind);
+      if (!by_kind && e.entry.id != name) continue;
+      matched = true;
+      if (!IsSimulable(e)) {
+        if (by_kind) continue;
+        throw InputError(spec.source, 0, 0,
+                         "experiment '" + name + "' is a " + ToString(e.entry.kind) +
+                             " log; only stroke and validation runs can be refined on");
+      }
+      if (std::find(chosen.begin(), chosen.end(), &e) == chosen.end()) chosen.push_back(&e);
+    }
+    const bool is_kind = name == "stroke" || name == "validation";
+    if (!matched && (must_match || !is_kind)) {
+      throw InputError(spec.source, 0, 0,
+                       "no experiment or kind '" + name + "' in " + ManifestPath(unit));
+    }
+  }
+  return chosen;
+}
+
+// A channel's noise sigma [SI]: the spec's when it gives one, else the one
+// declared under the manifest's `sensors` (0 when neither does).
+double ChannelSigma(const FitSpec& spec, const Unit& unit, const std::string& channel) {
+  const auto given = spec.channels.find(channel);
+  return given != spec.channels.end() && given->second.sigma > 0
+             ? given->second.sigma
+             : unit.manifest.DeclaredSigma(channel, 0.0);
+}
+
+// The noise sigmas of one logged sample of p1 and p2, when the spec estimates
+// starts and both are known; {0, 0} (the start is taken as logged) otherwise.
+std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Unit& unit) {
+  const double p1 = ChannelSigma(spec, unit, "p1"), p2 = ChannelSigma(spec, unit, "p2");
+  if (!spec.fit_initial_pressures || !(p1 > 0 && p2 > 0)) return {0, 0};
+  return {p1, p2};
+}
+
+// `sample_sigma_Pa`: StartSampleSigma(spec, unit).
+FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
+                      double half_stroke_m,
+                      const std::array<double, kStartOffsets>& sample_sigma_Pa) {
+  FitExperiment out;
+  out.id = e.entry.id;
+  out.measured = e.AsTrajectory();
+  out.command = SampledCommand(out.measured.t_s, out.measured.u_V);
+  int averaged = 1;
+  out.initial = LoggedInitialState(out.measured, half_stroke_m, &averaged);
+  const double root_n = std::sqrt(static_cast<double>(averaged));
+  for (int k = 0; k < kStartOffsets; ++k) out.start_sigma_Pa[k] = sample_sigma_Pa[k] / root_n;
+  for (const Channel& row : kChannelTable) {
+    const auto wanted = spec.channels.find(row.name);
+    if (wanted == spec.channels.end() || (out.measured.*row.values).empty()) continue;
+    const double sigma = ChannelSigma(spec, unit, row.name);
+    if (!(sigma > 0)) {
+      throw InputError(spec.source, 0, 0,
+                       "channel " + row.name +
+                           ": no sigma given and none declared under sensors "
+                           "in " +
+                           ManifestPath(unit));
+    }
+    Channel c = row;
+    c.factor = wanted->second.weight / sigma;
+    c.meter_tau_s = row.name[0] == 'q' ? unit.manifest.DeclaredTau(row.name, 0.0) : 0.0;
+    out.channels.push_back(c);
+  }
+  if (out.channels.empty()) {
+    throw InputError(spec.source, 0, 0, "experiment '" + out.id + "' logs none of the channels");
+  }
+  return out;
+}
+
+// A stuck phase: the logged position stays within the band for at least this
+// many samples; a window is at least this long.
+constexpr std::size_t kMinStuckSamples = 5;
+constexpr std::size_t kMinWindowSamples = 20;
+
+// Samples [begin, end) of a run as a trajectory.
+Trajectory Slice(const Trajectory& run, std::size_t begin, std::size_t end) {
+  Trajectory out;
+  const auto cut = [&](const std::vector<double>& from, std::vector<double>* to) {
+    if (!from.empty()) to->assign(from.begin() + begin, from.begin() + end);
+  };
+  cut(run.t_s, &out.t_s);
+  cut(run.u_V, &out.u_V);
+  cut(run.x_m, &out.x_m);
+  cut(run.v_m_per_s, &out.v_m_per_s);
+  cut(run.p1_Pa, &out.p1_Pa);
+  cut(run.p2_Pa, &out.p2_Pa);
+  cut(run.q1_kg_per_s, &out.q1_kg_per_s);
+  cut(run.q2_kg_per_s, &out.q2_kg_per_s);
+  return out;
+}
+
+// Multiple shooting (FitStage::windows): the run cut where the rod is stuck,
+// each window simulated from its logged state, v = 0, with the command-driven
+// lags replayed from the start of the log. `band_m`: how far a stuck rod's
+// logged position may wander (noise and ADC step).
+std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m,
+                                   const std::array<double, kStartOffsets>& sample_sigma_Pa) {
+  const std::vector<double>& x = run.measured.x_m;
+  const std::size_t n = x.size();
+  std::vector<std::size_t> starts = {0};
+  std::vector<double> rest_positions = {run.initial.position_m};
+  for (std::size_t i = 1; i < n;) {
+    std::size_t j = i;
+    while (j + 1 < n && std::fabs(x[j + 1] - x[i]) <= band_m) ++j;
+    if (j - i + 1 >= kMinStuckSamples && i - starts.back() >= kMinWindowSamples &&
+        n - i >= kMinWindowSamples) {
+      starts.push_back(i);
+      double sum = 0;
+      for (std::size_t k = i; k < i + kMinStuckSamples; ++k) sum += x[k];
+      rest_positions.push_back(sum / kMinStuckSamples);
+    }
+    i = j + 1;
+  }
+  std::vector<FitExperiment> windows;
+  for (std::size_t w = 0; w < starts.size(); ++w) {
+    const std::size_t begin = starts[w], end = w + 1 < starts.size() ? starts[w + 1] : n;
+    FitExperiment window = run;
+    window.measured = Slice(run.measured, begin, end);
+    window.id = run.id + "@" + std::to_string(run.measured.t_s[begin]);
+    window.parent = run.id;
+    if (begin > 0) {
+      window.initial = InitialState{};
+      window.initial.position_m = std::clamp(rest_positions[w], -half_stroke_m, half_stroke_m);
+      window.initial.p1_Pa = run.measured.p1_Pa[begin];
+      window.initial.p2_Pa = run.measured.p2_Pa[begin];
+      window.initial.lag_history_from_s = run.measured.t_s.front();
+      if (run.FitsStart()) window.start_sigma_Pa = sample_sigma_Pa;  // one sample each
+    }
+    windows.push_back(std::move(window));
+  }
+  return windows;
+}
+
+// The fitted runs of a spec, whole or cut into windows.
+std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
+                                      const FitSpec& spec, bool windows) {
+  const auto fitted = Select(unit, spec.fit, spec, true);
+  for (const Experiment* e : Select(unit, spec.hold_out, spec, false)) {
+    if (std::count(fitted.begin(), fitted.end(), e)) {
+      throw InputError(spec.source, 0, 0,
+                       "experiment '" + e->entry.id + "' is both fitted and held out");
+    }
+  }
+  if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
+  const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
+  const double band = 4.0 * unit.manifest.DeclaredSigma("x", 5e-6) + 10e-6;
+  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit);
+  std::vector<FitExperiment> runs;
+  for (const Experiment* e : fitted) {
+    FitExperiment run = Prepare(*e, unit, spec, half_stroke, sample_sigma);
+    if (!windows) {
+      runs.push_back(std::move(run));
+      continue;
+    }
+    for (FitExperiment& window : Windows(run, band, half_stroke, sample_sigma)) {
+      runs.push_back(std::move(window));
+    }
+  }
+  return runs;
+}
+
+// Windows' costs summed per run, in the order the runs first appear.
+std::vector<ExperimentCost> PerRun(const std::vector<ExperimentCost>& costs,
+                                   const std::vector<FitExperiment>& runs) {
+  std::vector<ExperimentCost> merged;
+  for (size_t k = 0; k < costs.size(); ++k) {
+    const std::string& id = runs[k].parent.empty() ? runs[k].id : runs[k].parent;
+    if (merged.empty() || merged.back().id != id) merged.push_back({id, 0, 0, 0});
+    merged.back().before += costs[k].before;
+    merged.back().after += costs[k].after;
+    merged.back().residuals += costs[k].residuals;
+  }
+  return merged;
+}
+
+}  // namespace pneumaid::refine_internal

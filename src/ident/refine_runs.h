@@ -1,0 +1,104 @@
+// Refinement (refine.h), its runs: which logged experiments are fitted, each
+// as the fit sees it (measured trajectory, command, logged start, weighted
+// channels, estimated start pressures), and the windows of multiple shooting.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "pneumaid/ident/fit_spec.h"
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/sim/command.h"
+#include "pneumaid/sim/sensitivities.h"
+#include "pneumaid/sim/simulate.h"
+
+namespace pneumaid::refine_internal {
+
+struct Channel {
+  std::string name;
+  std::vector<double> Trajectory::*values;
+  Eigen::MatrixXd TrajectorySensitivities::*derivatives;
+  double factor;       // weight / sigma
+  double meter_tau_s;  // flows: the declared meter lag, 0 when none
+};
+
+// Nuisance coordinates of an estimated start: the offsets of p1(t0), p2(t0)
+// from their logged values in units of their standard errors (0: as logged).
+constexpr int kStartOffsets = kInitialPressureColumns;
+using StartOffsets = std::array<double, kStartOffsets>;
+
+struct FitExperiment {
+  std::string id;
+  Trajectory measured;
+  CommandSignal command;
+  InitialState initial;
+  std::vector<Channel> channels;
+  std::string parent;  // a window's run (multiple shooting); empty for a whole run
+  // Standard errors of the logged initial p1, p2 [Pa] when they are estimated
+  // (FitSpec::fit_initial_pressures); {0, 0}: the start is taken as logged.
+  std::array<double, kStartOffsets> start_sigma_Pa = {0, 0};
+
+  bool FitsStart() const { return start_sigma_Pa[0] > 0; }
+  // Data rows, then one prior row per estimated initial pressure.
+  long residuals() const {
+    return static_cast<long>(measured.size() * channels.size()) + (FitsStart() ? kStartOffsets : 0);
+  }
+};
+
+// The coordinates z of an experiment's residual block: the free parameters'
+// theta, then its start offsets when it FitsStart (`offsets` unused otherwise).
+inline std::vector<double> Coordinates(const FitExperiment& e, const double* theta, int m,
+                                       const double* offsets) {
+  std::vector<double> z(theta, theta + m);
+  if (e.FitsStart()) z.insert(z.end(), offsets, offsets + kStartOffsets);
+  return z;
+}
+
+// The run's start with the offsets applied.
+InitialState StartOf(const FitExperiment& e, const double* offsets);
+
+// The unit's manifest, for messages.
+std::string ManifestPath(const Unit& unit);
+
+// The rows of the residual table: x, p1, p2, q1, q2.
+extern const Channel kChannelTable[5];
+
+// Stroke and validation runs can be simulated; valve and tube logs cannot.
+bool IsSimulable(const Experiment& e);
+
+// Experiments named by id or kind; InputError for a name that matches none.
+std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
+                                      const FitSpec& spec, bool must_match);
+
+// A channel's noise sigma [SI]: the spec's when it gives one, else the one
+// declared under the manifest's `sensors` (0 when neither does).
+double ChannelSigma(const FitSpec& spec, const Unit& unit, const std::string& channel);
+
+// The noise sigmas of one logged sample of p1 and p2, when the spec estimates
+// starts and both are known; {0, 0} (the start is taken as logged) otherwise.
+std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Unit& unit);
+
+// One logged run as the fit sees it. `sample_sigma_Pa`: StartSampleSigma(spec, unit).
+FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
+                      double half_stroke_m,
+                      const std::array<double, kStartOffsets>& sample_sigma_Pa);
+
+// Multiple shooting (FitStage::windows): the run cut where the rod is stuck,
+// each window simulated from its logged state, v = 0, with the command-driven
+// lags replayed from the start of the log. `band_m`: how far a stuck rod's
+// logged position may wander (noise and ADC step).
+std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m,
+                                   const std::array<double, kStartOffsets>& sample_sigma_Pa);
+
+// The fitted runs of a spec, whole or cut into windows; InputError when none,
+// or when a run is both fitted and held out.
+std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
+                                      const FitSpec& spec, bool windows);
+
+// Windows' costs summed per run, in the order the runs first appear.
+std::vector<ExperimentCost> PerRun(const std::vector<ExperimentCost>& costs,
+                                   const std::vector<FitExperiment>& runs);
+
+}  // namespace pneumaid::refine_internal

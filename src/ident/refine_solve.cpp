@@ -1,0 +1,152 @@
+#include "refine_solve.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+
+#include "pneumaid/model/parameter_table.h"
+#include "pneumaid/validate/validate.h"
+#include "refine_covariance.h"
+
+namespace pneumaid::refine_internal {
+
+ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& options) {
+  ceres::Solver::Options s;
+  s.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  s.linear_solver_type = ceres::DENSE_QR;
+  s.max_num_iterations = spec.max_iterations;
+  s.num_threads = options.threads;
+  s.function_tolerance = options.function_tolerance;
+  s.minimizer_progress_to_stdout = options.verbose;
+  s.logging_type = options.verbose ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  return s;
+}
+
+// Counts an estimated start and keeps the largest move of its pressures.
+void RecordStartOffset(const FitExperiment& e, const StartOffsets& offsets, RefineResult* r) {
+  ++r->estimated_starts;
+  for (int k = 0; k < kStartOffsets; ++k) {
+    if (std::fabs(offsets[k]) > r->largest_start_offset_sigma) {
+      r->largest_start_offset_sigma = std::fabs(offsets[k]);
+      r->largest_start_offset_Pa = std::fabs(offsets[k]) * e.start_sigma_Pa[k];
+    }
+  }
+}
+
+RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                         bool windows, bool last, const RefineOptions& options,
+                         const std::vector<std::vector<double>>& extra_starts) {
+  const Parameters conditioned = WithRigConditions(start, unit);
+  const ParameterMap map = MakeParameterMap(conditioned, spec);
+  const std::vector<FitExperiment> experiments = FittedRuns(conditioned, unit, spec, windows);
+
+  Problem p;
+  p.theta = map.ThetaOf(conditioned);
+  p.offsets.assign(experiments.size(), StartOffsets{0, 0});  // never reallocated below
+  long data_rows = 0;  // residuals less the start priors (one per start offset)
+  for (size_t k = 0; k < experiments.size(); ++k) {
+    const FitExperiment& e = experiments[k];
+    auto* block =
+        new ExperimentResidual(&conditioned, &map, &e, &options.simulation, options.jacobian);
+    if (e.FitsStart()) {
+      p.problem.AddResidualBlock(block, nullptr, p.theta.data(), p.offsets[k].data());
+    } else {
+      p.problem.AddResidualBlock(block, nullptr, p.theta.data());
+    }
+    p.blocks.push_back(block);
+    data_rows += e.residuals() - (e.FitsStart() ? kStartOffsets : 0);
+  }
+
+  RefineResult r;
+  const std::vector<double> start_theta = p.theta;
+  std::vector<std::vector<double>> starts = {start_theta};
+  for (auto& point : LatinHypercube(map, spec.multistart, spec.seed)) starts.push_back(point);
+  for (const auto& point : extra_starts) starts.push_back(point);
+
+  ceres::Solver::Options solver = SolverOptions(spec, options);
+  const long start_columns = std::count_if(experiments.begin(), experiments.end(),
+                                           [](const FitExperiment& e) { return e.FitsStart(); }) *
+                             kStartOffsets;
+  if (start_columns > map.size()) {
+    // Dense QR's work grows with the square of the columns (two per window
+    // of a windowed stage): eliminate the start offsets, each of which
+    // touches one experiment (Schur complement), instead.
+    solver.linear_solver_type = ceres::DENSE_SCHUR;
+  }
+  double best_cost = INFINITY;
+  std::vector<double> best_theta = start_theta;
+  std::vector<StartOffsets> best_offsets = p.offsets;
+  for (size_t s = 0; s < starts.size(); ++s) {
+    p.theta = starts[s];
+    std::fill(p.offsets.begin(), p.offsets.end(), StartOffsets{0, 0});  // as logged
+    // A stage before the last only prepares the next one's start, which
+    // refits its parameters anyway: it stops at the first small gain.
+    StallCallback stall(last ? options.stall_iterations : 1,
+                        last ? options.stall_tolerance : options.earlier_stage_stall_tolerance);
+    ceres::Solver::Options start_options = solver;
+    start_options.callbacks.push_back(&stall);
+    ceres::Solver::Summary summary;
+    ceres::Solve(start_options, &p.problem, &summary);
+    if (options.verbose) std::cout << summary.FullReport() << "\n";
+    r.iterations += static_cast<int>(summary.iterations.size());
+    if (summary.IsSolutionUsable() && summary.final_cost < best_cost) {
+      best_cost = summary.final_cost;
+      best_theta = p.theta;
+      best_offsets = p.offsets;
+      r.best_start = static_cast<int>(s);
+      r.converged = summary.termination_type == ceres::CONVERGENCE ||
+                    summary.termination_type == ceres::USER_SUCCESS;
+      r.message = summary.message;
+    } else if (!std::isfinite(best_cost)) {
+      r.message = summary.message;
+    }
+  }
+  r.starts = static_cast<int>(starts.size());
+  for (size_t k = 0; k < experiments.size(); ++k) {
+    // Ceres' first evaluation is at the given start.
+    r.fitted.push_back(
+        {experiments[k].id, p.blocks[k]->FirstCost(), 0, experiments[k].residuals()});
+    r.cost_before += r.fitted.back().before;
+  }
+  p.theta = best_theta;
+  p.offsets = best_offsets;
+  if (!std::isfinite(best_cost)) {
+    r.converged = false;
+    r.params = start;
+    r.message = "no start gave a usable solution: " + r.message;
+  } else {
+    r.params = WithValues(conditioned, map, p.theta.data());
+    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
+    for (size_t k = 0; k < experiments.size(); ++k) {
+      const EvaluationCache* at_best = nullptr;
+      const std::vector<double> z =
+          Coordinates(experiments[k], p.theta.data(), map.size(), p.offsets[k].data());
+      if (!p.blocks[k]->ResidualsAndJacobian(z, &at_best)) {
+        normal.resize(0, 0);
+        r.fitted[k].after = NAN;
+        continue;
+      }
+      r.fitted[k].after = 0.5 * at_best->residuals.squaredNorm();
+      r.cost_after += r.fitted[k].after;
+      if (normal.size() > 0) normal += ParameterInformation(*at_best, map.size());
+      if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
+    }
+    for (int j = 0; j < map.size(); ++j) {
+      RefinedParameter rp;
+      rp.path = map.free[j].path;
+      GetParameter(conditioned, rp.path, &rp.start);
+      rp.value = map.ToValue(j, p.theta[j]);
+      const double span = map.free[j].upper - map.free[j].lower;
+      rp.at_bound =
+          std::min(rp.value - map.free[j].lower, map.free[j].upper - rp.value) < 1e-6 * span;
+      r.parameters.push_back(rp);
+    }
+    Summarise(
+        ParameterCovariance(normal, map, p.theta, r.cost_after, data_rows, options.stall_tolerance),
+        map, options, &r);
+  }
+  if (windows) r.fitted = PerRun(r.fitted, experiments);
+  return r;
+}
+
+}  // namespace pneumaid::refine_internal
