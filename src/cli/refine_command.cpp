@@ -39,6 +39,11 @@ int ReportAndSave(const RefineResult& result, const std::string& out_path) {
   }
   SaveParams(result.params, out_path);
   std::cout << "wrote " << out_path << "\n";
+  if (result.status == RefineStatus::kNotExplained) {
+    std::cerr << "error: " << result.message
+              << "\n  the best set found is written, with that verdict in its provenance\n";
+    return kNumericalFailure;
+  }
   if (!result.converged) {
     std::cerr << "warning: the refinement did not converge (" << result.message
               << "); the parameters written are its best point\n";

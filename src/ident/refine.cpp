@@ -11,6 +11,7 @@
 #include "pneumaid/model/parameter_table.h"
 #include "refine_residual.h"
 #include "refine_solve.h"
+#include "refine_verdict.h"
 
 // Refinement's orchestration: stages (friction replay, windows, parameter
 // subsets) in order, the held-out validation before and after, provenance.
@@ -40,6 +41,8 @@ std::string AppendProvenance(const std::string& provenance, const RefineResult& 
         << ", stages: " << r.stages << ", starts: " << r.starts
         << ", experiments: " << r.fitted.size()
         << ", initial_pressures: " << (spec.fit_initial_pressures ? "fit" : "logged")
+        << ", status: " << ToString(r.status) << ", reduced_chi_square: " << r.reduced_chi_square
+        << ", acceptable_reduced_chi_square: " << r.acceptable_reduced_chi_square
         << ", converged: " << (r.converged ? "true" : "false") << "}";
   const std::size_t close = provenance.rfind('}');
   if (provenance.empty() || close == std::string::npos) return "{" + entry.str() + "}";
@@ -84,6 +87,11 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (!(stall_tolerance >= 0)) return fail("stall_tolerance must be >= 0");
   if (!(earlier_stage_stall_tolerance >= 0))
     return fail("earlier_stage_stall_tolerance must be >= 0");
+  if (!(acceptable_reduced_chi_square >= 1))
+    return fail("acceptable_reduced_chi_square must be >= 1");
+  if (rescue_starts < 0) return fail("rescue_starts must be >= 0");
+  if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");
+  if (!(misfit_window_s > 0)) return fail("misfit_window_s must be > 0");
   if (!(correlation_flag > 0 && correlation_flag < 1)) {
     return fail("correlation_flag must be in (0, 1)");
   }
@@ -125,6 +133,33 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     current = r.params;
   }
   r.iterations = iterations;
+  // The verdict: a windowed last stage's runs are judged whole.
+  if (stages.back().windows && !r.parameters.empty()) {
+    r.misfits = WholeRunMisfits(r.params, unit, spec, options);
+  }
+  Judge(options, &r);
+  if (r.status == RefineStatus::kNotExplained && options.rescue_starts > 0) {
+    // Stalled far above what the noise explains: the last stage again from
+    // starts in a trust box around the start (not the whole bounds).
+    const FitSpec last = StageSpec(spec, stages.back());
+    const Parameters conditioned = WithRigConditions(start, unit);
+    const ParameterMap map = MakeParameterMap(conditioned, last);
+    RefineResult rescue =
+        RefineStage(start, unit, last, stages.back().windows, true, options,
+                    TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed));
+    if (stages.back().windows && !rescue.parameters.empty()) {
+      rescue.misfits = WholeRunMisfits(rescue.params, unit, spec, options);
+    }
+    Judge(options, &rescue);
+    iterations += rescue.iterations;
+    const int tried = rescue.starts;
+    if (!rescue.parameters.empty() && rescue.reduced_chi_square < r.reduced_chi_square) {
+      rescue.replay_report = r.replay_report;
+      r = rescue;
+    }
+    r.rescue_starts = tried;
+    r.iterations = iterations;
+  }
   // A windowed stage's costs are windows': report whole runs, as validated
   // (and at the true start when friction was replayed first).
   if (stages.front().windows || stages.front().friction_replay) {
@@ -155,16 +190,40 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   return r;
 }
 
+const char* ToString(RefineStatus status) {
+  switch (status) {
+    case RefineStatus::kExplained:
+      return "converged";
+    case RefineStatus::kNotExplained:
+      return "the model does not explain these logs";
+    case RefineStatus::kNotConverged:
+      return "NOT converged";
+    case RefineStatus::kFailed:
+      return "failed";
+  }
+  return "?";
+}
+
 std::string RefineResult::BriefReport() const {
   std::ostringstream out;
   char line[256];
   std::snprintf(line, sizeof(line),
                 "Refinement: %s, cost %.6g -> %.6g, %d iterations in %d stage(s), %d start(s) "
                 "(best: %d), %.2f s\n",
-                converged ? "converged" : "NOT converged", cost_before, cost_after, iterations,
+                ToString(status), cost_before, cost_after, iterations,
                 stages, starts, best_start, wall_time_s);
   out << line;
-  if (!converged && !message.empty()) out << "  " << message << "\n";
+  if (!message.empty()) out << "  " << message << "\n";
+  if (!misfits.empty()) {
+    std::snprintf(line, sizeof(line),
+                  "  verdict: median reduced chi-square over the runs %.3g (acceptable %.3g)%s\n",
+                  reduced_chi_square, acceptable_reduced_chi_square,
+                  rescue_starts > 0 ? (", after " + std::to_string(rescue_starts) +
+                                       " starts around the start")
+                                          .c_str()
+                                    : "");
+    out << line;
+  }
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (estimated_starts > 0) {
     std::snprintf(line, sizeof(line),

@@ -54,4 +54,43 @@ std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int cou
   return points;
 }
 
+std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Parameters& start,
+                                          int count, double box, std::uint64_t seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<std::vector<double>> points(count, std::vector<double>(map.size()));
+  for (int j = 0; j < map.size(); ++j) {
+    double value = 0;
+    GetParameter(start, map.free[j].path, &value);
+    // Half-width relative to the value: at least `box`, 3 standard errors
+    // where the start has them, and wide (a factor 3) where it has none (a
+    // coefficient its fit did not determine).
+    const auto error = start.uncertainty.find(map.free[j].path);
+    double width = error == start.uncertainty.end() || !(std::fabs(value) > 0)
+                       ? 2.0
+                       : std::max(box, 3 * error->second / std::fabs(value));
+    double low = 0, high = 0;
+    if (map.IsLog(j)) {
+      width = std::min(width, 9.0);
+      low = value / (1 + width);
+      high = value * (1 + width);
+    } else {
+      low = value - std::min(width, 0.95) * std::fabs(value);
+      high = value + width * std::fabs(value);
+    }
+    low = std::max(low, map.free[j].lower);
+    high = std::min(high, map.free[j].upper);
+    std::vector<int> strata(count);
+    std::iota(strata.begin(), strata.end(), 0);
+    std::shuffle(strata.begin(), strata.end(), random);
+    for (int k = 0; k < count; ++k) {
+      const double fraction = (strata[k] + unit(random)) / count;
+      const double p = map.IsLog(j) && low > 0 ? low * std::pow(high / low, fraction)
+                                                : low + (high - low) * fraction;
+      points[k][j] = map.ToTheta(j, p);
+    }
+  }
+  return points;
+}
+
 }  // namespace pneumaid::refine_internal

@@ -71,4 +71,12 @@ Parameters WithValues(const Parameters& base, const ParameterMap& map, const dou
 std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int count,
                                                 std::uint64_t seed);
 
+// Latin-hypercube points in a trust box around `start`'s values, inside the
+// bounds: each free parameter within (1 +- w) of its value (log scale:
+// between value / (1 + w) and value (1 + w)), w the larger of `box` and 3
+// standard errors (start.uncertainty) relative to the value, and 2 for a
+// parameter without one (its fit did not determine it).
+std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Parameters& start,
+                                          int count, double box, std::uint64_t seed);
+
 }  // namespace pneumaid::refine_internal

@@ -7,6 +7,7 @@
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/validate.h"
 #include "refine_covariance.h"
+#include "refine_verdict.h"
 
 namespace pneumaid::refine_internal {
 
@@ -94,9 +95,12 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       best_theta = p.theta;
       best_offsets = p.offsets;
       r.best_start = static_cast<int>(s);
+      // Provisional: whether the runs are explained is the verdict's
+      // (refine_verdict.h) once the last stage is done.
       r.converged = summary.termination_type == ceres::CONVERGENCE ||
                     summary.termination_type == ceres::USER_SUCCESS;
-      r.message = summary.message;
+      r.status = r.converged ? RefineStatus::kExplained : RefineStatus::kNotConverged;
+      r.message = r.converged ? "" : summary.message;
     } else if (!std::isfinite(best_cost)) {
       r.message = summary.message;
     }
@@ -112,6 +116,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   p.offsets = best_offsets;
   if (!std::isfinite(best_cost)) {
     r.converged = false;
+    r.status = RefineStatus::kFailed;
     r.params = start;
     r.message = "no start gave a usable solution: " + r.message;
   } else {
@@ -130,6 +135,11 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       r.cost_after += r.fitted[k].after;
       if (normal.size() > 0) normal += ParameterInformation(*at_best, map.size());
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
+      if (!windows) {
+        for (const ChannelMisfit& m :
+             RunMisfits(experiments[k], at_best->residuals, options.misfit_window_s))
+          r.misfits.push_back(m);
+      }
     }
     for (int j = 0; j < map.size(); ++j) {
       RefinedParameter rp;

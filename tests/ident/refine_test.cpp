@@ -167,9 +167,12 @@ TEST(RefineTest, TheDefaultRefinementRecoversAHorizontalCylindersFriction) {
 // Component fits made blind to the outlet flow meters' 30 ms lag (not declared
 // in the manifest; the inlet meter's is: a lag common to both would be taken
 // up by the tube fit's valve lag) and to most of the position accuracy (50 um
-// noise): the held-out position error after refinement is at most half of
-// that before.
-TEST(RefineTest, HalvesTheHeldOutPositionErrorOfBiasedComponentFits) {
+// noise: the friction fit's negative direction lands far off). Refinement
+// still roughly halves the held-out position error, but it stalls far above
+// what the noise explains, and the trust-box starts find no better basin: the
+// verdict must say so (issue 12: never "converged" two orders of magnitude
+// above the threshold), with the worst runs and channels.
+TEST(RefineTest, FromBiasedComponentFitsItSaysWhenTheRunsAreNotExplained) {
   const Parameters truth;
   Protocol protocol = testing::RefinementProtocol({0.6, 0.8, 1.0}, true);
   for (const char* flow : {"q", "q_out", "q1", "q2"}) protocol.sensors[flow].declared = false;
@@ -180,13 +183,51 @@ TEST(RefineTest, HalvesTheHeldOutPositionErrorOfBiasedComponentFits) {
   const Parameters identified = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
   const RefineResult result = Refine(identified, unit, LoadFitSpec(kDefaultSpec), RefineOptions{});
   std::cout << report.BriefReport() << result.BriefReport();
-  ASSERT_TRUE(result.converged) << result.message;
+  ASSERT_FALSE(result.parameters.empty()) << result.message;
+  if (result.reduced_chi_square <= result.acceptable_reduced_chi_square) {
+    EXPECT_EQ(result.status, RefineStatus::kExplained);
+  } else {
+    EXPECT_EQ(result.status, RefineStatus::kNotExplained);
+    EXPECT_FALSE(result.converged);
+    EXPECT_GT(result.rescue_starts, 0);
+    EXPECT_NE(result.message.find("does not explain these logs"), std::string::npos);
+    EXPECT_NE(result.message.find(result.misfits.front().run), std::string::npos);
+    EXPECT_NE(result.params.provenance_yaml.find("status: the model does not explain"),
+              std::string::npos);
+  }
   ASSERT_EQ(result.held_out_before.experiments.size(), 2u);
   for (size_t i = 0; i < 2; ++i) {
     const double before = result.held_out_before.experiments[i].channels.at("x").rmse;
     const double after = result.held_out_after.experiments[i].channels.at("x").rmse;
     EXPECT_LE(after, 0.5 * before) << result.held_out_after.experiments[i].id;
   }
+}
+
+// The verdict itself: at the truth on a unit the model made (up to the
+// integration tolerance) the runs' median reduced chi-square is near 1 and
+// they are explained; with a hidden cross leakage the fitted model lacks, the
+// same refinement ends far above and says the model does not explain them.
+TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
+  const Parameters truth;
+  const Unit unit = testing::WriteAndRead(
+      Synthesize(truth, testing::RefinementProtocol({0.7, 1.0}, false), 35, "V"),
+      UnitDir("refine_verdict"));
+  RefineOptions options;
+  options.rescue_starts = 2;
+  const RefineResult explained = Refine(truth, unit, LoadFitSpec(kDefaultSpec), options);
+  std::cout << explained.BriefReport();
+  EXPECT_EQ(explained.status, RefineStatus::kExplained) << explained.message;
+  EXPECT_LT(explained.reduced_chi_square, 3.0);
+  Parameters leaky = truth;
+  leaky.effects["cross_leakage"] = {{"c", 2e-11}};  // 8e-6 kg/s at 4 bar: 9 % of q_max
+  const Unit leaking = testing::WriteAndRead(
+      Synthesize(leaky, testing::RefinementProtocol({0.7, 1.0}, false), 35, "L"),
+      UnitDir("refine_verdict_leak"));
+  const RefineResult missing = Refine(truth, leaking, LoadFitSpec(kDefaultSpec), options);
+  std::cout << missing.BriefReport();
+  EXPECT_EQ(missing.status, RefineStatus::kNotExplained);
+  EXPECT_GT(missing.reduced_chi_square, missing.acceptable_reduced_chi_square);
+  EXPECT_EQ(missing.rescue_starts, 3);  // the start and two in the trust box
 }
 
 class RefineSpecTest : public ::testing::Test {

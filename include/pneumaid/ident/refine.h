@@ -52,6 +52,22 @@ struct RefineOptions {
   double correlation_flag = 0.95;
   // How the Jacobian of the residuals is computed.
   JacobianMethod jacobian = JacobianMethod::kSensitivities;
+  // The stopping verdict (docs/refinement.md): the refined set explains the
+  // fitted runs when the median over runs of each run's reduced chi-square
+  // (mean squared residual in units of the declared noise; 1 is the noise
+  // alone) is at most this. A real model never reaches 1 on a real rig;
+  // calibrated on the robustness sweep (every unit passes at its true
+  // parameters, the stalls of issue 12 fail).
+  double acceptable_reduced_chi_square = 10.0;
+  // When the verdict fails: this many more starts of the last stage, drawn
+  // (Latin hypercube) from a trust box around the start: each free parameter
+  // within a factor (1 +- w) of its start value, w the larger of rescue_box
+  // and 3 of its standard errors from the start's uncertainty (2 when it has
+  // none: a coefficient the component fits did not determine).
+  int rescue_starts = 6;
+  double rescue_box = 0.3;
+  // Where the report looks for the worst stretch of a run [s].
+  double misfit_window_s = 0.2;
   // Print Ceres' per-iteration progress to stdout.
   bool verbose = false;
 
@@ -71,6 +87,23 @@ struct ExperimentCost {
   long residuals = 0;
 };
 
+// How far one fitted run's channel is from what the declared noise explains.
+struct ChannelMisfit {
+  std::string run, channel;
+  double reduced_chi_square = 0;  // mean squared weighted residual (1: the noise alone)
+  // The worst stretch of misfit_window_s: where, and its reduced chi-square.
+  double worst_from_s = 0, worst_to_s = 0, worst_reduced_chi_square = 0;
+};
+
+enum class RefineStatus {
+  kExplained,     // the solver stopped and the verdict holds
+  kNotExplained,  // the best point found leaves more than the acceptable misfit
+  kNotConverged,  // the solver ran out of iterations without stopping
+  kFailed,        // no start gave a usable solution (nothing to write)
+};
+
+const char* ToString(RefineStatus status);
+
 struct RefinedParameter {
   std::string path;
   double start = 0;
@@ -80,8 +113,15 @@ struct RefinedParameter {
 };
 
 struct RefineResult {
-  bool converged = false;  // a start ended with Ceres' convergence
+  RefineStatus status = RefineStatus::kFailed;
+  bool converged = false;  // status == kExplained: stopped, and the verdict holds
   std::string message;     // why not, when not
+  // The verdict: the median over the fitted runs of each run's reduced
+  // chi-square, the threshold it was held to, each run's channels (worst
+  // first), and how many rescue starts were tried.
+  double reduced_chi_square = 0, acceptable_reduced_chi_square = 0;
+  std::vector<ChannelMisfit> misfits;
+  int rescue_starts = 0;
   Parameters params;       // the refined set (start values elsewhere), with uncertainty
   std::vector<RefinedParameter> parameters;
   Eigen::MatrixXd correlation;  // of the free parameters, in the order above

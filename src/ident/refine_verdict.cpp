@@ -1,0 +1,109 @@
+#include "refine_verdict.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "refine_parameters.h"
+#include "refine_residual.h"
+
+namespace pneumaid::refine_internal {
+
+std::vector<ChannelMisfit> RunMisfits(const FitExperiment& e, const Eigen::VectorXd& residuals,
+                                      double window_s) {
+  std::vector<ChannelMisfit> out;
+  const Eigen::Index n = static_cast<Eigen::Index>(e.measured.size());
+  const std::vector<double>& t = e.measured.t_s;
+  const std::string run = e.parent.empty() ? e.id : e.parent;
+  for (std::size_t c = 0; c < e.channels.size(); ++c) {
+    const auto r = residuals.segment(static_cast<Eigen::Index>(c) * n, n);
+    ChannelMisfit m;
+    m.run = run;
+    m.channel = e.channels[c].name;
+    m.reduced_chi_square = n > 0 ? r.squaredNorm() / static_cast<double>(n) : 0.0;
+    // The worst window: a running sum over window_s.
+    double sum = 0;
+    Eigen::Index from = 0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      sum += r[i] * r[i];
+      while (t[i] - t[from] > window_s) sum -= r[from] * r[from], ++from;
+      const double mean = sum / static_cast<double>(i - from + 1);
+      if (t[i] - t[from] >= 0.5 * window_s && mean > m.worst_reduced_chi_square) {
+        m.worst_reduced_chi_square = mean;
+        m.worst_from_s = t[from];
+        m.worst_to_s = t[i];
+      }
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
+std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit& unit,
+                                           const FitSpec& spec, const RefineOptions& options) {
+  const Parameters conditioned = WithRigConditions(params, unit);
+  const ParameterMap map = MakeParameterMap(conditioned, spec);
+  const std::vector<double> theta = map.ThetaOf(conditioned);
+  std::vector<ChannelMisfit> out;
+  for (const FitExperiment& run : FittedRuns(conditioned, unit, spec, false)) {
+    const ExperimentResidual residual(&conditioned, &map, &run, &options.simulation,
+                                      options.jacobian);
+    Eigen::VectorXd r(residual.num_residuals());
+    const StartOffsets as_logged = {0, 0};
+    const double* blocks[] = {theta.data(), as_logged.data()};
+    if (!residual.Evaluate(blocks, r.data(), nullptr)) r.setConstant(NAN);
+    for (const ChannelMisfit& m : RunMisfits(run, r, options.misfit_window_s)) out.push_back(m);
+  }
+  return out;
+}
+
+double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {
+  std::map<std::string, std::pair<double, int>> runs;  // sum of channel chi-squares, channels
+  for (const ChannelMisfit& m : misfits) {
+    runs[m.run].first += m.reduced_chi_square;
+    runs[m.run].second += 1;
+  }
+  std::vector<double> values;
+  for (const auto& [run, sum] : runs) values.push_back(sum.first / sum.second);
+  if (values.empty()) return NAN;
+  std::sort(values.begin(), values.end());
+  const std::size_t half = values.size() / 2;
+  return values.size() % 2 ? values[half] : 0.5 * (values[half - 1] + values[half]);
+}
+
+void Judge(const RefineOptions& options, RefineResult* r) {
+  r->acceptable_reduced_chi_square = options.acceptable_reduced_chi_square;
+  r->reduced_chi_square = MedianRunChiSquare(r->misfits);
+  std::sort(r->misfits.begin(), r->misfits.end(),
+            [](const ChannelMisfit& a, const ChannelMisfit& b) {
+              return !(a.reduced_chi_square <= b.reduced_chi_square);  // NaN first
+            });
+  if (r->status == RefineStatus::kFailed || r->status == RefineStatus::kNotConverged) {
+    r->converged = false;
+    return;
+  }
+  if (r->reduced_chi_square <= options.acceptable_reduced_chi_square) {
+    r->status = RefineStatus::kExplained;
+    r->converged = true;
+    return;
+  }
+  r->status = RefineStatus::kNotExplained;
+  r->converged = false;
+  char text[400];
+  std::snprintf(text, sizeof(text),
+                "the model does not explain these logs: the runs' median reduced chi-square is "
+                "%.3g, above the acceptable %.3g (1 is the declared noise alone)",
+                r->reduced_chi_square, options.acceptable_reduced_chi_square);
+  r->message = text;
+  for (std::size_t k = 0; k < r->misfits.size() && k < 3; ++k) {
+    const ChannelMisfit& m = r->misfits[k];
+    std::snprintf(text, sizeof(text),
+                  "; %s %s: %.3g, worst %.3g over %.3g-%.3g s", m.run.c_str(),
+                  m.channel.c_str(), m.reduced_chi_square, m.worst_reduced_chi_square,
+                  m.worst_from_s, m.worst_to_s);
+    r->message += text;
+  }
+}
+
+}  // namespace pneumaid::refine_internal

@@ -1,0 +1,32 @@
+// Refinement (refine.h), its stopping verdict: how far each fitted run's
+// channels are from what the declared sensor noise explains, where the worst
+// stretch of each lies, and whether the set explains the runs.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "pneumaid/ident/refine.h"
+#include "refine_runs.h"
+
+namespace pneumaid::refine_internal {
+
+// The misfit of each channel of run `e` from its weighted residuals (channel
+// after channel, as the residual block writes them; start priors ignored).
+std::vector<ChannelMisfit> RunMisfits(const FitExperiment& e, const Eigen::VectorXd& residuals,
+                                      double window_s);
+
+// The misfits of every whole fitted run at `params`, simulated from its
+// logged start (a windowed last stage's runs are judged whole).
+std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit& unit,
+                                           const FitSpec& spec, const RefineOptions& options);
+
+// The median over runs of each run's reduced chi-square over its channels.
+double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits);
+
+// The verdict on `r` (its misfits): status, threshold, and when it fails a
+// message naming the worst runs, channels and windows.
+void Judge(const RefineOptions& options, RefineResult* r);
+
+}  // namespace pneumaid::refine_internal
