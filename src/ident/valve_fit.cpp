@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include <sstream>
 
 #include "held_levels.h"
+#include "pneumaid/eval/lag.h"
 #include "pneumaid/model/kvp.h"
 #include "pneumaid/model/orifice.h"
 
@@ -218,7 +220,6 @@ bool ValveFitOptions::IsValid(std::string* error) const {
     if (error != nullptr) *error = what;
     return false;
   };
-  if (!(settle_time_constants >= 0)) return fail("settle_time_constants must be >= 0");
   if (!(settle_fraction >= 0 && settle_fraction < 1))
     return fail("settle_fraction must be in [0, 1)");
   if (min_plateau_samples < 2) return fail("min_plateau_samples must be >= 2");
@@ -242,23 +243,61 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
     if (e.entry.kind != ExperimentKind::kValve) continue;
     const auto &t = e.column("t"), &u = e.column("u"), &q = e.column("q");
     const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
+    const auto levels = internal::HeldLevels(u, options.level_change_V);
+    const std::size_t n = t.size(), m = levels.size();
+    // The flow held per level, seen through the meter's declared lag: the
+    // reading is linear in the level flows (one lagged indicator column per
+    // level), so all of them come from one least-squares solve. The first
+    // settle_fraction of each level is left out (a valve's own opening
+    // dynamics are not modelled); the meter's lag is, so short holds work.
+    std::vector<char> used(n, 0);
+    std::vector<int> used_per_level(m, 0);
+    for (std::size_t k = 0; k < m; ++k) {
+      const auto [begin, end] = levels[k];
+      const double skip = options.settle_fraction * (t[end - 1] - t[begin]);
+      for (std::size_t i = begin; i < end; ++i) {
+        if (t[i] >= t[begin] + skip) used[i] = 1, ++used_per_level[k];
+      }
+    }
+    Eigen::MatrixXd columns =
+        Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(m));
+    for (std::size_t k = 0; k < m; ++k) {
+      std::vector<double> column(n, 0.0);
+      for (std::size_t i = levels[k].first; i < levels[k].second; ++i) column[i] = 1.0;
+      if (tau > 0) {
+        ApplyFirstOrderLag([&t](std::size_t i) { return t[i] - t[i - 1]; }, tau, &column);
+      }
+      for (std::size_t i = 0; i < n; ++i) columns(static_cast<Eigen::Index>(i), k) = column[i];
+    }
+    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+    std::size_t rows = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!used[i]) continue;
+      const auto a = columns.row(static_cast<Eigen::Index>(i));
+      normal.noalias() += a.transpose() * a;
+      rhs.noalias() += a.transpose() * q[i];
+      ++rows;
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> solver(normal);
+    const Eigen::VectorXd flow = solver.solve(rhs);
+    double squares = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (used[i])
+        squares += std::pow(columns.row(static_cast<Eigen::Index>(i)).dot(flow) - q[i], 2);
+    }
+    const double q_sigma = unit.manifest.DeclaredSigma(
+        "q", std::sqrt(squares / std::max<double>(1.0, static_cast<double>(rows) - m)));
+    const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
     double previous_u = 0.0;  // the level before, for the branch
-    for (const auto& [begin, end] : internal::HeldLevels(u, options.level_change_V)) {
+    for (std::size_t k = 0; k < m; ++k) {
+      const auto [begin, end] = levels[k];
       const double level = Mean(u, begin, end);
       const bool decreasing = level < previous_u;
       previous_u = level;
       if (level <= 0) continue;  // a closed valve says nothing about K_vp
-      const double duration = t[end - 1] - t[begin];
-      const double settle =
-          std::max(options.settle_time_constants * tau, options.settle_fraction * duration);
-      std::size_t first = begin;
-      while (first < end && t[first] < t[begin] + settle) ++first;
-      if (static_cast<int>(end - first) < options.min_plateau_samples) continue;
-      const double n = static_cast<double>(end - first);
-      const double q_mean = Mean(q, first, end);
-      double spread = 0;
-      for (std::size_t i = first; i < end; ++i) spread += (q[i] - q_mean) * (q[i] - q_mean);
-      const double q_sigma = unit.manifest.DeclaredSigma("q", std::sqrt(spread / (n - 1)));
+      if (used_per_level[k] < options.min_plateau_samples) continue;
+      const std::size_t first = end - static_cast<std::size_t>(used_per_level[k]);
       const double up = Mean(p_up, first, end), down = Mean(p_down, first, end);
       // Eq. 4 per unit of K_vp at the plateau's pressures.
       const double per_kvp = orifice.flow_scale * up * FlowShape(down / up, orifice);
@@ -266,9 +305,10 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
       plateau.experiment = e.entry.id;
       plateau.u_V = level;
       plateau.decreasing = decreasing;
-      plateau.kvp_kg_per_s = q_mean / per_kvp;
-      plateau.kvp_sigma = std::max(q_sigma / std::sqrt(n), 1e-15) / per_kvp;
-      plateau.samples = static_cast<int>(n);
+      plateau.kvp_kg_per_s = flow[k] / per_kvp;
+      plateau.kvp_sigma =
+          std::max(q_sigma * std::sqrt(std::max(inverse(k, k), 0.0)), 1e-15) / per_kvp;
+      plateau.samples = used_per_level[k];
       plateaus.push_back(plateau);
     }
   }

@@ -1,5 +1,6 @@
 #include "pneumaid/synth/synthetic_rig.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -89,8 +90,14 @@ class RigBuilder {
     for (double level : protocol_.stroke_levels_V) {
       char id[32];
       std::snprintf(id, sizeof(id), "stroke-%03d", static_cast<int>(std::lround(level * 100)));
-      logs.push_back(
-          ActuatorRun(manifest, id, ExperimentKind::kStroke, StrokeCommand(level), logs.size()));
+      std::string unique = id;  // two levels that round alike get a suffix
+      for (int k = 2; std::any_of(logs.begin(), logs.end(),
+                                  [&](const RigLog& l) { return l.entry.id == unique; });
+           ++k) {
+        unique = std::string(id) + "-" + std::to_string(k);
+      }
+      logs.push_back(ActuatorRun(manifest, unique, ExperimentKind::kStroke, StrokeCommand(level),
+                                 logs.size()));
     }
     if (protocol_.paper_step) {
       logs.push_back(ActuatorRun(manifest, "step-1", ExperimentKind::kValidation,

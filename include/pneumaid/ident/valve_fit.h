@@ -15,12 +15,12 @@
 namespace pneumaid {
 
 struct ValveFitOptions {
-  // A plateau is averaged after max(settle_time_constants x the flow meter's
-  // declared lag, settle_fraction x its duration): the meter's lag is waited
-  // out, not mistaken for valve dynamics.
-  double settle_time_constants = 7.0;
-  double settle_fraction = 0.5;
-  // Plateaus with fewer samples left are not used.
+  // Each held level's flow is read through the flow meter's declared lag
+  // (modelled, not waited out: short holds work), from the samples after the
+  // first settle_fraction of the level (a valve's own opening dynamics are
+  // not modelled).
+  double settle_fraction = 0.2;
+  // Plateaus with fewer samples used are not used.
   int min_plateau_samples = 10;
   // Half-width of the reported K_vp band in standard deviations.
   double band_sigmas = 2.0;

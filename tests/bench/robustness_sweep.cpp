@@ -1,0 +1,343 @@
+// Issue 12's robustness sweep: N seeded synthetic units whose truths,
+// protocols and model mismatch are drawn across the ranges a fleet of real
+// rigs covers, each identified (`identify`), refined (`configs/fit-default.yaml`,
+// as `identify --refine`) and validated on its held-out runs; per coefficient
+// the share of units within the issue's tolerance, the held-out rule, the
+// honesty of the standard errors, and the median times.
+//
+//   robustness_sweep N [--seed S] [--jobs J] [--min-units K] [--keep DIR]
+//
+// Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
+// not measured. --min-units K: exit 1 unless every coefficient is within
+// tolerance on at least K units (the suite runs 6 units with K = 5).
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "pneumaid/ident/identify.h"
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_writer.h"
+#include "pneumaid/model/kvp.h"
+#include "pneumaid/model/parameter_table.h"
+#include "pneumaid/synth/synthetic_rig.h"
+#include "pneumaid/validate/validate.h"
+
+namespace pneumaid {
+namespace {
+
+const std::string kSource = PNEUMAID_SOURCE_DIR;
+
+// The names of the checked coefficients, in the table's order.
+const std::vector<std::string> kChecked = {"kvp.increasing", "kvp.decreasing", "delta",  "pos.Fs",
+                                           "pos.Fd",         "pos.b",          "pos.vs", "neg.Fs",
+                                           "neg.Fd",         "neg.b",          "neg.vs"};
+
+struct Draw {
+  Parameters truth;
+  Protocol protocol;
+  double staircase_step_V = 0.05;
+  std::string summary;  // what was drawn, one line
+};
+
+double Uniform(std::mt19937_64* rng, double low, double high) {
+  return std::uniform_real_distribution<double>(low, high)(*rng);
+}
+double LogUniform(std::mt19937_64* rng, double low, double high) {
+  return std::exp(Uniform(rng, std::log(low), std::log(high)));
+}
+template <typename T>
+T Pick(std::mt19937_64* rng, const std::vector<T>& options) {
+  return options[std::uniform_int_distribution<std::size_t>(0, options.size() - 1)(*rng)];
+}
+
+// Truth, protocol and mismatch of unit `index`, drawn as issue 12 says.
+Draw MakeDraw(std::uint64_t seed, int index) {
+  std::mt19937_64 rng(seed * 1000003ULL + static_cast<std::uint64_t>(index));
+  Draw d;
+  Parameters& t = d.truth;
+  t = LoadParams(kSource + "/configs/paper.yaml");
+  t.cylinder.orientation =
+      Uniform(&rng, 0, 1) < 0.5 ? Orientation::kHorizontal : Orientation::kVertical;
+  t.cylinder.load_mass_kg = LogUniform(&rng, 0.05, 1.5);
+  const double q_scale = Uniform(&rng, 0.85, 1.15), u_sat = Uniform(&rng, 0.60, 0.85);
+  for (KvpBranchParams* b : {&t.valve.increasing, &t.valve.decreasing}) {
+    b->q_max_kg_per_s *= q_scale;
+    b->u_sat_V = u_sat;
+  }
+  t.pipeline.delta_per_s = LogUniform(&rng, 3, 20);
+  for (StribeckParams* f : {&t.friction.positive, &t.friction.negative}) {
+    f->static_force_N = Uniform(&rng, 2, 20);
+    f->dynamic_force_N = LogUniform(&rng, 0.1, std::min(10.0, 0.9 * f->static_force_N));
+    f->viscous_N_s_per_m = Uniform(&rng, 1, 15);
+    f->stribeck_velocity_m_per_s = LogUniform(&rng, 2e-3, 25e-3);
+  }
+  Protocol& p = d.protocol;
+  p = LoadProtocol(kSource + "/configs/protocol-full.yaml");
+  p.sample_rate_Hz = Pick<double>(&rng, {250, 500, 1000, 2000, 5000});
+  p.sensors["x"].quantization = Pick<double>(&rng, {0.0, 1e-5, 2e-5});
+  d.staircase_step_V = p.valve_step_V = Pick<double>(&rng, {0.04, 0.05, 0.1});
+  p.valve_hold_s = Uniform(&rng, 0.2, 0.4);
+  p.tube_lengths_m = {0.38};
+  if (Uniform(&rng, 0, 1) < 0.5) p.tube_lengths_m.push_back(Pick<double>(&rng, {0.09, 0.9, 1.2}));
+  const int shape = std::uniform_int_distribution<int>(0, 3)(rng);
+  const double on = Uniform(&rng, 0.05, 0.2), level = Uniform(&rng, 0.6, 1.0);
+  const char* shapes[] = {"step", "on-off", "two levels", "staircase"};
+  switch (shape) {
+    case 0:
+      p.pipeline_schedule = {{on, level}};
+      break;
+    case 1:
+      p.pipeline_schedule = {{on, level}, {on + Uniform(&rng, 0.6, 1.0), 0.0}};
+      break;
+    case 2:
+      p.pipeline_schedule = {{on, 0.5 * level}, {on + Uniform(&rng, 0.5, 0.8), level}};
+      break;
+    default:
+      p.pipeline_schedule = {
+          {on, 0.3}, {on + 0.4, 0.6}, {on + 0.8, 1.0}, {on + 1.2, 0.4}, {on + 1.6, 0}};
+  }
+  p.pipeline_duration_s = p.pipeline_schedule.back().first + 0.8;
+  const bool low_only = Uniform(&rng, 0, 1) < 0.25;
+  p.stroke_levels_V.clear();
+  const int levels = std::uniform_int_distribution<int>(3, 5)(rng);
+  for (int k = 0; k < levels; ++k) {
+    p.stroke_levels_V.push_back(low_only ? Uniform(&rng, 0.3, 0.45) : Uniform(&rng, 0.35, 1.0));
+  }
+  p.stroke_cycles = std::uniform_int_distribution<int>(1, 3)(rng);
+  p.stroke_margin_m = Pick<double>(&rng, {0.0, 0.001, 0.005});
+  p.stroke_dwell_s = p.stroke_margin_m == 0 ? 0.1 : 0.0;
+  p.stroke_max_leg_s = 2.0;
+  p.paper_step = p.rich_profile = true;
+  p.mismatch.regularized_friction = Uniform(&rng, 0, 1) < 0.75;
+  p.mismatch.stick_velocity_m_per_s = LogUniform(&rng, 5e-5, 5e-4);
+  p.mismatch.relative_tolerance = 1e-8;
+  char line[400];
+  std::snprintf(
+      line, sizeof(line),
+      "%s %.2f kg, u_sat %.2f, delta %.1f, +(%.1f %.2f %.1f %.1f) -(%.1f %.2f %.1f %.1f), "
+      "%.0f Hz, tube %s, strokes %s x%d margin %.0f mm, %s",
+      t.cylinder.orientation == Orientation::kVertical ? "vert" : "horiz", t.cylinder.load_mass_kg,
+      u_sat, t.pipeline.delta_per_s, t.friction.positive.static_force_N,
+      t.friction.positive.dynamic_force_N, t.friction.positive.viscous_N_s_per_m,
+      t.friction.positive.stribeck_velocity_m_per_s * 1e3, t.friction.negative.static_force_N,
+      t.friction.negative.dynamic_force_N, t.friction.negative.viscous_N_s_per_m,
+      t.friction.negative.stribeck_velocity_m_per_s * 1e3, p.sample_rate_Hz, shapes[shape],
+      low_only ? "low" : "spread", p.stroke_cycles, p.stroke_margin_m * 1e3,
+      p.mismatch.regularized_friction ? "smooth stick" : "event stick");
+  d.summary = line;
+  return d;
+}
+
+// Largest |K_vp fitted - true| / q_max over u in [0, 1], outside the
+// staircase's gap that holds the true u_sat (no plateau tells where the
+// polynomial ends there: docs/identification.md).
+double KvpError(const KvpBranchParams& fit, const KvpBranchParams& real, double step_V) {
+  const double gap_high = std::ceil(real.u_sat_V / step_V - 1e-9) * step_V;
+  const double gap_low = gap_high - step_V;
+  const auto c_fit = MakeKvpCoefficients<double>(fit), c_true = MakeKvpCoefficients<double>(real);
+  double worst = 0;
+  for (int k = 0; k <= 1000; ++k) {
+    const double u = k / 1000.0;
+    if (u > gap_low && u <= gap_high) continue;
+    worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real.q_max_kg_per_s);
+  }
+  return worst;
+}
+
+bool Within(double value, double truth, double fraction, double floor) {
+  return std::fabs(value - truth) <= std::max(fraction * std::fabs(truth), floor);
+}
+
+struct UnitResult {
+  std::string id, summary, status;
+  std::map<std::string, bool> ok;
+  double chi_square = NAN, identify_s = 0, refine_s = 0;
+  double held_out_mm = 0, held_out_limit_mm = 0;  // worst validation run, and its limit
+  bool held_out_ok = false;
+  int errors_checked = 0, errors_within_3 = 0;
+  std::string failure;
+};
+
+UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& scratch, bool keep) {
+  UnitResult out;
+  char id[32];
+  std::snprintf(id, sizeof(id), "sweep-%02d", index);
+  out.id = id;
+  const Draw d = MakeDraw(seed, index);
+  out.summary = d.summary;
+  try {
+    const std::filesystem::path dir = scratch / id;
+    std::filesystem::remove_all(dir);
+    WriteDirectoryAtomically(dir.string(),
+                             UnitFiles(Synthesize(d.truth, d.protocol, seed + index, id)));
+    const Unit unit = ReadUnit(dir.string());
+    const Parameters prior = LoadParams(kSource + "/configs/paper.yaml");
+    IdentifyReport report;
+    auto clock = std::chrono::steady_clock::now();
+    const Parameters identified = Identify(unit, prior, IdentifyOptions{}, &report);
+    out.identify_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+    clock = std::chrono::steady_clock::now();
+    const RefineResult refined = Refine(
+        identified, unit, LoadFitSpec(kSource + "/configs/fit-default.yaml"), RefineOptions{});
+    out.refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+    out.status = ToString(refined.status);
+    out.chi_square = refined.reduced_chi_square;
+    const Parameters& fit = refined.parameters.empty() ? identified : refined.params;
+    const Parameters& t = d.truth;
+    out.ok["kvp.increasing"] =
+        KvpError(fit.valve.increasing, t.valve.increasing, d.staircase_step_V) <= 0.01;
+    out.ok["kvp.decreasing"] =
+        KvpError(fit.valve.decreasing, t.valve.decreasing, d.staircase_step_V) <= 0.01;
+    out.ok["delta"] = Within(fit.pipeline.delta_per_s, t.pipeline.delta_per_s, 0.05, 0);
+    for (const auto& [prefix, f, real] :
+         {std::make_tuple("pos.", &fit.friction.positive, &t.friction.positive),
+          std::make_tuple("neg.", &fit.friction.negative, &t.friction.negative)}) {
+      const std::string p = prefix;
+      out.ok[p + "Fs"] = Within(f->static_force_N, real->static_force_N, 0.05, 0.1);
+      out.ok[p + "Fd"] = Within(f->dynamic_force_N, real->dynamic_force_N, 0.05, 0.1);
+      out.ok[p + "b"] = Within(f->viscous_N_s_per_m, real->viscous_N_s_per_m, 0.15, 0.5);
+      out.ok[p + "vs"] =
+          Within(f->stribeck_velocity_m_per_s, real->stribeck_velocity_m_per_s, 0.25, 1e-3);
+    }
+    for (const RefinedParameter& rp : refined.parameters) {
+      double truth = 0;
+      if (!(rp.standard_error > 0) || !GetParameter(t, rp.path, &truth)) continue;
+      ++out.errors_checked;
+      out.errors_within_3 += std::fabs(rp.value - truth) <= 3 * rp.standard_error;
+    }
+    ValidationOptions v;
+    for (const auto& e : unit.experiments)
+      if (e.entry.kind == ExperimentKind::kValidation) v.experiment_ids.push_back(e.entry.id);
+    const ValidationReport at_truth = ValidateUnit(t, unit, v), at_fit = ValidateUnit(fit, unit, v);
+    out.held_out_ok = true;
+    for (std::size_t k = 0; k < at_fit.experiments.size(); ++k) {
+      const double got = at_fit.experiments[k].channels.at("x").rmse;
+      const double limit = 2 * at_truth.experiments[k].channels.at("x").rmse + 0.05e-3;
+      if (got / limit > out.held_out_mm / std::max(out.held_out_limit_mm, 1e-12) || k == 0) {
+        out.held_out_mm = got * 1e3;
+        out.held_out_limit_mm = limit * 1e3;
+      }
+      out.held_out_ok = out.held_out_ok && got <= limit;
+    }
+    if (!keep) std::filesystem::remove_all(dir);
+  } catch (const std::exception& e) {
+    out.failure = e.what();
+  }
+  return out;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+}
+
+}  // namespace
+}  // namespace pneumaid
+
+int main(int argc, char** argv) {
+  using namespace pneumaid;
+  if (argc < 2) {
+    std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K]\n";
+    return 2;
+  }
+  const int n = std::atoi(argv[1]);
+  std::uint64_t seed = 12;
+  int jobs = 1, min_units = -1;
+  std::string keep;  // --keep DIR: the units are written there and kept
+  for (int i = 2; i + 1 < argc; i += 2) {
+    const std::string flag = argv[i];
+    if (flag == "--seed")
+      seed = std::strtoull(argv[i + 1], nullptr, 10);
+    else if (flag == "--jobs")
+      jobs = std::atoi(argv[i + 1]);
+    else if (flag == "--min-units")
+      min_units = std::atoi(argv[i + 1]);
+    else if (flag == "--keep")
+      keep = argv[i + 1];
+    else {
+      std::cerr << "unknown flag " << flag << "\n";
+      return 2;
+    }
+  }
+  if (n < 1 || jobs < 1) {
+    std::cerr << "N and --jobs must be >= 1\n";
+    return 2;
+  }
+  const std::filesystem::path scratch = keep.empty()
+                                            ? std::filesystem::temp_directory_path() /
+                                                  ("pneumaid-sweep-" + std::to_string(::getpid()))
+                                            : std::filesystem::path(keep);
+  std::vector<UnitResult> results(n);
+  std::atomic<int> next{0};
+  std::mutex print;
+  std::vector<std::thread> workers;
+  for (int w = 0; w < jobs; ++w) {
+    workers.emplace_back([&] {
+      for (int k = next++; k < n; k = next++) {
+        results[k] = RunUnit(seed, k, scratch, !keep.empty());
+        const UnitResult& r = results[k];
+        std::lock_guard<std::mutex> lock(print);
+        std::printf("%s: %s\n", r.id.c_str(), r.summary.c_str());
+        if (!r.failure.empty()) {
+          std::printf("  FAILED: %s\n", r.failure.c_str());
+          continue;
+        }
+        std::string misses;
+        for (const auto& name : kChecked)
+          if (!r.ok.at(name)) misses += " " + name;
+        std::printf(
+            "  %s, chi2 %.3g; misses:%s; held-out x %.3f mm (limit %.3f)%s; "
+            "within 3 SE %d/%d; identify %.2f s, refine %.1f s\n",
+            r.status.c_str(), r.chi_square, misses.empty() ? " none" : misses.c_str(),
+            r.held_out_mm, r.held_out_limit_mm, r.held_out_ok ? "" : " MISSED", r.errors_within_3,
+            r.errors_checked, r.identify_s, r.refine_s);
+        std::fflush(stdout);
+      }
+    });
+  }
+  for (auto& w : workers) w.join();
+  if (keep.empty()) std::filesystem::remove_all(scratch);
+  std::printf("\nSweep of %d synthetic units (seed %llu): share within tolerance\n", n,
+              static_cast<unsigned long long>(seed));
+  bool enough = true;
+  for (const auto& name : kChecked) {
+    int good = 0;
+    for (const auto& r : results) good += r.failure.empty() && r.ok.at(name);
+    std::printf("  %-15s %2d/%d (%.0f %%)\n", name.c_str(), good, n, 100.0 * good / n);
+    enough = enough && (min_units < 0 || good >= min_units);
+  }
+  int held = 0, checked = 0, within = 0, explained = 0;
+  std::vector<double> identify, refine;
+  for (const auto& r : results) {
+    if (!r.failure.empty()) continue;
+    held += r.held_out_ok;
+    checked += r.errors_checked;
+    within += r.errors_within_3;
+    explained += r.status == "converged";
+    identify.push_back(r.identify_s);
+    refine.push_back(r.refine_s);
+  }
+  std::printf("  held-out x RMSE <= 2 x truth's + 0.05 mm: %d/%d\n", held, n);
+  std::printf("  refined coefficients within 3 standard errors: %d/%d (%.0f %%)\n", within, checked,
+              checked ? 100.0 * within / checked : 0.0);
+  std::printf("  refinement verdict 'explained': %d/%d\n", explained, n);
+  std::printf("  median identify %.2f s, median identify --refine %.1f s (refine alone)\n",
+              Median(identify), Median(refine));
+  return enough ? 0 : 1;
+}
