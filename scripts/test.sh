@@ -7,6 +7,11 @@ cd "$(dirname "$0")/.."
 
 scripts/setup.sh
 ctest --test-dir build --output-on-failure -j"$(nproc)"
+# Issue 12's robustness sweep, 6 seeded units with model mismatch and drawn
+# protocols (Release only, about 1 min on 2 cores): gates on K_vp and delta
+# within tolerance on at least 5 of 6 units; the friction shares are printed
+# (not yet at issue 12's target: docs/identification.md).
+build/tests/bench/robustness_sweep 6 --seed 2026 --jobs "$(nproc)" --min-units-valve-tube 5
 
 if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   BUILD_DIR=build-asan CMAKE_ARGS="-DPNEUMAID_SANITIZE=ON -DPNEUMAID_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo" \

@@ -847,111 +847,171 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   ForceBalanceStart(data, -1, &negative);
   Block* const blocks[2] = {&positive, &negative};
   const double mass_kg = unit.manifest.rig.load_mass_kg;
-  // A direction without slides keeps the prior whole (its block constant).
-  std::vector<double*> free_blocks;
-  std::vector<int> free;  // columns 0-3 positive, 4-7 negative
+  // Held coefficients (columns 0-3 positive, 4-7 negative) with why: a
+  // direction without slides keeps the prior whole.
+  std::array<std::string, 2 * kDirectionParameters> held;
   for (int d = 0; d < 2; ++d) {
     const DirectionFit& fit = d == 0 ? result.positive : result.negative;
-    if (fit.segments + fit.smooth_slides == 0) {
-      *blocks[d] = prior_blocks[d];
-      continue;
-    }
-    free_blocks.push_back(blocks[d]->data());
-    for (int i = 0; i < kDirectionParameters; ++i) free.push_back(d * kDirectionParameters + i);
+    if (fit.segments + fit.smooth_slides > 0) continue;
+    for (int i = 0; i < kDirectionParameters; ++i)
+      held[d * kDirectionParameters + i] = "no slide this way";
+    *blocks[d] = prior_blocks[d];
   }
-
   std::vector<double> stop_time_s;
   for (const Segment& s : data.segments) stop_time_s.push_back(s.stop_time_guess_s);
   std::vector<SegmentJacobian> jacobians;
   std::vector<double> huber_scale;  // empty: plain least squares
-  for (int pass = 0; pass < 2; ++pass) {
-    SegmentProblem problem;
-    problem.stop_time_s = &stop_time_s;
-    BuildProblem(data, mass_kg, options, huber_scale, &positive, &negative, &problem);
+  std::vector<int> free;            // the columns fitted in the last round
+  Eigen::MatrixXd covariance;
+  const std::array<double, kDirectionParameters> sigma = PriorSigmas(options);
+  // One fit of every coefficient of a direction with slides (the weak prior
+  // keeps it regular); what it finds undetermined is then reported as held,
+  // its value the regularised one or the prior's (held_at_prior). A refit
+  // with them held at the prior's distorted the determined ones (Fd 0.19 for
+  // 0.29 on a heavy unit whose one fit gave 0.292), so there is none.
+  for (int round = 0; round < 1; ++round) {
+    free.clear();
+    std::vector<double*> free_blocks;
+    std::vector<int> columns;  // of the free blocks, in Evaluate's order
     for (int d = 0; d < 2; ++d) {
-      double* block = blocks[d]->data();
-      if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end()) {
-        problem.problem.SetParameterBlockConstant(block);
-      } else {
+      bool any = false;
+      for (int i = 0; i < kDirectionParameters; ++i)
+        any = any || held[d * kDirectionParameters + i].empty();
+      if (!any) continue;
+      free_blocks.push_back(blocks[d]->data());
+      for (int i = 0; i < kDirectionParameters; ++i)
+        columns.push_back(d * kDirectionParameters + i);
+    }
+    for (int c : columns) {
+      if (held[c].empty()) free.push_back(c);
+    }
+    if (free.empty()) break;
+    for (int pass = 0; pass < 2; ++pass) {
+      SegmentProblem problem;
+      problem.stop_time_s = &stop_time_s;
+      BuildProblem(data, mass_kg, options, huber_scale, &positive, &negative, &problem);
+      for (int d = 0; d < 2; ++d) {
+        double* block = blocks[d]->data();
+        if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end()) {
+          problem.problem.SetParameterBlockConstant(block);
+          continue;
+        }
         problem.problem.AddResidualBlock(
             new ceres::AutoDiffCostFunction<PriorResidual, kDirectionParameters,
                                             kDirectionParameters>(
-                new PriorResidual{prior_blocks[d], PriorSigmas(options)}),
+                new PriorResidual{prior_blocks[d], sigma}),
             nullptr, block);
+        std::vector<int> constant;
+        for (int i = 0; i < kDirectionParameters; ++i) {
+          if (!held[d * kDirectionParameters + i].empty()) constant.push_back(i);
+        }
+        if (!constant.empty()) {
+          problem.problem.SetManifold(block,
+                                      new ceres::SubsetManifold(kDirectionParameters, constant));
+        }
       }
-    }
-    const ceres::Solver::Summary summary = Solve(options, &problem.problem);
-    if (pass == 0) result.initial_cost = summary.initial_cost;
-    result.final_cost = summary.final_cost;
-    result.iterations += static_cast<int>(summary.iterations.size());
-    const auto failed = [&] {
-      result.note = "Ceres did not converge (" + summary.message + "); the prior is kept";
-      return result;
-    };
-    if (!summary.IsSolutionUsable()) return failed();
-    if (pass == 0) {
-      // Segments far worse than the typical one (a disturbed stroke, a bump
-      // on the rod): refit with each segment's influence bounded (Huber).
-      std::vector<double> mean_squares;
-      if (!SegmentMeanSquares(&problem, &mean_squares)) return failed();
-      const double typical = Median(mean_squares);
-      result.outlier_segments =
-          static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
-            return m > options.outlier_ratio * typical;
-          }));
-      if (result.outlier_segments > 0) {
-        for (int n : problem.rows) huber_scale.push_back(options.outlier_ratio * typical * n);
-        continue;  // the Jacobians are taken after the refit
+      const ceres::Solver::Summary summary = Solve(options, &problem.problem);
+      if (round == 0 && pass == 0) result.initial_cost = summary.initial_cost;
+      result.final_cost = summary.final_cost;
+      result.iterations += static_cast<int>(summary.iterations.size());
+      const auto failed = [&] {
+        result.note = "Ceres did not converge (" + summary.message + "); the prior is kept";
+        return result;
+      };
+      if (!summary.IsSolutionUsable()) return failed();
+      if (round == 0 && pass == 0) {
+        // Segments far worse than the typical one (a disturbed stroke, a
+        // bump on the rod): refit with each segment's influence bounded.
+        std::vector<double> mean_squares;
+        if (!SegmentMeanSquares(&problem, &mean_squares)) return failed();
+        const double typical = Median(mean_squares);
+        result.outlier_segments =
+            static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
+              return m > options.outlier_ratio * typical;
+            }));
+        if (result.outlier_segments > 0) {
+          for (int n : problem.rows) huber_scale.push_back(options.outlier_ratio * typical * n);
+          continue;  // the Jacobians are taken after the refit
+        }
       }
+      if (!Evaluate(data, free_blocks, &problem, &jacobians)) return failed();
+      break;
     }
-    if (!Evaluate(data, free_blocks, &problem, &jacobians)) return failed();
-    break;
-  }
-  // The robust covariance: the data's information plus the prior's in the
-  // bread, the clusters' scores in the meat.
-  Eigen::MatrixXd information, meat;
-  Information(jacobians, &information, &meat);
-  // The prior is one more independent observation of each coefficient: its
-  // information enters the bread and, as its own variance, the meat (where
-  // the logs say nothing, the error is then the prior's, not zero).
-  const std::array<double, kDirectionParameters> sigma = PriorSigmas(options);
-  const double clusters = static_cast<double>(jacobians.size());
-  meat *= clusters / std::max(clusters - 1.0, 1.0);
-  for (std::size_t a = 0; a < free.size(); ++a) {
-    const int i = free[a] % kDirectionParameters;
-    const double value = (*blocks[free[a] / kDirectionParameters])[i];
-    const double slope = i == 3 ? 1.0 / (value * sigma[i]) : 1.0 / sigma[i];  // vs: ln scale
-    information(a, a) += slope * slope;
-    meat(a, a) += slope * slope;
-  }
-  const Eigen::MatrixXd bread = information.inverse();
-  const Eigen::MatrixXd covariance = bread * meat * bread;
-  // What the logs determine (determination.h): the rest is reported as held,
-  // its value the prior's pull against no evidence.
-  std::vector<bool> determined(free.size(), true);
-  for (std::size_t a = 0; a < free.size(); ++a) {
-    const int i = free[a] % kDirectionParameters;
-    const double value = (*blocks[free[a] / kDirectionParameters])[i];
-    const double error = std::sqrt(std::max(covariance(a, a), 0.0));
-    determined[a] = internal::IsDetermined(value, error, kDeterminedFloor[i],
-                                           options.identifiable_relative_error);
-    if (!determined[a]) {
+    // The robust covariance of the free columns: the data's information plus
+    // the prior's in the bread, the clusters' scores and the prior (one more
+    // independent observation of each coefficient) in the meat, so that
+    // where the logs say nothing the error is the prior's, not zero.
+    Eigen::MatrixXd information, meat;
+    Information(jacobians, &information, &meat);
+    const double clusters = static_cast<double>(jacobians.size());
+    meat *= clusters / std::max(clusters - 1.0, 1.0);
+    std::vector<Eigen::Index> index;  // of each free column in `columns`
+    for (int c : free) {
+      index.push_back(std::find(columns.begin(), columns.end(), c) - columns.begin());
+    }
+    const Eigen::Index m = static_cast<Eigen::Index>(free.size());
+    Eigen::MatrixXd bread(m, m), score(m, m);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      for (Eigen::Index b = 0; b < m; ++b) {
+        bread(a, b) = information(index[a], index[b]);
+        score(a, b) = meat(index[a], index[b]);
+      }
+      const int i = free[a] % kDirectionParameters;
+      const double value = (*blocks[free[a] / kDirectionParameters])[i];
+      const double slope = i == 3 ? 1.0 / (value * sigma[i]) : 1.0 / sigma[i];  // vs: ln scale
+      bread(a, a) += slope * slope;
+      score(a, a) += slope * slope;
+    }
+    const Eigen::MatrixXd inverse = bread.inverse();
+    covariance = inverse * score * inverse;
+    // What the logs determine (determination.h); vs means something only
+    // through the Stribeck drop Fs - Fd, so it goes with an undetermined Fs.
+    bool held_any = false;
+    for (Eigen::Index a = 0; a < m; ++a) {
+      const int c = free[a], i = c % kDirectionParameters;
+      const double value = (*blocks[c / kDirectionParameters])[i];
+      const double error = std::sqrt(std::max(covariance(a, a), 0.0));
+      if (internal::IsDetermined(value, error, kDeterminedFloor[i],
+                                 options.identifiable_relative_error)) {
+        continue;
+      }
       char why[200];
-      std::snprintf(why, sizeof(why),
-                    "not determined by these logs (%.4g +- %.2g); regularised toward the prior",
-                    value, error);
-      (free[a] < kDirectionParameters ? result.positive : result.negative)
-          .held[kParameterNames[i]] = why;
+      std::snprintf(why, sizeof(why), "not determined by these logs (%.4g +- %.2g); %s", value,
+                    error,
+                    options.held_at_prior ? "held at the prior" : "regularised toward the prior");
+      held[c] = why;
+      held_any = true;
     }
-  }
-  // vs means something only through the Stribeck drop Fs - Fd: with Fs not
-  // determined, a "determined" vs is the prior's Fs speaking.
-  for (std::size_t a = 0; a + 3 < free.size(); a += kDirectionParameters) {
-    if (determined[a] || !determined[a + 3]) continue;
-    determined[a + 3] = false;
-    (free[a] < kDirectionParameters ? result.positive : result.negative).held["vs"] =
-        "not determined by these logs: Fs, which sets the Stribeck drop, is not; regularised "
-        "toward the prior";
+    for (int d = 0; d < 2; ++d) {
+      const int fs = d * kDirectionParameters, vs = fs + 3;
+      if (!held[fs].empty() && held[vs].empty() && held[fs] != "no slide this way") {
+        held[vs] = std::string(
+                       "not determined by these logs: Fs, which sets the Stribeck drop, "
+                       "is not; ") +
+                   (options.held_at_prior ? "held at the prior" : "regularised toward the prior");
+        held_any = true;
+      }
+    }
+    if (!held_any) break;
+    for (int c = 0; c < 2 * kDirectionParameters; ++c) {
+      if (!held[c].empty() && options.held_at_prior) {
+        (*blocks[c / kDirectionParameters])[c % kDirectionParameters] =
+            prior_blocks[c / kDirectionParameters][c % kDirectionParameters];
+      }
+    }
+    std::vector<int> still;  // the columns the logs determine
+    for (int c : free) {
+      if (held[c].empty()) still.push_back(c);
+    }
+    Eigen::MatrixXd kept(still.size(), still.size());
+    for (std::size_t a = 0; a < still.size(); ++a) {
+      for (std::size_t b = 0; b < still.size(); ++b) {
+        kept(a, b) = covariance(std::find(free.begin(), free.end(), still[a]) - free.begin(),
+                                std::find(free.begin(), free.end(), still[b]) - free.begin());
+      }
+    }
+    free = still;
+    covariance = kept;
   }
   result.segments = static_cast<int>(data.segments.size());
   double squares = 0;
@@ -968,13 +1028,13 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     DirectionFit& fit = d == 0 ? result.positive : result.negative;
     fit.params = Unpack(*blocks[d]);
     for (int i = 0; i < kDirectionParameters; ++i) {
-      const auto at =
-          std::find(free.begin(), free.end(), d * kDirectionParameters + i) - free.begin();
-      if (at == static_cast<long>(free.size())) {
-        fit.held[kParameterNames[i]] = "no slide this way";
-      } else if (determined[at]) {
-        fit.standard_errors[kParameterNames[i]] = std::sqrt(std::max(covariance(at, at), 0.0));
+      const int c = d * kDirectionParameters + i;
+      if (!held[c].empty()) {
+        fit.held[kParameterNames[i]] = held[c];
+        continue;
       }
+      const auto at = std::find(free.begin(), free.end(), c) - free.begin();
+      fit.standard_errors[kParameterNames[i]] = std::sqrt(std::max(covariance(at, at), 0.0));
     }
     fit.fitted = !fit.standard_errors.empty();
   }

@@ -92,6 +92,8 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (rescue_starts < 0) return fail("rescue_starts must be >= 0");
   if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");
   if (!(misfit_window_s > 0)) return fail("misfit_window_s must be > 0");
+  if (!(start_prior_errors > 0) || !(start_prior_fraction > 0))
+    return fail("start_prior_errors and start_prior_fraction must be > 0");
   if (!(correlation_flag > 0 && correlation_flag < 1)) {
     return fail("correlation_flag must be in (0, 1)");
   }
@@ -144,9 +146,9 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     const FitSpec last = StageSpec(spec, stages.back());
     const Parameters conditioned = WithRigConditions(start, unit);
     const ParameterMap map = MakeParameterMap(conditioned, last);
-    RefineResult rescue =
-        RefineStage(start, unit, last, stages.back().windows, true, options,
-                    TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed));
+    RefineResult rescue = RefineStage(
+        start, unit, last, stages.back().windows, true, options,
+        TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed));
     if (stages.back().windows && !rescue.parameters.empty()) {
       rescue.misfits = WholeRunMisfits(rescue.params, unit, spec, options);
     }
@@ -210,18 +212,18 @@ std::string RefineResult::BriefReport() const {
   std::snprintf(line, sizeof(line),
                 "Refinement: %s, cost %.6g -> %.6g, %d iterations in %d stage(s), %d start(s) "
                 "(best: %d), %.2f s\n",
-                ToString(status), cost_before, cost_after, iterations,
-                stages, starts, best_start, wall_time_s);
+                ToString(status), cost_before, cost_after, iterations, stages, starts, best_start,
+                wall_time_s);
   out << line;
   if (!message.empty()) out << "  " << message << "\n";
   if (!misfits.empty()) {
-    std::snprintf(line, sizeof(line),
-                  "  verdict: median reduced chi-square over the runs %.3g (acceptable %.3g)%s\n",
-                  reduced_chi_square, acceptable_reduced_chi_square,
-                  rescue_starts > 0 ? (", after " + std::to_string(rescue_starts) +
-                                       " starts around the start")
-                                          .c_str()
-                                    : "");
+    std::snprintf(
+        line, sizeof(line),
+        "  verdict: median reduced chi-square over the runs %.3g (acceptable %.3g)%s\n",
+        reduced_chi_square, acceptable_reduced_chi_square,
+        rescue_starts > 0
+            ? (", after " + std::to_string(rescue_starts) + " starts around the start").c_str()
+            : "");
     out << line;
   }
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
@@ -233,8 +235,9 @@ std::string RefineResult::BriefReport() const {
     out << line;
   }
   for (const RefinedParameter& p : parameters) {
-    std::snprintf(line, sizeof(line), "  %-28s %12.6g -> %12.6g +- %.3g%s\n", p.path.c_str(),
-                  p.start, p.value, p.standard_error, p.at_bound ? "  (at a bound)" : "");
+    std::snprintf(line, sizeof(line), "  %-28s %12.6g -> %12.6g +- %.3g%s%s\n", p.path.c_str(),
+                  p.start, p.value, p.standard_error, p.at_bound ? "  (at a bound)" : "",
+                  p.held.empty() ? "" : "  (held: not determined by the fitted runs)");
     out << line;
   }
   for (size_t i = 0; i < poorly_separable.size(); ++i) {

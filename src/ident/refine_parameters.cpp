@@ -86,11 +86,53 @@ std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Paramet
     for (int k = 0; k < count; ++k) {
       const double fraction = (strata[k] + unit(random)) / count;
       const double p = map.IsLog(j) && low > 0 ? low * std::pow(high / low, fraction)
-                                                : low + (high - low) * fraction;
+                                               : low + (high - low) * fraction;
       points[k][j] = map.ToTheta(j, p);
     }
   }
   return points;
+}
+
+StartPrior MakeStartPrior(const ParameterMap& map, const Parameters& start, double errors,
+                          double fraction) {
+  StartPrior prior;
+  for (int j = 0; j < map.size(); ++j) {
+    double value = 0;
+    GetParameter(start, map.free[j].path, &value);
+    const auto error = start.uncertainty.find(map.free[j].path);
+    const bool known = error != start.uncertainty.end() && error->second > 0;
+    const double span = map.free[j].upper - map.free[j].lower;
+    if (map.IsLog(j)) {
+      prior.w.push_back(std::log(value));
+      prior.sigma.push_back(known ? std::log1p(std::max(errors * error->second / value, fraction))
+                                  : std::log(3.0));
+    } else {
+      prior.w.push_back(value);
+      const double size = std::max(std::fabs(value), 1e-3 * span);
+      prior.sigma.push_back(known ? std::max(errors * error->second, fraction * size) : size);
+    }
+  }
+  return prior;
+}
+
+StartPriorCost::StartPriorCost(const ParameterMap* map, StartPrior prior)
+    : map_(map), prior_(std::move(prior)) {
+  set_num_residuals(map->size());
+  mutable_parameter_block_sizes()->push_back(map->size());
+}
+
+bool StartPriorCost::Evaluate(double const* const* theta, double* residuals,
+                              double** jacobians) const {
+  const int m = map_->size();
+  for (int j = 0; j < m; ++j) {
+    residuals[j] = (map_->ScaleCoordinate(j, theta[0][j]) - prior_.w[j]) / prior_.sigma[j];
+  }
+  if (jacobians != nullptr && jacobians[0] != nullptr) {
+    std::fill(jacobians[0], jacobians[0] + m * m, 0.0);
+    for (int j = 0; j < m; ++j)
+      jacobians[0][j * m + j] = map_->ScaleDerivative(j, theta[0][j]) / prior_.sigma[j];
+  }
+  return true;
 }
 
 }  // namespace pneumaid::refine_internal

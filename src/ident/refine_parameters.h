@@ -3,6 +3,8 @@
 // Latin-hypercube starting points inside the bounds.
 #pragma once
 
+#include <ceres/ceres.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -39,6 +41,11 @@ struct ParameterMap {
     // A start on a bound is moved just inside (theta would be infinite).
     const double f = std::clamp((w - Low(j)) / Span(j), 1e-9, 1.0 - 1e-9);
     return std::log(f / (1.0 - f));
+  }
+  double ScaleCoordinate(int j, double theta) const { return Low(j) + Span(j) * Logistic(theta); }
+  double ScaleDerivative(int j, double theta) const {  // dw/dtheta
+    const double s = Logistic(theta);
+    return Span(j) * s * (1.0 - s);
   }
   double Derivative(int j, double theta) const {  // dp/dtheta
     const double s = Logistic(theta);
@@ -78,5 +85,30 @@ std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int cou
 // parameter without one (its fit did not determine it).
 std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Parameters& start,
                                           int count, double box, std::uint64_t seed);
+
+// The weak prior toward the start (RefineOptions::start_prior): per free
+// parameter its start in the scale coordinate w (p, or ln p) and a standard
+// deviation there: the larger of start_prior_errors of its standard errors
+// (start.uncertainty) and start_prior_fraction of its value, or, without a
+// standard error (the component fits did not determine it), a factor 3 (log
+// scale) or its own size (linear).
+struct StartPrior {
+  std::vector<double> w, sigma;
+};
+StartPrior MakeStartPrior(const ParameterMap& map, const Parameters& start, double errors,
+                          double fraction);
+
+// (w_j(theta_j) - w_start_j) / sigma_j for every free parameter: keeps what
+// the fitted runs do not determine near the start (instead of at a bound),
+// negligible against runs that determine it.
+class StartPriorCost final : public ceres::CostFunction {
+ public:
+  StartPriorCost(const ParameterMap* map, StartPrior prior);
+  bool Evaluate(double const* const* theta, double* residuals, double** jacobians) const override;
+
+ private:
+  const ParameterMap* map_;
+  StartPrior prior_;
+};
 
 }  // namespace pneumaid::refine_internal

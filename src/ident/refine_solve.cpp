@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 
 #include "pneumaid/model/parameter_table.h"
@@ -58,6 +59,13 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     data_rows += e.residuals() - (e.FitsStart() ? kStartOffsets : 0);
   }
 
+  // The weak prior toward the start (after the runs: Ceres' cost includes it,
+  // the costs reported are the runs').
+  const StartPrior prior =
+      MakeStartPrior(map, conditioned, options.start_prior_errors, options.start_prior_fraction);
+  if (options.start_prior) {
+    p.problem.AddResidualBlock(new StartPriorCost(&map, prior), nullptr, p.theta.data());
+  }
   RefineResult r;
   const std::vector<double> start_theta = p.theta;
   std::vector<std::vector<double>> starts = {start_theta};
@@ -151,9 +159,27 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
           std::min(rp.value - map.free[j].lower, map.free[j].upper - rp.value) < 1e-6 * span;
       r.parameters.push_back(rp);
     }
-    Summarise(
-        ParameterCovariance(normal, map, p.theta, r.cost_after, data_rows, options.stall_tolerance),
-        map, options, &r);
+    // What the fitted runs determine: a parameter whose information from the
+    // runs is below the prior's (its standard error from the runs alone
+    // above the prior's sigma) is reported as held toward the start.
+    Eigen::MatrixXd with_prior = normal;
+    if (options.start_prior && normal.size() > 0) {
+      for (int j = 0; j < map.size(); ++j) {
+        const double slope = map.ScaleDerivative(j, p.theta[j]) / prior.sigma[j];
+        if (normal(j, j) < slope * slope) {
+          char why[200];
+          std::snprintf(why, sizeof(why),
+                        "not determined by the fitted runs (less information than the prior "
+                        "toward the start, sigma %.3g in %s); regularised toward the start",
+                        prior.sigma[j], map.IsLog(j) ? "ln" : "SI");
+          r.parameters[j].held = why;
+        }
+        with_prior(j, j) += slope * slope;
+      }
+    }
+    Summarise(ParameterCovariance(with_prior, map, p.theta, r.cost_after, data_rows,
+                                  options.stall_tolerance),
+              map, options, &r);
   }
   if (windows) r.fitted = PerRun(r.fitted, experiments);
   return r;

@@ -6,10 +6,14 @@
 // honesty of the standard errors, and the median times.
 //
 //   robustness_sweep N [--seed S] [--jobs J] [--min-units K] [--keep DIR]
+//                    [--min-units-valve-tube K]
+//                    [--start-prior on|off]
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
-// tolerance on at least K units (the suite runs 6 units with K = 5).
+// tolerance on at least K units (issue 12's suite target: 6 units, K = 5);
+// --min-units-valve-tube K: the same for K_vp and delta only (what the suite
+// gates on today: docs/identification.md).
 #include <unistd.h>
 
 #include <atomic>
@@ -172,7 +176,8 @@ struct UnitResult {
   std::string failure;
 };
 
-UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& scratch, bool keep) {
+UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& scratch, bool keep,
+                   const RefineOptions& refine_options) {
   UnitResult out;
   char id[32];
   std::snprintf(id, sizeof(id), "sweep-%02d", index);
@@ -193,7 +198,7 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
         std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
     clock = std::chrono::steady_clock::now();
     const RefineResult refined = Refine(
-        identified, unit, LoadFitSpec(kSource + "/configs/fit-default.yaml"), RefineOptions{});
+        identified, unit, LoadFitSpec(kSource + "/configs/fit-default.yaml"), refine_options);
     out.refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
     out.status = ToString(refined.status);
     out.chi_square = refined.reduced_chi_square;
@@ -258,8 +263,9 @@ int main(int argc, char** argv) {
   }
   const int n = std::atoi(argv[1]);
   std::uint64_t seed = 12;
-  int jobs = 1, min_units = -1;
+  int jobs = 1, min_units = -1, min_units_valve_tube = -1;
   std::string keep;  // --keep DIR: the units are written there and kept
+  RefineOptions refine_options;
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--seed")
@@ -268,8 +274,12 @@ int main(int argc, char** argv) {
       jobs = std::atoi(argv[i + 1]);
     else if (flag == "--min-units")
       min_units = std::atoi(argv[i + 1]);
+    else if (flag == "--min-units-valve-tube")
+      min_units_valve_tube = std::atoi(argv[i + 1]);
     else if (flag == "--keep")
       keep = argv[i + 1];
+    else if (flag == "--start-prior")
+      refine_options.start_prior = std::string(argv[i + 1]) == "on";
     else {
       std::cerr << "unknown flag " << flag << "\n";
       return 2;
@@ -290,7 +300,7 @@ int main(int argc, char** argv) {
   for (int w = 0; w < jobs; ++w) {
     workers.emplace_back([&] {
       for (int k = next++; k < n; k = next++) {
-        results[k] = RunUnit(seed, k, scratch, !keep.empty());
+        results[k] = RunUnit(seed, k, scratch, !keep.empty(), refine_options);
         const UnitResult& r = results[k];
         std::lock_guard<std::mutex> lock(print);
         std::printf("%s: %s\n", r.id.c_str(), r.summary.c_str());
@@ -321,6 +331,8 @@ int main(int argc, char** argv) {
     for (const auto& r : results) good += r.failure.empty() && r.ok.at(name);
     std::printf("  %-15s %2d/%d (%.0f %%)\n", name.c_str(), good, n, 100.0 * good / n);
     enough = enough && (min_units < 0 || good >= min_units);
+    const bool valve_tube = name.rfind("kvp", 0) == 0 || name == "delta";
+    enough = enough && (!valve_tube || min_units_valve_tube < 0 || good >= min_units_valve_tube);
   }
   int held = 0, checked = 0, within = 0, explained = 0;
   std::vector<double> identify, refine;

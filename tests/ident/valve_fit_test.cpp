@@ -112,6 +112,29 @@ TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
   }
 }
 
+// Short holds at a low rate: 0.2 s per level at 500 Hz, a 30 ms meter. Waiting
+// out 7 meter lags left no sample of a plateau; the meter's lag is modelled
+// instead, so every level counts and K_vp is recovered.
+TEST(ValveFitTest, ShortHoldsAtALowRateAreReadThroughTheMetersLag) {
+  Parameters truth;
+  Protocol protocol;
+  protocol.valve = true;
+  protocol.sample_rate_Hz = 500;
+  protocol.valve_hold_s = 0.2;
+  protocol.sensors["q"] = {2e-7, 0.03, 0.0, true};
+  protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
+  protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
+  const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 9, "V"), "valve_short");
+  const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  EXPECT_EQ(fit.plateaus.size(), 39u);
+  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+    ASSERT_TRUE(fitted->fitted) << fitted->note;
+    EXPECT_LT(WorstKvpError(fitted->params, *real, 0.70, 0.75), 0.01);
+  }
+}
+
 // A staircase that stops below saturation shows none: u_sat stays the prior's
 // and the report says why.
 TEST(ValveFitTest, AStaircaseWithoutSaturationKeepsThePriorsSaturation) {

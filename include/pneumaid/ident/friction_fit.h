@@ -83,6 +83,9 @@ struct FrictionFitOptions {
   // and its tolerance (0.1 N, 0.5 N s/m, 1 mm/s) is not determined by the
   // logs: it is reported as held, by name with why (determination.h).
   double identifiable_relative_error = 0.5;
+  // A held coefficient takes the prior's value (true) or keeps the value the
+  // regularised fit gave it (false).
+  bool held_at_prior = false;
 
   bool IsValid(std::string* error) const;
 };

@@ -66,6 +66,16 @@ struct RefineOptions {
   // none: a coefficient the component fits did not determine).
   int rescue_starts = 6;
   double rescue_box = 0.3;
+  // A weak prior ties each free parameter to its start (a MAP fit): sigma
+  // is the larger of start_prior_errors of its standard errors from the
+  // start's uncertainty and start_prior_fraction of its value, or, without
+  // one (the component fits did not determine it), a factor 3 (log scale) or
+  // its own size. It keeps what the fitted runs do not determine near the
+  // start instead of at a bound (friction from low-command strokes only), is
+  // negligible against runs that determine a parameter, and is reported.
+  bool start_prior = true;
+  double start_prior_errors = 3.0;
+  double start_prior_fraction = 0.02;
   // Where the report looks for the worst stretch of a run [s].
   double misfit_window_s = 0.2;
   // Print Ceres' per-iteration progress to stdout.
@@ -110,6 +120,9 @@ struct RefinedParameter {
   double value = 0;
   double standard_error = 0;  // 0 when the covariance was not available
   bool at_bound = false;
+  // Not empty: the fitted runs do not determine it (why); its value is the
+  // prior toward the start's pull.
+  std::string held;
 };
 
 struct RefineResult {
@@ -122,7 +135,7 @@ struct RefineResult {
   double reduced_chi_square = 0, acceptable_reduced_chi_square = 0;
   std::vector<ChannelMisfit> misfits;
   int rescue_starts = 0;
-  Parameters params;       // the refined set (start values elsewhere), with uncertainty
+  Parameters params;  // the refined set (start values elsewhere), with uncertainty
   std::vector<RefinedParameter> parameters;
   Eigen::MatrixXd correlation;  // of the free parameters, in the order above
   std::vector<std::pair<std::string, std::string>> poorly_separable;
