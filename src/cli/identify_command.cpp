@@ -60,7 +60,16 @@ int RunIdentify(const IdentifyArgs& args) {
   options.tool_version = PNEUMAID_VERSION;
   options.date = UtcNow();
   IdentifyReport report;
-  const Parameters identified = Identify(unit, prior, options, &report);
+  Parameters identified;
+  try {
+    identified = Identify(unit, prior, options, &report);
+  } catch (const InputError& error) {
+    // The library names its options' objects; here they are flags.
+    const std::string object = "components: ";
+    if (error.message().compare(0, object.size(), object) != 0) throw;
+    throw InputError(error.file(), error.line(), 0,
+                     "--only " + error.message().substr(object.size()));
+  }
   std::cout << report.BriefReport();
   if (args.refine) {
     RefineOptions refine;

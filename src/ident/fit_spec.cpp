@@ -1,5 +1,8 @@
 #include "pneumaid/ident/fit_spec.h"
 
+#include <algorithm>
+#include <iterator>
+
 #include "../io/yaml_reader.h"
 #include "pneumaid/io/files.h"
 #include "pneumaid/model/parameter_table.h"
@@ -60,6 +63,8 @@ class FitSpecReader : internal::YamlReader {
     spec.multistart = Count(root["multistart"], "multistart", 0, 1000, spec.multistart);
     spec.seed = static_cast<std::uint64_t>(Count(root["seed"], "seed", 0, 1e15, 1));
     spec.max_iterations = Count(root["max_iterations"], "max_iterations", 1, 10000, 50);
+    std::string error;
+    if (!spec.IsValid(&error)) Fail(root, error);  // what the reader above does not see
     return spec;
   }
 
@@ -179,6 +184,63 @@ class FitSpecReader : internal::YamlReader {
 
 FitSpec ParseFitSpec(const std::string& text, const std::string& source) {
   return FitSpecReader(source).Read(text);
+}
+
+bool FitSpec::IsValid(std::string* error) const {
+  const auto fail = [error](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (parameters.empty()) return fail("parameters: expected at least one free parameter");
+  const int room =
+      kMaxSensitivityParameters - (fit_initial_pressures ? kInitialPressureColumns : 0);
+  if (parameters.size() > static_cast<std::size_t>(room)) {
+    return fail("parameters: at most " + std::to_string(room) + " free");
+  }
+  for (std::size_t k = 0; k < parameters.size(); ++k) {
+    const FreeParameter& p = parameters[k];
+    const std::string where = "parameters." + p.path;
+    const ScalarParameterInfo* info = FindScalarParameter(p.path);
+    if (info == nullptr && p.path.rfind("effects.", 0) != 0) {
+      return fail("parameters: unknown parameter '" + p.path + "'");
+    }
+    for (std::size_t j = 0; j < k; ++j) {
+      if (parameters[j].path == p.path) return fail(where + ": freed twice");
+    }
+    if (!(p.lower < p.upper)) return fail(where + ": expected min < max");
+    if (info != nullptr && (!info->range.Contains(p.lower) || !info->range.Contains(p.upper))) {
+      return fail(where + ": bounds must lie " + info->range.Describe());
+    }
+    if (p.scale == ParameterScale::kLog && !(p.lower > 0)) {
+      return fail(where + ": a log scale needs min > 0");
+    }
+  }
+  if (channels.empty()) return fail("channels: expected at least one channel");
+  for (const auto& [name, w] : channels) {
+    if (std::find(std::begin(kChannels), std::end(kChannels), name) == std::end(kChannels)) {
+      return fail("channels: unknown channel '" + name + "' (expected x, p1, p2, q1 or q2)");
+    }
+    if (!(w.sigma >= 0) || !(w.weight > 0)) {
+      return fail("channels." + name + ": expected sigma >= 0 and weight > 0");
+    }
+  }
+  if (fit.empty()) return fail("experiments.fit: expected at least one experiment");
+  for (const FitStage& stage : stages) {
+    if (stage.friction_replay && (stage.windows || !stage.parameters.empty())) {
+      return fail("stages: friction_replay stands alone (no parameters, no windows)");
+    }
+    for (const std::string& path : stage.parameters) {
+      const bool free = std::any_of(parameters.begin(), parameters.end(),
+                                    [&](const FreeParameter& p) { return p.path == path; });
+      if (!free) return fail("stages: '" + path + "' is not under parameters");
+    }
+  }
+  if (!stages.empty() && stages.back().friction_replay) {
+    return fail("stages: the last stage must fit through the simulator");
+  }
+  if (multistart < 0 || multistart > 1000) return fail("multistart: expected 0 to 1000");
+  if (max_iterations < 1) return fail("max_iterations: expected >= 1");
+  return true;
 }
 
 FitSpec LoadFitSpec(const std::string& path) {

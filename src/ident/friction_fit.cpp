@@ -24,6 +24,10 @@ constexpr int kDirectionParameters = 4;  // Fs, Fd, b, vs
 const char* const kParameterNames[kDirectionParameters] = {"Fs", "Fd", "b", "vs"};
 // Lower bounds: forces and damping are magnitudes; vs > 0 keeps Eq. 12 defined.
 const double kLowerBounds[kDirectionParameters] = {0.0, 0.0, 0.0, 1e-4};
+// Upper bounds: configs/fit-default.yaml's, so that refinement can start
+// from whatever the fit gives (a vs of 1.9 m/s once came out of a unit whose
+// slides never slowed down).
+const double kUpperBounds[kDirectionParameters] = {200.0, 200.0, 1000.0, 1.0};
 // Standard errors below these count as determined whatever the value (the
 // identification's tolerances: 0.1 N, 0.5 N s/m, 1 mm/s).
 const double kDeterminedFloor[kDirectionParameters] = {0.1, 0.1, 0.5, 1e-3};
@@ -608,6 +612,7 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
   for (Block* block : {positive, negative}) {
     for (int i = 0; i < kDirectionParameters; ++i) {
       p->problem.SetParameterLowerBound(block->data(), i, kLowerBounds[i]);
+      p->problem.SetParameterUpperBound(block->data(), i, kUpperBounds[i]);
     }
   }
 }

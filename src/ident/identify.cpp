@@ -106,8 +106,9 @@ void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyO
   }
   if (!HasKind(unit, ExperimentKind::kPipeline)) {
     if (options.components_explicit) {
-      throw InputError(unit.directory + "/unit.yaml", 0, 0,
-                       "--only pipeline: the unit has no pipeline experiment to fit");
+      throw InputError(
+          unit.directory + "/unit.yaml", 0, 0,
+          "components: pipeline was asked for, but the unit has no pipeline experiment to fit");
     }
     AddPriorsUnder("pipeline.", "no pipeline experiment", report);
     return;
@@ -139,8 +140,9 @@ void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyO
   }
   if (!HasKind(unit, ExperimentKind::kStroke)) {
     if (options.components_explicit) {
-      throw InputError(unit.directory + "/unit.yaml", 0, 0,
-                       "--only friction: the unit has no stroke experiment to fit");
+      throw InputError(
+          unit.directory + "/unit.yaml", 0, 0,
+          "components: friction was asked for, but the unit has no stroke experiment to fit");
     }
     AddPriorsUnder("friction.", "no stroke experiment", report);
     return;
@@ -210,8 +212,9 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
     ApplyBranch(report->valve.increasing, "valve.increasing", &params, report);
     ApplyBranch(report->valve.decreasing, "valve.decreasing", &params, report);
   } else if (valve_wanted && options.components_explicit) {
-    throw InputError(unit.directory + "/unit.yaml", 0, 0,
-                     "--only valve: the unit has no valve experiment to fit");
+    throw InputError(
+        unit.directory + "/unit.yaml", 0, 0,
+        "components: valve was asked for, but the unit has no valve experiment to fit");
   } else {
     AddPriorsUnder("valve.", "no valve experiment", report);
   }

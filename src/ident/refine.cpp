@@ -105,6 +105,9 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const auto clock = std::chrono::steady_clock::now();
   std::string error;
   if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
+  if (!spec.IsValid(&error)) {
+    throw InputError(spec.source.empty() ? "fit spec" : spec.source, 0, 0, error);
+  }
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   RefineResult r;

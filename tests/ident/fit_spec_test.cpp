@@ -134,5 +134,57 @@ INSTANTIATE_TEST_SUITE_P(
         BadSpec{"syntax", "format: pneumaid-fit/1\nparameters: {pipeline.delta: [\n", 3,
                 "YAML syntax"}));
 
+// FitSpec::IsValid: a spec built in code is checked as strictly as one read
+// from YAML, and the message names the field.
+TEST(FitSpecTest, IsValidNamesTheBadFieldOfASpecBuiltInCode) {
+  const FitSpec good = LoadFitSpec(std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml");
+  std::string error;
+  EXPECT_TRUE(good.IsValid(&error)) << error;
+  struct Case {
+    const char* what;
+    void (*spoil)(FitSpec*);
+    const char* expected;
+  };
+  const Case cases[] = {
+      {"no parameter", [](FitSpec* s) { s->parameters.clear(); }, "parameters: expected"},
+      {"unknown path", [](FitSpec* s) { s->parameters[0].path = "pipeline.gamma"; },
+       "unknown parameter 'pipeline.gamma'"},
+      {"freed twice", [](FitSpec* s) { s->parameters.push_back(s->parameters[0]); },
+       "parameters.pipeline.delta: freed twice"},
+      {"min above max", [](FitSpec* s) { s->parameters[0].lower = 600; },
+       "parameters.pipeline.delta: expected min < max"},
+      {"log scale through zero",
+       [](FitSpec* s) { s->parameters[2].scale = ParameterScale::kLog; },  // Fs from 0
+       "parameters.friction.positive.Fs: a log scale needs min > 0"},
+      {"outside the physical range", [](FitSpec* s) { s->parameters[2].lower = -1; },
+       "parameters.friction.positive.Fs: bounds must lie"},
+      {"too many",
+       [](FitSpec* s) {
+         for (const char* p : {"friction.positive.Fs", "valve.decreasing.q_max",
+                               "valve.increasing.a", "valve.increasing.b", "valve.increasing.c"})
+           s->parameters.push_back({p, 0.1, 1, ParameterScale::kLinear});
+       },
+       "parameters: at most"},
+      {"unknown channel", [](FitSpec* s) { s->channels["v"] = ChannelWeight{}; },
+       "unknown channel 'v'"},
+      {"zero weight", [](FitSpec* s) { s->channels["x"].weight = 0; }, "channels.x: expected"},
+      {"nothing to fit", [](FitSpec* s) { s->fit.clear(); }, "experiments.fit"},
+      {"stage names a fixed parameter", [](FitSpec* s) { s->stages[0].parameters = {"gas.T"}; },
+       "stages: 'gas.T' is not under parameters"},
+      {"replay last",
+       [](FitSpec* s) {
+         s->stages.back() = FitStage{{}, false, true};
+       },
+       "the last stage must fit"},
+      {"no iterations", [](FitSpec* s) { s->max_iterations = 0; }, "max_iterations"},
+  };
+  for (const Case& c : cases) {
+    FitSpec spec = good;
+    c.spoil(&spec);
+    EXPECT_FALSE(spec.IsValid(&error)) << c.what;
+    EXPECT_NE(error.find(c.expected), std::string::npos) << c.what << ": " << error;
+  }
+}
+
 }  // namespace
 }  // namespace pneumaid

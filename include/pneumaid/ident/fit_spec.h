@@ -73,6 +73,15 @@ struct FitSpec {
   std::uint64_t seed = 1;
   int max_iterations = 50;
   std::string source;  // the file it came from, for messages and provenance
+
+  // Checks a spec however it was made (read from YAML or built in code):
+  // known parameter paths, each once, bounds inside the parameter's physical
+  // range with min < max (min > 0 on a log scale), no more free parameters
+  // than the sensitivities hold, known channels with sigma >= 0 and weight
+  // > 0, something to fit, stages naming free parameters only and ending in
+  // a simulation stage, multistart 0..1000, max_iterations >= 1. On failure
+  // `error` names the field. Refine() calls it.
+  bool IsValid(std::string* error) const;
 };
 
 // Reads a fit spec; InputError (file, line, what was expected) for anything
