@@ -1,0 +1,388 @@
+#include "friction_segments.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "pneumaid/model/load.h"
+
+namespace pneumaid::friction_internal {
+
+RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps) {
+  RodReplayInput replay;
+  replay.force_N = s.force_N->data() + s.begin;
+  replay.samples = s.end - s.begin;
+  replay.period_s = s.period_s;
+  replay.mass_kg = mass_kg;
+  replay.initial_position_m = s.initial_position_m;
+  replay.substeps = substeps;
+  return replay;
+}
+
+// Slope [per sample] and curvature (second derivative, per sample^2) of
+// x[from, to) by a least-squares quadratic.
+std::pair<double, double> SlopeAndCurvature(const std::vector<double>& x, std::size_t from,
+                                            std::size_t to) {
+  const double n = static_cast<double>(to - from), mid = 0.5 * (n - 1);
+  double sxy = 0, sxx = 0, m2 = 0;
+  for (std::size_t i = from; i < to; ++i) m2 += std::pow(static_cast<double>(i - from) - mid, 2);
+  m2 /= n;
+  double sqy = 0, sqq = 0;
+  for (std::size_t i = from; i < to; ++i) {
+    const double j = static_cast<double>(i - from) - mid, q = j * j - m2;
+    sxy += j * x[i];
+    sxx += j * j;
+    sqy += q * x[i];
+    sqq += q * q;
+  }
+  return {sxx > 0 ? sxy / sxx : 0.0, sqq > 0 ? 2 * sqy / sqq : 0.0};
+}
+
+// The noise of SlopeAndCurvature over n samples of position noise sigma.
+std::pair<double, double> SlopeAndCurvatureNoise(double sigma, double n) {
+  const double mid = 0.5 * (n - 1);
+  double sxx = 0, m2 = 0, sqq = 0;
+  for (int i = 0; i < n; ++i) sxx += (i - mid) * (i - mid);
+  m2 = sxx / n;
+  for (int i = 0; i < n; ++i) sqq += std::pow((i - mid) * (i - mid) - m2, 2);
+  return {sigma / std::sqrt(sxx), 2 * sigma / std::sqrt(sqq)};
+}
+
+// Runs [begin, end) of at least `min_samples` samples whose values stay
+// within `band` of each other, and whose motion over the run's first four
+// fifths (the last samples may already be the slide) is that of a rod at
+// rest: slope below `max_speed` [per sample] and curvature below `max_accel`
+// [per sample^2], or within 4 x what the position noise gives. At a high
+// sample rate a slow slide stays inside the band for many samples, and the
+// apex of a reversal without stick looks still for a while: neither is stuck.
+Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, double max_speed,
+               double max_accel, double sigma) {
+  Runs runs;
+  std::size_t begin = 0;
+  while (begin < x.size()) {
+    double low = x[begin], high = x[begin];
+    std::size_t end = begin + 1;
+    while (end < x.size() && std::max(high, x[end]) - std::min(low, x[end]) <= band) {
+      low = std::min(low, x[end]);
+      high = std::max(high, x[end]);
+      ++end;
+    }
+    const std::size_t length = end - begin;
+    bool still = static_cast<int>(length) >= min_samples;
+    if (still) {
+      const std::size_t fitted = std::max<std::size_t>(3, length * 4 / 5);
+      const auto [slope, curvature] = SlopeAndCurvature(x, begin, begin + fitted);
+      const auto [slope_noise, curvature_noise] =
+          SlopeAndCurvatureNoise(sigma, static_cast<double>(fitted));
+      still = std::fabs(slope) <= std::max(max_speed, 4 * slope_noise) &&
+              std::fabs(curvature) <= std::max(max_accel, 4 * curvature_noise);
+    }
+    if (still) {
+      runs.push_back({begin, end});
+      begin = end;
+    } else {
+      ++begin;
+    }
+  }
+  return runs;
+}
+
+// While the rod sticks the chamber volumes are constant and the force varies
+// smoothly (the valve filling a closed chamber), so its noise is averaged out
+// by a quadratic fit over the last `window` samples of each stuck run. That
+// matters at breakaway: the first crossing of Fs by the raw noisy force comes
+// early, and a replay driven by it would bias Fs.
+void SmoothStuckForce(const Runs& runs, std::size_t window, std::vector<double>* force) {
+  for (const auto& [begin, end] : runs) {
+    // The first samples of a run still carry the arrest's pressure transient.
+    const std::size_t first =
+        end - std::min(window, end - begin - std::min<std::size_t>(3, end - begin));
+    const std::size_t n = end - 1 - first;  // the run's last sample may already move
+    if (n < 8) continue;
+    Eigen::MatrixXd design(n, 3);
+    Eigen::VectorXd y(n);
+    const double centre = 0.5 * static_cast<double>(first + end - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double s = (static_cast<double>(first + i) - centre) / static_cast<double>(n);
+      for (int power = 0; power < 3; ++power) design(i, power) = std::pow(s, power);
+      y(i) = (*force)[first + i];
+    }
+    const Eigen::Vector3d c = design.colPivHouseholderQr().solve(y);
+    for (std::size_t i = first; i < end; ++i) {
+      const double s = (static_cast<double>(i) - centre) / static_cast<double>(n);
+      (*force)[i] = c(0) + s * (c(1) + s * c(2));
+    }
+  }
+}
+
+double UniformPeriod(const std::vector<double>& t) {
+  if (t.size() < 2) return 0;
+  const double period = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (std::fabs(t[i] - t[i - 1] - period) > 0.01 * period) return 0;
+  }
+  return period;
+}
+
+// Residual weights of `s`: a sample n intervals from the last known state
+// (the breakaway forward, the arrest backward) carries the position noise and
+// a drift of variance (sigma_F h^2 / M)^2 n^3 / 3 from the force's noise.
+void SetWeights(double sigma_x_m, double drift_m, Segment* s) {
+  s->weight.assign(s->end - s->begin, 1.0 / sigma_x_m);
+  for (std::size_t i = s->begin; i < s->end; ++i) {
+    double n = i > s->slide_begin ? static_cast<double>(i - s->slide_begin) : 0.0;
+    if (s->two_sided && i > s->split) {
+      n = s->arrest > i ? static_cast<double>(s->arrest - i) : 0.0;
+    }
+    const double variance = sigma_x_m * sigma_x_m + drift_m * drift_m * n * n * n / 3.0;
+    s->weight[i - s->begin] = 1.0 / std::sqrt(variance);
+  }
+}
+
+// The slide of `s` ends in the stuck run `next`: where it stopped, when
+// (a guess and bounds for the nuisance parameter), and its fastest sample.
+void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
+                std::pair<std::size_t, std::size_t> next, double period_s, Segment* s) {
+  const auto [arrest, next_end] = next;
+  std::size_t split = slide_begin - 1;
+  for (std::size_t j = slide_begin - 1; j + 1 < arrest; ++j) {
+    if (std::fabs(x[j + 1] - x[j]) > std::fabs(x[split + 1] - x[split])) split = j;
+  }
+  if (split + 2 >= s->end || split < s->begin + 1) return;
+  const std::size_t settled_end = std::min(next_end, arrest + 21);
+  s->stop_position_m = std::accumulate(x.begin() + arrest + 1, x.begin() + settled_end, 0.0) /
+                       static_cast<double>(settled_end - arrest - 1);
+  s->split = split;
+  s->stop_time_min_s = (static_cast<double>(split - s->begin) + 0.05) * period_s;
+  s->stop_time_max_s = static_cast<double>(s->end - 1 - s->begin) * period_s;
+  s->stop_time_guess_s = std::clamp((static_cast<double>(arrest - s->begin) - 0.5) * period_s,
+                                    s->stop_time_min_s, s->stop_time_max_s);
+  s->two_sided = settled_end > arrest + 1;
+  s->arrest = arrest;
+}
+
+double Median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+// Where the rod may touch an end stop: within `contact_m` of either end.
+// +1 at the extended end, -1 at the retracted one, 0 elsewhere.
+int EndContact(double x, double half_stroke_m, double contact_m) {
+  if (x > half_stroke_m - contact_m) return +1;
+  if (x < -half_stroke_m + contact_m) return -1;
+  return 0;
+}
+
+void CutSegments(const std::vector<double>& force, const std::vector<double>& x, const Runs& runs,
+                 double band, double half_stroke_m, double contact_m, double period_s,
+                 double sigma_x_m, double drift_m, const FrictionFitOptions& options,
+                 StrokeData* data) {
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const auto [stuck_begin, stuck_end] = runs[k];
+    Segment s{};
+    s.force_N = &force;
+    s.position_m = &x;
+    s.period_s = period_s;
+    s.begin = std::max(stuck_begin + 1,
+                       stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
+    // A rod stuck at an end may rest on the stop, and the pressures there
+    // change faster than a replay between samples follows (the chamber at
+    // the end is nearly its dead volume): no segment starts there. Its
+    // breakaway force still tells Fs.
+    if (EndContact(x[stuck_end - 1], half_stroke_m, contact_m) != 0) {
+      const std::size_t after = std::min(x.size() - 1, stuck_end + options.min_stuck_samples);
+      const double travel = x[after] - x[stuck_end - 1];
+      if (std::fabs(travel) > band) {
+        const int direction = travel > 0 ? +1 : -1;
+        // The breakaway: the last sample still within 3 sigma of where the
+        // rod rested (the band's edge is crossed later, at a higher force).
+        std::vector<double> rest(x.begin() + stuck_begin, x.begin() + stuck_end);
+        const double rested = Median(rest);
+        std::size_t at = stuck_end - 1;
+        while (at > stuck_begin && std::fabs(x[at] - rested) > 3 * sigma_x_m) --at;
+        data->end_breakaway_N[direction > 0 ? 0 : 1].push_back(direction * force[at]);
+      }
+      ++data->excluded;
+      continue;
+    }
+    // The run's last sample may already be the first of the slide.
+    const std::size_t settled_end = std::max(s.begin + 1, stuck_end - 1);
+    s.initial_position_m = std::accumulate(x.begin() + s.begin, x.begin() + settled_end, 0.0) /
+                           static_cast<double>(settled_end - s.begin);
+    s.end = k + 1 < runs.size()
+                ? runs[k + 1].first + std::min<std::size_t>(options.arrest_samples,
+                                                            runs[k + 1].second - runs[k + 1].first)
+                : stuck_end;
+    // The slide ends where the rod may touch a stop (end-stop forces are not
+    // friction): the segment is cut there and loses its arrest.
+    // A replay over a long slide integrates any bias of the force twice: the
+    // rest of such a slide is left to the force balance (friction_slides.h).
+    const std::size_t max_slide = std::max<std::size_t>(
+        options.min_stuck_samples, static_cast<std::size_t>(options.max_slide_s / period_s));
+    bool cut = false;
+    if (s.end > stuck_end + max_slide) {
+      s.end = stuck_end + max_slide;
+      cut = true;
+    }
+    for (std::size_t i = stuck_end; i < s.end; ++i) {
+      if (EndContact(x[i], half_stroke_m, contact_m) != 0) {
+        s.end = i;
+        cut = true;
+        break;
+      }
+    }
+    if (s.end < stuck_end + options.min_stuck_samples) {
+      ++data->excluded;
+      continue;
+    }
+    const double travel = x[s.end - 1] - s.initial_position_m;
+    s.direction = travel > band ? +1 : (travel < -band ? -1 : 0);
+    s.slide_begin = stuck_end - 1;
+    if (s.direction != 0 && k + 1 < runs.size() && !cut)
+      MarkArrest(x, stuck_end, runs[k + 1], period_s, &s);
+    SetWeights(sigma_x_m, drift_m, &s);
+    data->segments.push_back(s);
+  }
+}
+
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
+                          double sigma_x_m) {
+  const RigConstants& rig = unit.manifest.rig;
+  const double force_sigma_N = std::hypot(unit.manifest.DeclaredSigma("p1", 0.0) * rig.area_1_m2(),
+                                          unit.manifest.DeclaredSigma("p2", 0.0) * rig.area_2_m2());
+  const double weight_N =
+      rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
+  StrokeData data;
+  std::size_t count = 0;
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind == ExperimentKind::kStroke) ++count;
+  }
+  // Segments point into these vectors: reserve so that they never move.
+  data.force_N.reserve(count);
+  data.position_m.reserve(count);
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind != ExperimentKind::kStroke) continue;
+    const double period = UniformPeriod(e.column("t"));
+    if (period <= 0) {
+      data.skipped += e.entry.id + " (not uniformly sampled) ";
+      continue;
+    }
+    const auto &p1 = e.column("p1"), &p2 = e.column("p2");
+    std::vector<double> force(p1.size());
+    for (std::size_t i = 0; i < force.size(); ++i) {
+      force[i] = PneumaticAndGravityForce(p1[i], p2[i], rig.atmospheric_pressure_Pa,
+                                          rig.area_1_m2(), rig.area_2_m2(), weight_N);
+    }
+    const auto& x = e.column("x");
+    const int min_samples = std::max(options.min_stuck_samples,
+                                     static_cast<int>(std::ceil(options.min_stuck_s / period)));
+    const Runs runs =
+        StuckRuns(x, band, min_samples, options.max_stuck_speed_m_per_s * period,
+                  options.max_stuck_acceleration_m_per_s2 * period * period, sigma_x_m);
+    SmoothStuckForce(runs, options.stuck_force_samples, &force);
+    data.force_N.push_back(std::move(force));
+    data.position_m.push_back(x);
+    const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
+    const std::size_t first_segment = data.segments.size();
+    CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m,
+                options.end_margin_m + 4 * sigma_x_m, period, sigma_x_m, drift_m, options, &data);
+    if (!options.force_balance) continue;
+    std::vector<bool> covered(x.size(), false);
+    for (const auto& [begin, end] : runs)
+      std::fill(covered.begin() + begin, covered.begin() + end, true);
+    for (std::size_t k = first_segment; k < data.segments.size(); ++k) {
+      const Segment& segment = data.segments[k];
+      std::fill(covered.begin() + segment.begin, covered.begin() + segment.end, true);
+    }
+    internal::SlideSampling sampling;
+    sampling.period_s = period;
+    sampling.mass_kg = rig.load_mass_kg;
+    sampling.sigma_x_m = sigma_x_m;
+    sampling.sigma_force_N = std::max(force_sigma_N, 1e-3);
+    sampling.half_stroke_m = 0.5 * rig.stroke_m;
+    sampling.end_zone_m = options.end_margin_m + 4 * sigma_x_m;
+    sampling.window_s = options.smoothing_window_s;
+    for (auto& cluster :
+         internal::SlidingSamples(data.position_m.back(), data.force_N.back(), covered, sampling)) {
+      data.clusters.push_back(std::move(cluster));
+    }
+  }
+  return data;
+}
+
+// Median over the slides of `direction` of the force on the last sample
+// before the rod has covered a quarter of the segment's travel: about where
+// it broke away, a starting point for Fs; without three such slides, the
+// median breakaway force at the stroke ends.
+double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
+  std::vector<double> forces;
+  for (const Segment& s : data.segments) {
+    if (s.direction != direction) continue;
+    std::size_t i = s.begin;
+    while (i + 1 < s.end && std::fabs((*s.position_m)[i + 1] - s.initial_position_m) <
+                                std::fabs((*s.position_m)[s.end - 1] - s.initial_position_m) / 4) {
+      ++i;
+    }
+    forces.push_back(direction * (*s.force_N)[i]);
+  }
+  if (forces.size() >= 3) return Median(forces);
+  const std::vector<double>& at_ends = data.end_breakaway_N[direction > 0 ? 0 : 1];
+  return at_ends.size() >= 3 ? Median(at_ends) : fallback;
+}
+
+int SegmentsOf(const StrokeData& data, int direction) {
+  return static_cast<int>(
+      std::count_if(data.segments.begin(), data.segments.end(),
+                    [direction](const Segment& s) { return s.direction == direction; }));
+}
+
+int ClustersOf(const StrokeData& data, int direction) {
+  return static_cast<int>(std::count_if(
+      data.clusters.begin(), data.clusters.end(),
+      [direction](const internal::SlideCluster& c) { return c.direction == direction; }));
+}
+
+// Fd, b, vs of one direction from its force-balance samples with Fs given
+// (the breakaways): for each vs on a log grid (1 mm/s to 0.1 m/s) the
+// magnitude Fs e + Fd (1 - e) + b v, e = exp(-(v/vs)^2), is linear in
+// (Fd, b); the grid point that fits best, Fd in [0, Fs] and b >= 0. Leaves
+// `block` as it is with fewer than 20 samples.
+void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
+  std::size_t samples = 0;
+  for (const auto& c : data.clusters) {
+    if (c.direction == direction) samples += c.speed_m_per_s.size();
+  }
+  if (samples < 20) return;
+  const double fs = (*block)[0];
+  double best = HUGE_VAL;
+  for (int g = 0; g <= 24; ++g) {
+    const double vs = 1e-3 * std::pow(100.0, g / 24.0);
+    Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+    const auto each = [&](const auto& use) {
+      for (const auto& c : data.clusters) {
+        if (c.direction != direction) continue;
+        for (std::size_t i = 0; i < c.speed_m_per_s.size(); ++i) {
+          const double v = c.speed_m_per_s[i], e = std::exp(-(v / vs) * (v / vs));
+          use(Eigen::Vector2d(1 - e, v), c.friction_N[i] - fs * e, c.weight[i] * c.weight[i]);
+        }
+      }
+    };
+    each([&](const Eigen::Vector2d& x, double y, double w) {
+      normal += w * x * x.transpose();
+      rhs += w * y * x;
+    });
+    Eigen::Vector2d theta = normal.ldlt().solve(rhs);
+    if (!(theta(1) >= 0)) theta = Eigen::Vector2d(rhs(0) / normal(0, 0), 0.0);
+    theta(0) = std::clamp(theta(0), 0.0, fs);
+    double cost = 0;
+    each([&](const Eigen::Vector2d& x, double y, double w) {
+      cost += w * std::pow(y - x.dot(theta), 2);
+    });
+    if (cost < best) best = cost, *block = {fs, theta(0), theta(1), vs};
+  }
+}
+
+}  // namespace pneumaid::friction_internal

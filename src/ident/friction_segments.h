@@ -1,0 +1,113 @@
+// The friction fit (friction_fit.h), its data: the stroke logs cut into
+// stuck-to-arrest segments for the rod replay (stuck phases that move like a
+// rod at rest, slides cut where they reach an end zone or run long), and the
+// smooth slides no segment covers for the force balance (friction_slides.h).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "friction_slides.h"
+#include "pneumaid/ident/friction_fit.h"
+#include "pneumaid/ident/rod_replay.h"
+#include "pneumaid/io/rig_data.h"
+
+namespace pneumaid::friction_internal {
+
+constexpr int kDirectionParameters = 4;  // Fs, Fd, b, vs
+// params-v1 names (friction.<direction>.<name>).
+inline const char* const kParameterNames[kDirectionParameters] = {"Fs", "Fd", "b", "vs"};
+// Lower bounds: forces and damping are magnitudes; vs > 0 keeps Eq. 12 defined.
+inline const double kLowerBounds[kDirectionParameters] = {0.0, 0.0, 0.0, 1e-4};
+// Upper bounds: configs/fit-default.yaml's, so that refinement can start
+// from whatever the fit gives (a vs of 1.9 m/s once came out of a unit whose
+// slides never slowed down).
+inline const double kUpperBounds[kDirectionParameters] = {200.0, 200.0, 1000.0, 1.0};
+// Standard errors below these count as determined whatever the value (the
+// identification's tolerances: 0.1 N, 0.5 N s/m, 1 mm/s).
+inline const double kDeterminedFloor[kDirectionParameters] = {0.1, 0.1, 0.5, 1e-3};
+
+using Block = std::array<double, kDirectionParameters>;
+
+inline Block Pack(const StribeckParams& p) {
+  return {p.static_force_N, p.dynamic_force_N, p.viscous_N_s_per_m, p.stribeck_velocity_m_per_s};
+}
+
+inline StribeckParams Unpack(const Block& b) { return {b[0], b[1], b[2], b[3]}; }
+
+template <typename T>
+StribeckCoefficients<T> Coefficients(const T* theta) {
+  return {theta[0], theta[1], theta[2], theta[3]};
+}
+
+// One stretch of a stroke log: starts stuck, ends a few samples into the next
+// stuck phase (or at the log's end).
+struct Segment {
+  const std::vector<double>* force_N;
+  const std::vector<double>* position_m;
+  std::size_t begin, end;  // samples [begin, end)
+  double period_s;         // of its log
+  double initial_position_m;
+  int direction;  // of the slide: +1, -1, or 0 (stays stuck)
+  // A slide that ends in a logged arrest is replayed from both of its ends:
+  // forward from the start up to `split` (its fastest sample), backward from
+  // the arrest after it; the arrest time is a nuisance parameter.
+  bool two_sided = false;
+  std::size_t split = 0;
+  double stop_position_m = 0, stop_time_guess_s = 0, stop_time_min_s = 0, stop_time_max_s = 0;
+  // Where the logged slide starts and (two-sided) stops, for the weights.
+  std::size_t slide_begin = 0, arrest = 0;
+  // 1 / (expected residual std) per sample of the segment: the position
+  // noise, and the drift that the force's noise integrated twice adds with
+  // the distance from the nearest exactly known state (stuck, v = 0).
+  std::vector<double> weight;
+};
+
+using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
+
+// Everything the Ceres problem reads: per stroke log its driving force and
+// position, and the segments cut from them.
+struct StrokeData {
+  std::vector<std::vector<double>> force_N, position_m;
+  std::vector<Segment> segments;
+  std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers
+  // Breakaway forces (magnitudes) of stuck phases at the stroke ends, which
+  // start no segment: positive direction first.
+  std::vector<double> end_breakaway_N[2];
+  int excluded = 0;
+  std::string skipped;  // logs that could not be used, why
+};
+
+// The rod counts as stuck over these runs [begin, end) of a log.
+Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, double max_speed,
+               double max_accel, double sigma);
+
+// The median of `values`.
+double Median(std::vector<double> values);
+
+// Per stroke log its driving force and position, the replay segments cut
+// from them and the force-balance slides no segment covers.
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
+                          double sigma_x_m);
+
+// A starting point for Fs: the median force at breakaway of the slides of
+// `direction` (the stroke ends' breakaways with fewer than three).
+double BreakawayMedian(const StrokeData& data, int direction, double fallback);
+
+// Replayed segments and force-balance slides of one direction.
+int SegmentsOf(const StrokeData& data, int direction);
+
+int ClustersOf(const StrokeData& data, int direction);
+
+// The replay of a segment.
+RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps);
+
+// Fd, b, vs of one direction from its force-balance samples, Fs given (the
+// breakaways): the best point of a vs grid, (Fd, b) solved exactly at each.
+// Leaves `block` as it is with fewer than 20 samples.
+void ForceBalanceStart(const StrokeData& data, int direction, Block* block);
+
+}  // namespace pneumaid::friction_internal
