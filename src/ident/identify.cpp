@@ -5,23 +5,10 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
+#include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid {
 namespace {
-
-// The unit's own constants: conditions and geometry as its manifest states them.
-void TakeRigConstants(const Unit& unit, Parameters* params) {
-  const RigConstants& rig = unit.manifest.rig;
-  params->unit = unit.manifest.unit;
-  ApplyRigConditions(rig, params);
-  params->gas = rig.gas;  // the unit's gas whole, not only its temperature
-  params->cylinder.area_1_m2 = rig.area_1_m2();
-  params->cylinder.area_2_m2 = rig.area_2_m2();
-  params->cylinder.stroke_m = rig.stroke_m;
-  params->cylinder.dead_volume_1_m3 = rig.dead_volume_1_m3;
-  params->cylinder.dead_volume_2_m3 = rig.dead_volume_2_m3;
-  params->pipeline.tube_length_m = rig.tube_length_m;
-}
 
 void ApplyBranch(const BranchFit& fit, const std::string& prefix, Parameters* params,
                  IdentifyReport* report) {
@@ -200,9 +187,8 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
                     IdentifyReport* report) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("identify options", 0, 0, error);
-  Parameters params = prior;
+  Parameters params = WithUnitConstants(prior, unit);
   params.uncertainty.clear();
-  TakeRigConstants(unit, &params);
   *report = IdentifyReport{};
   const bool valve_wanted = options.components.count(Component::kValve) > 0;
   if (valve_wanted && HasKind(unit, ExperimentKind::kValve)) {

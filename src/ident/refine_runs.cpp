@@ -8,8 +8,6 @@
 
 namespace pneumaid::refine_internal {
 
-std::string ManifestPath(const Unit& unit) { return unit.directory + "/unit.yaml"; }
-
 // The run's start with the offsets applied.
 InitialState StartOf(const FitExperiment& e, const double* offsets) {
   InitialState initial = e.initial;
@@ -52,7 +50,7 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
     const bool is_kind = name == "stroke" || name == "validation";
     if (!matched && (must_match || !is_kind)) {
       throw InputError(spec.source, 0, 0,
-                       "no experiment or kind '" + name + "' in " + ManifestPath(unit));
+                       "no experiment or kind '" + name + "' in " + unit.manifest_path());
     }
   }
   return chosen;
@@ -96,7 +94,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
                        "channel " + row.name +
                            ": no sigma given and none declared under sensors "
                            "in " +
-                           ManifestPath(unit));
+                           unit.manifest_path());
     }
     Channel c = row;
     c.factor = wanted->second.weight / sigma;

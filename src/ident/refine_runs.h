@@ -59,9 +59,6 @@ inline std::vector<double> Coordinates(const FitExperiment& e, const double* the
 // The run's start with the offsets applied.
 InitialState StartOf(const FitExperiment& e, const double* offsets);
 
-// The unit's manifest, for messages.
-std::string ManifestPath(const Unit& unit);
-
 // The rows of the residual table: x, p1, p2, q1, q2.
 extern const Channel kChannelTable[5];
 

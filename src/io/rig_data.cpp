@@ -563,14 +563,6 @@ Unit ReadUnit(const std::string& directory) {
   return unit;
 }
 
-void ApplyRigConditions(const RigConstants& rig, Parameters* params) {
-  params->supply.supply_pressure_Pa = rig.supply_pressure_Pa;
-  params->supply.atmospheric_pressure_Pa = rig.atmospheric_pressure_Pa;
-  params->gas.temperature_K = rig.gas.temperature_K;
-  params->cylinder.orientation = rig.orientation;
-  params->cylinder.load_mass_kg = rig.load_mass_kg;
-}
-
 std::optional<Experiment> ReadLogOfUnit(const std::string& csv_path) {
   const fs::path log = fs::weakly_canonical(csv_path);
   const fs::path manifest_path = log.parent_path() / "unit.yaml";

@@ -11,38 +11,6 @@
 namespace pneumaid {
 namespace {
 
-constexpr double kGeometryTolerance = 0.01;
-
-std::string ManifestPath(const Unit& unit) { return unit.directory + "/unit.yaml"; }
-
-bool Stated(const Manifest& manifest, const std::string& path) {
-  for (const auto& used : manifest.defaults_used) {
-    if (used == path) return false;
-  }
-  return true;
-}
-
-void CheckGeometry(const Unit& unit, const std::string& what, double from_manifest,
-                   double from_params, bool stated) {
-  if (!stated || std::fabs(from_manifest / from_params - 1.0) <= kGeometryTolerance) return;
-  char message[256];
-  std::snprintf(message, sizeof(message),
-                "geometry disagrees with the parameter set by more than 1 %%: %s is %.6g here, "
-                "%.6g in the parameter set",
-                what.c_str(), from_manifest, from_params);
-  throw InputError(ManifestPath(unit), 0, 0, message);
-}
-
-// The simulated run as the rig's instruments would have logged it: flows
-// through the declared meter lags.
-void ApplyDeclaredLags(const Manifest& manifest, Trajectory* run) {
-  for (const auto& [name, values] :
-       {std::make_pair("q1", &run->q1_kg_per_s), std::make_pair("q2", &run->q2_kg_per_s)}) {
-    const double tau_s = manifest.DeclaredTau(name, 0.0);
-    if (tau_s > 0) *values = FirstOrderLag(run->t_s, *values, tau_s);
-  }
-}
-
 std::map<std::string, double> DeclaredNoise(const Manifest& manifest) {
   std::map<std::string, double> noise;
   for (const auto& [name, sensor] : manifest.sensors) {
@@ -159,52 +127,6 @@ std::string ValidationReport::BriefReport() const {
   return out.str();
 }
 
-// The state a run starts from: the mean of its leading samples while the
-// command has not yet changed (at most 50), so that one noisy first sample
-// does not set the start. A log that starts moving gets its first sample.
-InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* samples_averaged) {
-  std::size_t n = 1;
-  while (n < m.size() && n < 50 && m.u_V[n] == m.u_V[0]) ++n;
-  const auto mean = [n](const std::vector<double>& v) {
-    return std::accumulate(v.begin(), v.begin() + static_cast<long>(n), 0.0) /
-           static_cast<double>(n);
-  };
-  InitialState initial;
-  initial.position_m = mean(m.x_m);
-  initial.p1_Pa = mean(m.p1_Pa);
-  initial.p2_Pa = mean(m.p2_Pa);
-  const double moved = std::fabs(m.x_m[n - 1] - m.x_m[0]);
-  if (moved > 1e-4) {  // not at rest: averaging would blur a moving start
-    initial.position_m = m.x_m.front();
-    initial.p1_Pa = m.p1_Pa.front();
-    initial.p2_Pa = m.p2_Pa.front();
-    n = 1;
-  }
-  if (samples_averaged != nullptr) *samples_averaged = static_cast<int>(n);
-  // A rod resting on an end stop reads up to a few noise sigmas beyond it.
-  initial.position_m = std::clamp(initial.position_m, -half_stroke_m, half_stroke_m);
-  return initial;
-}
-
-Parameters WithRigConditions(const Parameters& params, const Unit& unit) {
-  const Manifest& m = unit.manifest;
-  const RigConstants& rig = m.rig;
-  CheckGeometry(unit, "area_1 from rig.cylinder.bore", rig.area_1_m2(), params.cylinder.area_1_m2,
-                Stated(m, "rig.cylinder.bore"));
-  CheckGeometry(unit, "area_2 from rig.cylinder.bore and rod", rig.area_2_m2(),
-                params.cylinder.area_2_m2,
-                Stated(m, "rig.cylinder.bore") || Stated(m, "rig.cylinder.rod"));
-  CheckGeometry(unit, "rig.cylinder.stroke", rig.stroke_m, params.cylinder.stroke_m,
-                Stated(m, "rig.cylinder.stroke"));
-  CheckGeometry(unit, "rig.cylinder.dead_volume_1", rig.dead_volume_1_m3,
-                params.cylinder.dead_volume_1_m3, Stated(m, "rig.cylinder.dead_volume_1"));
-  CheckGeometry(unit, "rig.cylinder.dead_volume_2", rig.dead_volume_2_m3,
-                params.cylinder.dead_volume_2_m3, Stated(m, "rig.cylinder.dead_volume_2"));
-  Parameters out = params;
-  ApplyRigConditions(rig, &out);
-  return out;
-}
-
 ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
                               const ValidationOptions& options) {
   std::string error;
@@ -215,7 +137,7 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
   for (const auto& id : options.experiment_ids) {
     bool found = false;
     for (const auto& e : unit.experiments) found = found || e.entry.id == id;
-    if (!found) throw InputError(ManifestPath(unit), 0, 0, "no experiment '" + id + "'");
+    if (!found) throw InputError(unit.manifest_path(), 0, 0, "no experiment '" + id + "'");
   }
   for (const Experiment& e : unit.experiments) {
     const bool chosen =
@@ -224,14 +146,14 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
             : std::count(options.experiment_ids.begin(), options.experiment_ids.end(), e.entry.id);
     if (!chosen) continue;
     if (e.entry.kind != ExperimentKind::kValidation && e.entry.kind != ExperimentKind::kStroke) {
-      throw InputError(ManifestPath(unit), e.entry.manifest_line, 0,
+      throw InputError(unit.manifest_path(), e.entry.manifest_line, 0,
                        "experiment '" + e.entry.id + "' is a " + ToString(e.entry.kind) +
                            " log; only stroke and validation runs can be simulated");
     }
     report.experiments.push_back(ValidateExperiment(conditioned, unit, e, options));
   }
   if (report.experiments.empty()) {
-    throw InputError(ManifestPath(unit), 0, 0, "no validation experiments to validate");
+    throw InputError(unit.manifest_path(), 0, 0, "no validation experiments to validate");
   }
   return report;
 }

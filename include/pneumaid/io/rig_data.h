@@ -89,6 +89,9 @@ struct Unit {
   std::string directory;
   Manifest manifest;
   std::vector<Experiment> experiments;
+
+  // The manifest's path, for messages.
+  std::string manifest_path() const { return directory + "/unit.yaml"; }
 };
 
 // Parses a manifest's text; `source` names it in messages.
@@ -102,10 +105,6 @@ Unit ReadUnit(const std::string& directory);
 // and position origin.
 Experiment ParseExperiment(const std::string& text, const std::string& path,
                            const ExperimentEntry& entry, const Manifest& manifest);
-
-// A log's conditions into a parameter set ("which constants win"): supply and
-// atmospheric pressure, gas temperature, orientation and load mass.
-void ApplyRigConditions(const RigConstants& rig, Parameters* params);
 
 // When `csv_path` is one of the logs listed in the unit.yaml beside it, that
 // log read as its unit's manifest says (origin, units, gauge pressures);

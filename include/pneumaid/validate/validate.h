@@ -11,6 +11,7 @@
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/parameters.h"
 #include "pneumaid/sim/simulate.h"
+#include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid {
 
@@ -45,22 +46,6 @@ struct ValidationReport {
   bool thresholds_met() const;
   std::string BriefReport() const;  // a table of the metrics in display units
 };
-
-// The parameter set under a log's conditions ("which constants win"): supply
-// and atmospheric pressure, gas temperature, orientation and load mass from the
-// manifest; geometry from the parameter set. Geometry the manifest states
-// (bore, rod, stroke, dead volumes) that disagrees by more than 1 % is an
-// InputError naming the manifest.
-Parameters WithRigConditions(const Parameters& params, const Unit& unit);
-
-// The state a logged run starts from: the mean of its leading samples while
-// the command has not yet changed (at most 50); its first sample when the rod
-// already moves. The position is clamped to the stroke (+-half_stroke_m): a rod
-// resting on an end stop reads up to a few noise sigmas beyond it.
-// `samples_averaged`, if given, receives how many samples the start is the
-// mean of (1 for a moving start).
-InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m,
-                                int* samples_averaged = nullptr);
 
 // Throws InputError for an unknown experiment id or a unit without validation
 // runs; numerical failures are reported in the result.

@@ -1,0 +1,118 @@
+#include "pneumaid/validate/logged_run.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numeric>
+#include <string>
+
+#include "pneumaid/eval/metrics.h"
+#include "pneumaid/io/input_error.h"
+
+namespace pneumaid {
+namespace {
+
+constexpr double kGeometryTolerance = 0.01;
+
+bool Stated(const Manifest& manifest, const std::string& path) {
+  for (const auto& used : manifest.defaults_used) {
+    if (used == path) return false;
+  }
+  return true;
+}
+
+void CheckGeometry(const Unit& unit, const std::string& what, double from_manifest,
+                   double from_params, bool stated) {
+  if (!stated || std::fabs(from_manifest / from_params - 1.0) <= kGeometryTolerance) return;
+  char message[256];
+  std::snprintf(message, sizeof(message),
+                "geometry disagrees with the parameter set by more than 1 %%: %s is %.6g here, "
+                "%.6g in the parameter set",
+                what.c_str(), from_manifest, from_params);
+  throw InputError(unit.manifest_path(), 0, 0, message);
+}
+
+// The log's conditions: supply and atmospheric pressure, gas temperature,
+// orientation and load mass.
+void ApplyRigConditions(const RigConstants& rig, Parameters* params) {
+  params->supply.supply_pressure_Pa = rig.supply_pressure_Pa;
+  params->supply.atmospheric_pressure_Pa = rig.atmospheric_pressure_Pa;
+  params->gas.temperature_K = rig.gas.temperature_K;
+  params->cylinder.orientation = rig.orientation;
+  params->cylinder.load_mass_kg = rig.load_mass_kg;
+}
+
+}  // namespace
+
+// The state a run starts from: the mean of its leading samples while the
+// command has not yet changed (at most 50), so that one noisy first sample
+// does not set the start. A log that starts moving gets its first sample.
+InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* samples_averaged) {
+  std::size_t n = 1;
+  while (n < m.size() && n < 50 && m.u_V[n] == m.u_V[0]) ++n;
+  const auto mean = [n](const std::vector<double>& v) {
+    return std::accumulate(v.begin(), v.begin() + static_cast<long>(n), 0.0) /
+           static_cast<double>(n);
+  };
+  InitialState initial;
+  initial.position_m = mean(m.x_m);
+  initial.p1_Pa = mean(m.p1_Pa);
+  initial.p2_Pa = mean(m.p2_Pa);
+  const double moved = std::fabs(m.x_m[n - 1] - m.x_m[0]);
+  if (moved > 1e-4) {  // not at rest: averaging would blur a moving start
+    initial.position_m = m.x_m.front();
+    initial.p1_Pa = m.p1_Pa.front();
+    initial.p2_Pa = m.p2_Pa.front();
+    n = 1;
+  }
+  if (samples_averaged != nullptr) *samples_averaged = static_cast<int>(n);
+  // A rod resting on an end stop reads up to a few noise sigmas beyond it.
+  initial.position_m = std::clamp(initial.position_m, -half_stroke_m, half_stroke_m);
+  return initial;
+}
+
+Parameters WithRigConditions(const Parameters& params, const Unit& unit) {
+  const Manifest& m = unit.manifest;
+  const RigConstants& rig = m.rig;
+  CheckGeometry(unit, "area_1 from rig.cylinder.bore", rig.area_1_m2(), params.cylinder.area_1_m2,
+                Stated(m, "rig.cylinder.bore"));
+  CheckGeometry(unit, "area_2 from rig.cylinder.bore and rod", rig.area_2_m2(),
+                params.cylinder.area_2_m2,
+                Stated(m, "rig.cylinder.bore") || Stated(m, "rig.cylinder.rod"));
+  CheckGeometry(unit, "rig.cylinder.stroke", rig.stroke_m, params.cylinder.stroke_m,
+                Stated(m, "rig.cylinder.stroke"));
+  CheckGeometry(unit, "rig.cylinder.dead_volume_1", rig.dead_volume_1_m3,
+                params.cylinder.dead_volume_1_m3, Stated(m, "rig.cylinder.dead_volume_1"));
+  CheckGeometry(unit, "rig.cylinder.dead_volume_2", rig.dead_volume_2_m3,
+                params.cylinder.dead_volume_2_m3, Stated(m, "rig.cylinder.dead_volume_2"));
+  Parameters out = params;
+  ApplyRigConditions(rig, &out);
+  return out;
+}
+
+Parameters WithUnitConstants(const Parameters& params, const Unit& unit) {
+  const RigConstants& rig = unit.manifest.rig;
+  Parameters out = params;
+  out.unit = unit.manifest.unit;
+  ApplyRigConditions(rig, &out);
+  out.gas = rig.gas;  // the unit's gas whole, not only its temperature
+  out.cylinder.area_1_m2 = rig.area_1_m2();
+  out.cylinder.area_2_m2 = rig.area_2_m2();
+  out.cylinder.stroke_m = rig.stroke_m;
+  out.cylinder.dead_volume_1_m3 = rig.dead_volume_1_m3;
+  out.cylinder.dead_volume_2_m3 = rig.dead_volume_2_m3;
+  out.pipeline.tube_length_m = rig.tube_length_m;
+  return out;
+}
+
+// The simulated run as the rig's instruments would have logged it: flows
+// through the declared meter lags.
+void ApplyDeclaredLags(const Manifest& manifest, Trajectory* run) {
+  for (const auto& [name, values] :
+       {std::make_pair("q1", &run->q1_kg_per_s), std::make_pair("q2", &run->q2_kg_per_s)}) {
+    const double tau_s = manifest.DeclaredTau(name, 0.0);
+    if (tau_s > 0) *values = FirstOrderLag(run->t_s, *values, tau_s);
+  }
+}
+
+}  // namespace pneumaid
