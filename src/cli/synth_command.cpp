@@ -29,9 +29,16 @@ int RunSynth(const SynthArgs& args) {
   Parameters truth = LoadParams(args.truth_path);
   const Protocol protocol = LoadProtocol(args.protocol_path);
   truth = ApplySpread(truth, ParseAssignments(args.spread, "--spread", kPathNumber), args.seed);
-  truth = ApplyScale(truth, ParseAssignments(args.scale, "--scale", kPathNumber));
   const std::string unit_id = args.unit_id.empty() ? truth.unit : args.unit_id;
-  const SyntheticUnit unit = Synthesize(truth, protocol, args.seed, unit_id);
+  SyntheticUnit unit;
+  try {
+    truth = ApplyScale(truth, ParseAssignments(args.scale, "--scale", kPathNumber));
+    unit = Synthesize(truth, protocol, args.seed, unit_id);
+  } catch (const InputError& error) {
+    // The library names its objects; here they are flags.
+    const std::string flag = error.file() == "scale" ? "--scale" : "--truth " + args.truth_path;
+    throw InputError(flag, error.line(), 0, error.message());
+  }
   WriteDirectoryAtomically(args.out_dir, UnitFiles(unit));
   std::cout << "wrote synthetic unit " << unit_id << " to " << args.out_dir << " ("
             << unit.logs.size() << " logs, seed " << args.seed << ")\n";

@@ -1,8 +1,9 @@
-// What the data determine: one rule for every fit (valve, tube, friction,
-// refinement). A coefficient counts as determined by the logs when its
-// standard error (with model error, and with whatever prior the fit states)
-// is below both a fraction of its value and its tolerance; a fit reports
-// every other coefficient by name as held, with the reason. Partial
+// What the data determine: the one rule of the tube and friction fits (the
+// valve fit and refinement have their own, to be brought here). A coefficient
+// counts as determined by the logs when its standard error (with model error,
+// and with whatever prior the fit states) is below a fraction of its value or
+// below its tolerance, whichever is larger; a fit reports every other
+// coefficient by name as held, with the reason. Partial
 // identifiability instead of all-or-nothing: one poorly determined
 // coefficient never throws away the ones the data determine.
 #pragma once

@@ -241,6 +241,10 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   negative[0] = BreakawayMedian(data, -1, negative[0]);
   ForceBalanceStart(data, +1, &positive);
   ForceBalanceStart(data, -1, &negative);
+  for (Block* block : {&positive, &negative}) {  // Ceres refuses a start outside
+    for (int i = 0; i < kDirectionParameters; ++i)
+      (*block)[i] = std::clamp((*block)[i], kLowerBounds[i], kUpperBounds[i]);
+  }
   Block* const blocks[2] = {&positive, &negative};
   const double mass_kg = unit.manifest.rig.load_mass_kg;
   // Held coefficients (columns 0-3 positive, 4-7 negative) with why: a
@@ -257,7 +261,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   for (const Segment& s : data.segments) stop_time_s.push_back(s.stop_time_guess_s);
   std::vector<SegmentJacobian> jacobians;
   std::vector<double> huber_scale;  // empty: plain least squares
-  std::vector<int> free;            // the columns fitted in the last round
+  std::vector<int> free;            // the columns fitted (then: determined)
   Eigen::MatrixXd covariance;
   const std::array<double, kDirectionParameters> sigma = PriorSigmas(options);
   // One fit of every coefficient of a direction with slides (the weak prior
@@ -265,7 +269,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   // its value the regularised one or the prior's (held_at_prior). A refit
   // with them held at the prior's distorted the determined ones (Fd 0.19 for
   // 0.29 on a heavy unit whose one fit gave 0.292), so there is none.
-  for (int round = 0; round < 1; ++round) {
+  {
     free.clear();
     std::vector<double*> free_blocks;
     std::vector<int> columns;  // of the free blocks, in Evaluate's order
@@ -281,7 +285,6 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     for (int c : columns) {
       if (held[c].empty()) free.push_back(c);
     }
-    if (free.empty()) break;
     for (int pass = 0; pass < 2; ++pass) {
       SegmentProblem problem;
       problem.stop_time_s = &stop_time_s;
@@ -297,17 +300,9 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
                                             kDirectionParameters>(
                 new PriorResidual{prior_blocks[d], sigma}),
             nullptr, block);
-        std::vector<int> constant;
-        for (int i = 0; i < kDirectionParameters; ++i) {
-          if (!held[d * kDirectionParameters + i].empty()) constant.push_back(i);
-        }
-        if (!constant.empty()) {
-          problem.problem.SetManifold(block,
-                                      new ceres::SubsetManifold(kDirectionParameters, constant));
-        }
       }
       const ceres::Solver::Summary summary = Solve(options, &problem.problem);
-      if (round == 0 && pass == 0) result.initial_cost = summary.initial_cost;
+      if (pass == 0) result.initial_cost = summary.initial_cost;
       result.final_cost = summary.final_cost;
       result.iterations += static_cast<int>(summary.iterations.size());
       const auto failed = [&] {
@@ -315,7 +310,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
         return result;
       };
       if (!summary.IsSolutionUsable()) return failed();
-      if (round == 0 && pass == 0) {
+      if (pass == 0) {
         // Segments far worse than the typical one (a disturbed stroke, a
         // bump on the rod): refit with each segment's influence bounded.
         std::vector<double> mean_squares;
@@ -326,7 +321,10 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
               return m > options.outlier_ratio * typical;
             }));
         if (result.outlier_segments > 0) {
-          for (int n : problem.rows) huber_scale.push_back(options.outlier_ratio * typical * n);
+          // Huber's a: the loss turns robust where a segment's squared norm
+          // passes a^2 = outlier_ratio x the typical mean square x its rows.
+          for (int n : problem.rows)
+            huber_scale.push_back(std::sqrt(options.outlier_ratio * typical * n));
           continue;  // the Jacobians are taken after the refit
         }
       }
@@ -362,7 +360,6 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     covariance = inverse * score * inverse;
     // What the logs determine (determination.h); vs means something only
     // through the Stribeck drop Fs - Fd, so it goes with an undetermined Fs.
-    bool held_any = false;
     for (Eigen::Index a = 0; a < m; ++a) {
       const int c = free[a], i = c % kDirectionParameters;
       const double value = (*blocks[c / kDirectionParameters])[i];
@@ -376,7 +373,6 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
                     error,
                     options.held_at_prior ? "held at the prior" : "regularised toward the prior");
       held[c] = why;
-      held_any = true;
     }
     for (int d = 0; d < 2; ++d) {
       const int fs = d * kDirectionParameters, vs = fs + 3;
@@ -385,10 +381,8 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
                        "not determined by these logs: Fs, which sets the Stribeck drop, "
                        "is not; ") +
                    (options.held_at_prior ? "held at the prior" : "regularised toward the prior");
-        held_any = true;
       }
     }
-    if (!held_any) break;
     for (int c = 0; c < 2 * kDirectionParameters; ++c) {
       if (!held[c].empty() && options.held_at_prior) {
         (*blocks[c / kDirectionParameters])[c % kDirectionParameters] =

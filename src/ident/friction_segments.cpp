@@ -376,7 +376,7 @@ void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
     });
     Eigen::Vector2d theta = normal.ldlt().solve(rhs);
     if (!(theta(1) >= 0)) theta = Eigen::Vector2d(rhs(0) / normal(0, 0), 0.0);
-    theta(0) = std::clamp(theta(0), 0.0, fs);
+    theta(0) = std::clamp(theta(0), 0.0, std::max(fs, 0.0));
     double cost = 0;
     each([&](const Eigen::Vector2d& x, double y, double w) {
       cost += w * std::pow(y - x.dot(theta), 2);

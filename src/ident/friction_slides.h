@@ -2,7 +2,7 @@
 // while it slides smoothly, friction(v) = F(t) - M a, with v and a read off
 // the logged positions by a local quadratic (Savitzky-Golay) over a window.
 //
-// The stuck-to-arrest replays (friction_fit.cpp) need stick-slip: a rod that
+// The stuck-to-arrest replays (friction_segments.h, friction_cost.h) need stick-slip: a rod that
 // slides through the stroke in one go (a heavy load, little Stribeck drop)
 // gives them no segment, and a replay over a long slide integrates any force
 // bias twice. The force balance needs no stick and no integration: it is the

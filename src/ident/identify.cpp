@@ -24,7 +24,7 @@ void ApplyBranch(const BranchFit& fit, const std::string& prefix, Parameters* pa
   if (fit.fitted && fit.u_sat_fitted) {
     report->fitted.push_back(prefix + ".u_sat");
     params->uncertainty[prefix + ".u_sat"] = fit.standard_errors.at("u_sat");
-  } else if (fit.fitted) {
+  } else {
     report->priors.push_back(prefix + ".u_sat (" +
                              (fit.note.empty() ? std::string("fixed") : fit.note) + ")");
   }
@@ -94,7 +94,7 @@ void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyO
   if (!HasKind(unit, ExperimentKind::kPipeline)) {
     if (options.components_explicit) {
       throw InputError(
-          unit.directory + "/unit.yaml", 0, 0,
+          unit.manifest_path(), 0, 0,
           "components: pipeline was asked for, but the unit has no pipeline experiment to fit");
     }
     AddPriorsUnder("pipeline.", "no pipeline experiment", report);
@@ -128,7 +128,7 @@ void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyO
   if (!HasKind(unit, ExperimentKind::kStroke)) {
     if (options.components_explicit) {
       throw InputError(
-          unit.directory + "/unit.yaml", 0, 0,
+          unit.manifest_path(), 0, 0,
           "components: friction was asked for, but the unit has no stroke experiment to fit");
     }
     AddPriorsUnder("friction.", "no stroke experiment", report);
@@ -199,7 +199,7 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
     ApplyBranch(report->valve.decreasing, "valve.decreasing", &params, report);
   } else if (valve_wanted && options.components_explicit) {
     throw InputError(
-        unit.directory + "/unit.yaml", 0, 0,
+        unit.manifest_path(), 0, 0,
         "components: valve was asked for, but the unit has no valve experiment to fit");
   } else {
     AddPriorsUnder("valve.", "no valve experiment", report);

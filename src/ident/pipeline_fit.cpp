@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "determination.h"
 #include "held_levels.h"
 #include "pneumaid/eval/lag.h"
 
@@ -108,9 +109,18 @@ double BestLevels(const TubeLog& log, double delta, std::vector<double>* flow) {
 // sample-to-sample differences (robust: a level change is a few outliers).
 double NoiseFromDifferences(const std::vector<double>& v) {
   std::vector<double> d;
-  for (std::size_t i = 1; i < v.size(); ++i) d.push_back(std::fabs(v[i] - v[i - 1]));
+  double squares = 0, largest = 0;
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    d.push_back(std::fabs(v[i] - v[i - 1]));
+    squares += d.back() * d.back();
+    largest = std::max(largest, std::fabs(v[i]));
+  }
+  if (d.empty()) return 0.0;
   std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
+  const double robust = 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
+  // A quantised or noise-free meter repeats most readings (median difference
+  // 0): then the RMS difference, and never below 1e-6 of the signal.
+  return std::max({robust, robust > 0 ? 0.0 : std::sqrt(squares / d.size() / 2), 1e-6 * largest});
 }
 
 // How much wider than the noise alone the errors are when the model misses
@@ -144,7 +154,11 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   const auto held = internal::HeldLevels(e.column("u"), options.level_change_V);
   const std::size_t n = log.t->size();
   fit.levels = log.levels = static_cast<int>(held.size());
-  if (held.size() < 2 || n < 20) {
+  if (n < 20) {
+    fit.note = "fewer than 20 samples";
+    return fit;
+  }
+  if (held.size() < 2) {
     fit.note = "the command never changes: a step response is needed";
     return fit;
   }
@@ -229,7 +243,7 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   }
   // Model error counts: a fit worse than the noise widens its error.
   const double error = std::sqrt(c.back() * ModelErrorFactor(residuals, n, fit.reduced_chi_square));
-  if (!(error < options.determined_relative_error * delta)) {
+  if (!internal::IsDetermined(delta, error, 0.0, options.determined_relative_error)) {
     std::snprintf(note, sizeof(note),
                   "delta is not determined by this log (%.3g +- %.2g 1/s; the sample rate or the "
                   "level changes do not resolve the tube's lag)",

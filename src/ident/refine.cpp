@@ -15,9 +15,11 @@
 
 // Refinement's orchestration: stages (friction replay, windows, parameter
 // subsets) in order, the held-out validation before and after, provenance.
-// Its parts: refine_parameters (bounds map, multistart points), refine_runs
-// (runs and windows), refine_residual (the residual block), refine_solve (one
-// stage's Levenberg-Marquardt), refine_covariance (uncertainty).
+// Its parts: refine_parameters (bounds map, multistart and trust-box points,
+// the prior toward the start), refine_runs (runs and windows),
+// refine_residual (the residual block), refine_solve (one stage's
+// Levenberg-Marquardt), refine_covariance (uncertainty), refine_verdict (the
+// stopping verdict).
 namespace pneumaid {
 namespace {
 
@@ -116,12 +118,14 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   std::vector<ExperimentCost> before;
   double cost_before = 0;
   bool first_fit = true;
+  Parameters before_last = start;  // what the last stage started from
   for (size_t k = 0; k < stages.size(); ++k) {
     if (stages[k].friction_replay) {
       ReplayFriction(unit, &current, &r.replay_report);
       continue;
     }
     const std::string replay_report = r.replay_report;
+    before_last = current;
     r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows,
                     k + 1 == stages.size(), options);
     r.replay_report = replay_report;
@@ -144,14 +148,16 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   }
   Judge(options, &r);
   if (r.status == RefineStatus::kNotExplained && options.rescue_starts > 0) {
-    // Stalled far above what the noise explains: the last stage again from
-    // starts in a trust box around the start (not the whole bounds).
+    // Stalled far above what the noise explains: the last stage again (from
+    // what it started from, earlier stages included) from starts in a trust
+    // box around the start's values (not the whole bounds), those alone.
     const FitSpec last = StageSpec(spec, stages.back());
     const Parameters conditioned = WithRigConditions(start, unit);
     const ParameterMap map = MakeParameterMap(conditioned, last);
     RefineResult rescue = RefineStage(
-        start, unit, last, stages.back().windows, true, options,
-        TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed));
+        before_last, unit, last, stages.back().windows, true, options,
+        TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed),
+        /*extra_starts_only=*/true);
     if (stages.back().windows && !rescue.parameters.empty()) {
       rescue.misfits = WholeRunMisfits(rescue.params, unit, spec, options);
     }

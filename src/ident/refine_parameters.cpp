@@ -66,17 +66,18 @@ std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Paramet
     // where the start has them, and wide (a factor 3) where it has none (a
     // coefficient its fit did not determine).
     const auto error = start.uncertainty.find(map.free[j].path);
-    double width = error == start.uncertainty.end() || !(std::fabs(value) > 0)
-                       ? 2.0
-                       : std::max(box, 3 * error->second / std::fabs(value));
+    const bool known = error != start.uncertainty.end() && error->second > 0;
+    // A linear parameter at 0 gets a box measured on its span.
+    const double size = std::max(std::fabs(value), 1e-3 * (map.free[j].upper - map.free[j].lower));
+    double width = known ? std::max(box, 3 * error->second / size) : 2.0;
     double low = 0, high = 0;
     if (map.IsLog(j)) {
       width = std::min(width, 9.0);
       low = value / (1 + width);
       high = value * (1 + width);
     } else {
-      low = value - std::min(width, 0.95) * std::fabs(value);
-      high = value + width * std::fabs(value);
+      low = value - std::min(width * size, value > 0 ? 0.95 * value : width * size);
+      high = value + width * size;
     }
     low = std::max(low, map.free[j].lower);
     high = std::min(high, map.free[j].upper);

@@ -37,7 +37,8 @@ void RecordStartOffset(const FitExperiment& e, const StartOffsets& offsets, Refi
 
 RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
                          bool windows, bool last, const RefineOptions& options,
-                         const std::vector<std::vector<double>>& extra_starts) {
+                         const std::vector<std::vector<double>>& extra_starts,
+                         bool extra_starts_only) {
   const Parameters conditioned = WithRigConditions(start, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
   const std::vector<FitExperiment> experiments = FittedRuns(conditioned, unit, spec, windows);
@@ -68,8 +69,11 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   }
   RefineResult r;
   const std::vector<double> start_theta = p.theta;
-  std::vector<std::vector<double>> starts = {start_theta};
-  for (auto& point : LatinHypercube(map, spec.multistart, spec.seed)) starts.push_back(point);
+  std::vector<std::vector<double>> starts;
+  if (!extra_starts_only || extra_starts.empty()) {
+    starts.push_back(start_theta);
+    for (auto& point : LatinHypercube(map, spec.multistart, spec.seed)) starts.push_back(point);
+  }
   for (const auto& point : extra_starts) starts.push_back(point);
 
   ceres::Solver::Options solver = SolverOptions(spec, options);

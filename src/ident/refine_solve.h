@@ -69,9 +69,11 @@ ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& o
 
 // One Levenberg-Marquardt fit of spec.parameters (all starts: the given one
 // and spec.multistart Latin-hypercube points, plus `extra_starts` in the
-// solver's coordinates); held-out validation and provenance are the caller's.
+// solver's coordinates; only those with extra_starts_only); held-out
+// validation and provenance are the caller's.
 RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
                          bool windows, bool last, const RefineOptions& options,
-                         const std::vector<std::vector<double>>& extra_starts = {});
+                         const std::vector<std::vector<double>>& extra_starts = {},
+                         bool extra_starts_only = false);
 
 }  // namespace pneumaid::refine_internal

@@ -65,7 +65,10 @@ double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {
     runs[m.run].second += 1;
   }
   std::vector<double> values;
-  for (const auto& [run, sum] : runs) values.push_back(sum.first / sum.second);
+  for (const auto& [run, sum] : runs) {
+    // A run that could not be simulated is not explained: it counts as the worst.
+    values.push_back(std::isnan(sum.first) ? HUGE_VAL : sum.first / sum.second);
+  }
   if (values.empty()) return NAN;
   std::sort(values.begin(), values.end());
   const std::size_t half = values.size() / 2;
@@ -77,13 +80,16 @@ void Judge(const RefineOptions& options, RefineResult* r) {
   r->reduced_chi_square = MedianRunChiSquare(r->misfits);
   std::sort(r->misfits.begin(), r->misfits.end(),
             [](const ChannelMisfit& a, const ChannelMisfit& b) {
-              return !(a.reduced_chi_square <= b.reduced_chi_square);  // NaN first
+              const bool a_nan = std::isnan(a.reduced_chi_square);
+              const bool b_nan = std::isnan(b.reduced_chi_square);
+              if (a_nan != b_nan) return a_nan;  // NaN (not simulated) first
+              return !a_nan && a.reduced_chi_square > b.reduced_chi_square;
             });
   if (r->status == RefineStatus::kFailed || r->status == RefineStatus::kNotConverged) {
     r->converged = false;
     return;
   }
-  if (r->reduced_chi_square <= options.acceptable_reduced_chi_square) {
+  if (r->reduced_chi_square <= options.acceptable_reduced_chi_square) {  // NaN: not
     r->status = RefineStatus::kExplained;
     r->converged = true;
     return;
@@ -98,8 +104,7 @@ void Judge(const RefineOptions& options, RefineResult* r) {
   r->message = text;
   for (std::size_t k = 0; k < r->misfits.size() && k < 3; ++k) {
     const ChannelMisfit& m = r->misfits[k];
-    std::snprintf(text, sizeof(text),
-                  "; %s %s: %.3g, worst %.3g over %.3g-%.3g s", m.run.c_str(),
+    std::snprintf(text, sizeof(text), "; %s %s: %.3g, worst %.3g over %.3g-%.3g s", m.run.c_str(),
                   m.channel.c_str(), m.reduced_chi_square, m.worst_reduced_chi_square,
                   m.worst_from_s, m.worst_to_s);
     r->message += text;

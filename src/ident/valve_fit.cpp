@@ -177,7 +177,10 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   std::vector<double> openings;
   for (const ValvePlateau* p : plateaus) openings.push_back(p->u_V);
   std::sort(openings.begin(), openings.end());
-  openings.erase(std::unique(openings.begin(), openings.end()), openings.end());
+  // Holds of one nominal level (0.6000 and 0.6003 V) are one opening.
+  openings.erase(std::unique(openings.begin(), openings.end(),
+                             [&](double a, double b) { return b - a <= options.level_change_V; }),
+                 openings.end());
   BranchFit best;
   double gap_low = 0, gap_high = 0;
   const std::size_t saturated = static_cast<std::size_t>(options.min_saturated_openings);
@@ -228,6 +231,7 @@ bool ValveFitOptions::IsValid(std::string* error) const {
   if (min_saturated_openings < 1) return fail("min_saturated_openings must be >= 1");
   if (!(saturation_flatness > 0)) return fail("saturation_flatness must be > 0");
   if (!(level_change_V > 0)) return fail("level_change_V must be > 0");
+  if (max_levels < 2) return fail("max_levels must be >= 2");
   return true;
 }
 
@@ -245,6 +249,8 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
     const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
     const auto levels = internal::HeldLevels(u, options.level_change_V);
     const std::size_t n = t.size(), m = levels.size();
+    // A ramp or a sampled signal is not a staircase: each level is an unknown.
+    if (static_cast<int>(m) > options.max_levels) continue;
     // The flow held per level, seen through the meter's declared lag: the
     // reading is linear in the level flows (one lagged indicator column per
     // level), so all of them come from one least-squares solve. The first
@@ -280,6 +286,7 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
       ++rows;
     }
     const Eigen::LDLT<Eigen::MatrixXd> solver(normal);
+    if (solver.info() != Eigen::Success) continue;
     const Eigen::VectorXd flow = solver.solve(rhs);
     double squares = 0;
     for (std::size_t i = 0; i < n; ++i) {

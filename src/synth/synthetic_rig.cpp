@@ -293,7 +293,7 @@ class RigBuilder {
         Simulate(truth_, command, RetractedAtRest(truth_),
                  SampleTimes(duration_s, protocol_.sample_rate_Hz), options, &run);
     if (summary.status == SimulationStatus::kInvalidInput) {
-      throw InputError("--truth", 0, 0, summary.message);
+      throw InputError("truth parameter set", 0, 0, summary.message);
     }
     if (!summary.ok()) throw std::runtime_error("synthetic rig: " + summary.message);
     return run;
@@ -393,7 +393,8 @@ SyntheticUnit Synthesize(const Parameters& truth, const Protocol& protocol, std:
                          const std::string& unit_id) {
   const auto problems = Validate(truth);
   if (!problems.empty()) {
-    throw InputError("--truth", 0, 0, problems.front().path + ": " + problems.front().message);
+    throw InputError("truth parameter set", 0, 0,
+                     problems.front().path + ": " + problems.front().message);
   }
   RigBuilder builder(truth, protocol, seed);
   SyntheticUnit unit;
@@ -434,7 +435,7 @@ Parameters ApplyScale(const Parameters& params, const std::map<std::string, doub
   for (const auto& [path, factor] : factors) {
     double value = 0;
     if (!GetParameter(out, path, &value)) {
-      throw InputError("--scale", 0, 0, "'" + path + "' names no parameter of the truth set");
+      throw InputError("scale", 0, 0, "'" + path + "' names no parameter of the truth set");
     }
     SetParameter(&out, path, value * factor);
   }

@@ -16,6 +16,7 @@
 // gates on today: docs/identification.md).
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -29,6 +30,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "pneumaid/ident/identify.h"
@@ -168,6 +170,7 @@ bool Within(double value, double truth, double fraction, double floor) {
 
 struct UnitResult {
   std::string id, summary, status;
+  bool explained = false;
   std::map<std::string, bool> ok;
   double chi_square = NAN, identify_s = 0, refine_s = 0;
   double held_out_mm = 0, held_out_limit_mm = 0;  // worst validation run, and its limit
@@ -201,6 +204,7 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
         identified, unit, LoadFitSpec(kSource + "/configs/fit-default.yaml"), refine_options);
     out.refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
     out.status = ToString(refined.status);
+    out.explained = refined.status == RefineStatus::kExplained;
     out.chi_square = refined.reduced_chi_square;
     const Parameters& fit = refined.parameters.empty() ? identified : refined.params;
     const Parameters& t = d.truth;
@@ -258,7 +262,8 @@ double Median(std::vector<double> v) {
 int main(int argc, char** argv) {
   using namespace pneumaid;
   if (argc < 2) {
-    std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K]\n";
+    std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K] "
+                 "[--min-units-valve-tube K] [--keep DIR] [--start-prior on|off]\n";
     return 2;
   }
   const int n = std::atoi(argv[1]);
@@ -266,6 +271,10 @@ int main(int argc, char** argv) {
   int jobs = 1, min_units = -1, min_units_valve_tube = -1;
   std::string keep;  // --keep DIR: the units are written there and kept
   RefineOptions refine_options;
+  if (argc % 2 != 0) {
+    std::cerr << "every flag takes a value\n";
+    return 2;
+  }
   for (int i = 2; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--seed")
@@ -341,7 +350,7 @@ int main(int argc, char** argv) {
     held += r.held_out_ok;
     checked += r.errors_checked;
     within += r.errors_within_3;
-    explained += r.status == "converged";
+    explained += r.explained;
     identify.push_back(r.identify_s);
     refine.push_back(r.refine_s);
   }

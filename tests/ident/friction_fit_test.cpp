@@ -184,8 +184,9 @@ void ExpectWithinToleranceOrHeld(const DirectionFit& fit, const StribeckParams& 
   for (int i = 0; i < 4; ++i) {
     const bool held = fit.held.count(names[i]) > 0;
     EXPECT_NE(held, fit.standard_errors.count(names[i]) > 0) << direction << " " << names[i];
-    if (std::find(fitted.begin(), fitted.end(), names[i]) != fitted.end())
+    if (std::find(fitted.begin(), fitted.end(), names[i]) != fitted.end()) {
       EXPECT_FALSE(held) << direction << " " << names[i] << ": " << fit.held.at(names[i]);
+    }
     if (held) continue;
     EXPECT_NEAR(values[i], real[i], std::max(fraction[i] * real[i], floor[i]))
         << direction << " " << names[i];

@@ -131,7 +131,7 @@ TEST(PipelineFitTest, ACommandThatNeverHoldsSaysWhy) {
   Parameters truth;
   Protocol protocol;
   protocol.tube_lengths_m = {0.38};
-  for (int k = 0; k < 100; ++k) protocol.pipeline_schedule.push_back({0.01 * k, 0.01 * k});
+  for (int k = 0; k < 70; ++k) protocol.pipeline_schedule.push_back({0.01 * k, 0.014 * k});
   const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 5, "P"), "ramp");
   const PipelineFitResult fit = FitPipeline(unit, PipelineFitOptions{});
   EXPECT_FALSE(fit.fitted);

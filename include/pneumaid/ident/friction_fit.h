@@ -7,14 +7,18 @@
 // With the paper's friction the rod moves in stick-slip, so the logs are cut
 // into segments at the rod's stuck phases: each segment starts stuck at the
 // phase's measured position (v = 0 is then known exactly), covers breakaway,
-// the slide and the next arrest. Segments touching the stroke ends (end-stop
-// forces) are left out. Breakaway forces give the starting point of Fs.
+// the slide and the next arrest (friction_segments.h). No segment starts at a
+// stroke end (end-stop forces, fast pressures there). Smooth slides that no
+// segment covers enter as force balance, friction(v) = F - M a
+// (friction_slides.h). Breakaways and the force balance start the fit; a weak
+// prior per coefficient keeps what the logs do not determine near the prior.
 //
 // Uncertainty: the replay integrates the pressure sensors' noise twice, so the
 // residuals inside a segment are correlated and (J'J)^-1 s^2 would understate
 // the errors. The reported covariance is the cluster-robust sandwich
-// (J'J)^-1 (sum over segments J_k' r_k r_k' J_k) (J'J)^-1, segments being
-// independent; docs/identification.md derives it.
+// (J'J)^-1 (sum over clusters J_k' r_k r_k' J_k) (J'J)^-1, the clusters being
+// the segments and the smooth slides, the prior's information in both the
+// bread and the meat; docs/identification.md derives it.
 #pragma once
 
 #include <map>
@@ -95,9 +99,9 @@ struct DirectionFit {
   bool fitted = false;  // false: no coefficient of this direction fitted
   StribeckParams params;
   std::map<std::string, double> standard_errors;  // the fitted of "Fs", "Fd", "b", "vs"
-  std::map<std::string, std::string> held;        // the others, at the prior: why
-  int segments = 0;                               // replayed segments whose slide goes this way
-  int smooth_slides = 0;                          // force-balance clusters (smooth slides) this way
+  std::map<std::string, std::string> held;  // the others (held_at_prior says their values): why
+  int segments = 0;                         // replayed segments whose slide goes this way
+  int smooth_slides = 0;                    // force-balance clusters (smooth slides) this way
 };
 
 struct FrictionFitResult {

@@ -44,7 +44,7 @@ struct TubeFit {
   bool fitted = false;
   std::string note;
   double delta_per_s = 0, delta_standard_error = 0;
-  double flow_kg_per_s = 0;       // the steady valve flow at the largest held level
+  double flow_kg_per_s = 0;       // the largest steady valve flow of the held levels
   int levels = 0;                 // held command levels in the log
   double valve_lag_s = 0;         // the valve's own opening lag, fitted as a nuisance
   double reduced_chi_square = 0;  // final cost per degree of freedom (1: noise alone)

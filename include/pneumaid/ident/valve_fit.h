@@ -20,6 +20,9 @@ struct ValveFitOptions {
   // first settle_fraction of the level (a valve's own opening dynamics are
   // not modelled).
   double settle_fraction = 0.2;
+  // A valve log with more held levels than this (a ramp, a sampled signal)
+  // is not a staircase and is not used.
+  int max_levels = 200;
   // Plateaus with fewer samples used are not used.
   int min_plateau_samples = 10;
   // Half-width of the reported K_vp band in standard deviations.
