@@ -201,6 +201,21 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   return r;
 }
 
+RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,
+                         const RefineOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
+  if (!spec.IsValid(&error)) {
+    throw InputError(spec.source.empty() ? "fit spec" : spec.source, 0, 0, error);
+  }
+  RefineResult r;
+  r.params = params;
+  r.misfits = WholeRunMisfits(params, unit, spec, options);
+  r.status = RefineStatus::kExplained;  // provisional: the verdict decides
+  Judge(options, &r);
+  return r;
+}
+
 const char* ToString(RefineStatus status) {
   switch (status) {
     case RefineStatus::kExplained:

@@ -219,6 +219,10 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
   std::cout << explained.BriefReport();
   EXPECT_EQ(explained.status, RefineStatus::kExplained) << explained.message;
   EXPECT_LT(explained.reduced_chi_square, 3.0);
+  // The same verdict without a fit (EvaluateFit), at the truth.
+  const RefineResult at_truth = EvaluateFit(truth, unit, LoadFitSpec(kDefaultSpec), options);
+  EXPECT_EQ(at_truth.status, RefineStatus::kExplained) << at_truth.message;
+  EXPECT_LT(at_truth.reduced_chi_square, 3.0);
   Parameters leaky = truth;
   leaky.effects["cross_leakage"] = {{"c", 2e-11}};  // 8e-6 kg/s at 4 bar: 9 % of q_max
   const Unit leaking = testing::WriteAndRead(
@@ -227,6 +231,8 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
   const RefineResult missing = Refine(truth, leaking, LoadFitSpec(kDefaultSpec), options);
   std::cout << missing.BriefReport();
   EXPECT_EQ(missing.status, RefineStatus::kNotExplained);
+  EXPECT_EQ(EvaluateFit(truth, leaking, LoadFitSpec(kDefaultSpec), options).status,
+            RefineStatus::kNotExplained);
   EXPECT_GT(missing.reduced_chi_square, missing.acceptable_reduced_chi_square);
   EXPECT_EQ(missing.rescue_starts, 2);  // the trust box's two
 }
