@@ -24,7 +24,7 @@ int RunRefine(const RefineArgs& args) {
   const FitSpec spec = LoadFitSpec(args.spec_path);
   RefineOptions options;
   options.threads = args.threads;
-  options.verbose = args.verbose;
+  if (args.verbose) options.log = [](const std::string& line) { std::cout << line << "\n"; };
   const RefineResult result = Refine(start, unit, spec, options);
   return ReportAndSave(result, args.out_path);
 }

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <iostream>
 
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/validate.h"
@@ -12,6 +11,17 @@
 
 namespace pneumaid::refine_internal {
 
+ceres::CallbackReturnType ProgressCallback::operator()(const ceres::IterationSummary& summary) {
+  char line[200];
+  std::snprintf(line, sizeof(line),
+                "iteration %3d: cost %.6e, change %.3e, |step| %.3e, radius %.3e, %s, %.2f s",
+                summary.iteration, summary.cost, summary.cost_change, summary.step_norm,
+                summary.trust_region_radius, summary.step_is_successful ? "accepted" : "rejected",
+                summary.cumulative_time_in_seconds);
+  log_(line);
+  return ceres::SOLVER_CONTINUE;
+}
+
 ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& options) {
   ceres::Solver::Options s;
   s.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -19,8 +29,8 @@ ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& o
   s.max_num_iterations = spec.max_iterations;
   s.num_threads = options.threads;
   s.function_tolerance = options.function_tolerance;
-  s.minimizer_progress_to_stdout = options.verbose;
-  s.logging_type = options.verbose ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  s.minimizer_progress_to_stdout = false;  // the library prints nothing: RefineOptions::log
+  s.logging_type = ceres::SILENT;
   return s;
 }
 
@@ -98,9 +108,11 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
                         last ? options.stall_tolerance : options.earlier_stage_stall_tolerance);
     ceres::Solver::Options start_options = solver;
     start_options.callbacks.push_back(&stall);
+    ProgressCallback progress(options.log);
+    if (options.log) start_options.callbacks.push_back(&progress);
     ceres::Solver::Summary summary;
     ceres::Solve(start_options, &p.problem, &summary);
-    if (options.verbose) std::cout << summary.FullReport() << "\n";
+    if (options.log) options.log(summary.FullReport());
     r.iterations += static_cast<int>(summary.iterations.size());
     if (summary.IsSolutionUsable() && summary.final_cost < best_cost) {
       best_cost = summary.final_cost;

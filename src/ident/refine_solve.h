@@ -64,6 +64,16 @@ class StallCallback final : public ceres::IterationCallback {
   std::vector<double> accepted_;  // cost after each accepted step (and at the start)
 };
 
+// One line per iteration into RefineOptions::log.
+class ProgressCallback final : public ceres::IterationCallback {
+ public:
+  explicit ProgressCallback(const std::function<void(const std::string&)>& log) : log_(log) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override;
+
+ private:
+  const std::function<void(const std::string&)>& log_;
+};
+
 // Levenberg-Marquardt as the options and spec ask.
 ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& options);
 

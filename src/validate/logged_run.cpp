@@ -49,7 +49,8 @@ void ApplyRigConditions(const RigConstants& rig, Parameters* params) {
 // does not set the start. A log that starts moving gets its first sample.
 InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* samples_averaged) {
   std::size_t n = 1;
-  while (n < m.size() && n < 50 && m.u_V[n] == m.u_V[0]) ++n;
+  // A logger's noise on the command is not a change (as HeldLevels reads it).
+  while (n < m.size() && n < 50 && std::fabs(m.u_V[n] - m.u_V[0]) <= 0.01) ++n;
   const auto mean = [n](const std::vector<double>& v) {
     return std::accumulate(v.begin(), v.begin() + static_cast<long>(n), 0.0) /
            static_cast<double>(n);

@@ -36,6 +36,22 @@ TEST_F(RefineCliTest, RefinesAndWritesUncertaintyAndProvenance) {
       << Stdout() << Stderr();
 }
 
+// --verbose: the solver's progress reaches stdout through the library's log
+// sink (the library itself prints nothing); without it, none.
+TEST_F(RefineCliTest, VerboseShowsTheSolversProgressThroughTheLogSink) {
+  const std::string spec = Write("small.yaml", kSmallSpec);
+  const std::string out = (dir_ / "refined.yaml").string();
+  const std::string command = "refine " + testing::Source("datasets/paper-rig") + " --params " +
+                              testing::Source("configs/paper.yaml") + " --spec " + spec +
+                              " --out " + out;
+  ASSERT_EQ(Run(command + " --verbose"), 0) << Stdout() << Stderr();
+  EXPECT_NE(Stdout().find("iteration   1: cost"), std::string::npos) << Stdout();
+  EXPECT_NE(Stdout().find("Solver Summary"), std::string::npos) << Stdout();
+  std::filesystem::remove(out);
+  ASSERT_EQ(Run(command), 0) << Stdout() << Stderr();
+  EXPECT_EQ(Stdout().find("iteration   1: cost"), std::string::npos) << Stdout();
+}
+
 TEST_F(RefineCliTest, IdentifyRefineRunsTheComponentFitsThenTheRefinement) {
   const std::string spec = Write("small.yaml", kSmallSpec);
   const std::string out = (dir_ / "identified.yaml").string();

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -78,8 +79,10 @@ struct RefineOptions {
   double start_prior_fraction = 0.02;
   // Where the report looks for the worst stretch of a run [s].
   double misfit_window_s = 0.2;
-  // Print Ceres' per-iteration progress to stdout.
-  bool verbose = false;
+  // Where the solver's progress goes, a line per iteration and a report per
+  // start (empty: nowhere). The library prints nothing itself; a caller
+  // (the CLI's --verbose) passes a sink. Called from the solving thread.
+  std::function<void(const std::string&)> log;
 
   bool IsValid(std::string* error) const;
 

@@ -24,7 +24,7 @@ Parameters WithRigConditions(const Parameters& params, const Unit& unit);
 Parameters WithUnitConstants(const Parameters& params, const Unit& unit);
 
 // The state a logged run starts from: the mean of its leading samples while
-// the command has not yet changed (at most 50); its first sample when the rod
+// the command has not yet changed by more than 0.01 V (at most 50); its first sample when the rod
 // already moves. The position is clamped to the stroke (+-half_stroke_m): a rod
 // resting on an end stop reads up to a few noise sigmas beyond it.
 // `samples_averaged`, if given, receives how many samples the start is the
