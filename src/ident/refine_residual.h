@@ -241,6 +241,15 @@ class ExperimentResidual final : public ceres::CostFunction {
   mutable double first_cost_ = NAN;
 };
 
+// Each whole fitted run at `params`, simulated from its logged start, with
+// its weighted residuals (NaN where it cannot be simulated).
+struct RunResiduals {
+  FitExperiment run;
+  Eigen::VectorXd residuals;
+};
+std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit& unit,
+                                            const FitSpec& spec, const RefineOptions& options);
+
 // 0.5 |r|^2 of each whole fitted run at `params` from its logged start (NaN
 // where it cannot be simulated): what a windowed stage's costs are reported as.
 std::vector<ExperimentCost> WholeRunCosts(const Parameters& params, const Unit& unit,

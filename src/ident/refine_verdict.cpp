@@ -42,18 +42,10 @@ std::vector<ChannelMisfit> RunMisfits(const FitExperiment& e, const Eigen::Vecto
 
 std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit& unit,
                                            const FitSpec& spec, const RefineOptions& options) {
-  const Parameters conditioned = WithRigConditions(params, unit);
-  const ParameterMap map = MakeParameterMap(conditioned, spec);
-  const std::vector<double> theta = map.ThetaOf(conditioned);
   std::vector<ChannelMisfit> out;
-  for (const FitExperiment& run : FittedRuns(conditioned, unit, spec, false)) {
-    const ExperimentResidual residual(&conditioned, &map, &run, &options.simulation,
-                                      options.jacobian);
-    Eigen::VectorXd r(residual.num_residuals());
-    const StartOffsets as_logged = {0, 0};
-    const double* blocks[] = {theta.data(), as_logged.data()};
-    if (!residual.Evaluate(blocks, r.data(), nullptr)) r.setConstant(NAN);
-    for (const ChannelMisfit& m : RunMisfits(run, r, options.misfit_window_s)) out.push_back(m);
+  for (const RunResiduals& run : WholeRunResiduals(params, unit, spec, options)) {
+    for (const ChannelMisfit& m : RunMisfits(run.run, run.residuals, options.misfit_window_s))
+      out.push_back(m);
   }
   return out;
 }

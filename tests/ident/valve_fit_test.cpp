@@ -16,13 +16,17 @@
 namespace pneumaid {
 namespace {
 
-// A valve-only synthetic unit written and read back, as a user's would be.
-Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed) {
+// A valve-only synthetic unit written and read back, as a user's would be:
+// a staircase of `step_V` held `hold_s` at `rate_Hz`, a 30 ms flow meter with
+// an ADC step of `q_quantization` (standard m3/s).
+Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed, double step_V = 0.05,
+                        double hold_s = 0.3, double rate_Hz = 1000, double q_quantization = 0) {
   Protocol protocol;
   protocol.valve = true;
-  protocol.valve_step_V = 0.05;
-  protocol.valve_hold_s = 0.3;
-  protocol.sensors["q"] = {2e-7, 0.03, 0.0, true};
+  protocol.valve_step_V = step_V;
+  protocol.valve_hold_s = hold_s;
+  protocol.sample_rate_Hz = rate_Hz;
+  protocol.sensors["q"] = {2e-7, 0.03, q_quantization, true};
   protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
   protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
   return testing::WriteAndReadUnit(Synthesize(truth, protocol, seed, "V"),
@@ -92,14 +96,7 @@ TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
   truth.effects["valve_lag"] = {{"tau", 0.01}};
   ValveParams prior = Perturbed(truth.valve);
   prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
-  Protocol protocol;
-  protocol.valve = true;
-  protocol.valve_step_V = 0.04;
-  protocol.valve_hold_s = 0.25;
-  protocol.sensors["q"] = {2e-7, 0.03, 1e-7, true};
-  protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
-  protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
-  const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 62, "V"), "valve_062");
+  const Unit unit = SyntheticValveUnit(truth, 62, 0.04, 0.25, 1000, 1e-7);
   const ValveFitResult fit = FitValve(unit, prior, ValveFitOptions{});
   std::cout << fit.BriefReport();
   for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
@@ -117,14 +114,7 @@ TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
 // instead, so every level counts and K_vp is recovered.
 TEST(ValveFitTest, ShortHoldsAtALowRateAreReadThroughTheMetersLag) {
   Parameters truth;
-  Protocol protocol;
-  protocol.valve = true;
-  protocol.sample_rate_Hz = 500;
-  protocol.valve_hold_s = 0.2;
-  protocol.sensors["q"] = {2e-7, 0.03, 0.0, true};
-  protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
-  protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
-  const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 9, "V"), "valve_short");
+  const Unit unit = SyntheticValveUnit(truth, 9, 0.05, 0.2, 500);
   const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
   std::cout << fit.BriefReport();
   EXPECT_EQ(fit.plateaus.size(), 39u);
