@@ -76,6 +76,15 @@ FitSpec StageSpec(const FitSpec& spec, const FitStage& stage) {
   return one;
 }
 
+// InputError for options or a spec (however it was made) that are not valid.
+void CheckInputs(const FitSpec& spec, const RefineOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
+  if (!spec.IsValid(&error)) {
+    throw InputError(spec.source.empty() ? "fit spec" : spec.source, 0, 0, error);
+  }
+}
+
 }  // namespace
 
 bool RefineOptions::IsValid(std::string* error) const {
@@ -105,11 +114,7 @@ bool RefineOptions::IsValid(std::string* error) const {
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options) {
   const auto clock = std::chrono::steady_clock::now();
-  std::string error;
-  if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
-  if (!spec.IsValid(&error)) {
-    throw InputError(spec.source.empty() ? "fit spec" : spec.source, 0, 0, error);
-  }
+  CheckInputs(spec, options);
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   RefineResult r;
@@ -203,11 +208,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
 
 RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,
                          const RefineOptions& options) {
-  std::string error;
-  if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
-  if (!spec.IsValid(&error)) {
-    throw InputError(spec.source.empty() ? "fit spec" : spec.source, 0, 0, error);
-  }
+  CheckInputs(spec, options);
   RefineResult r;
   r.params = params;
   r.misfits = WholeRunMisfits(params, unit, spec, options);

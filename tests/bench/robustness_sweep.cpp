@@ -33,6 +33,7 @@
 #include <tuple>
 #include <vector>
 
+#include "../ident/kvp_test_util.h"
 #include "pneumaid/ident/identify.h"
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
@@ -155,15 +156,7 @@ Draw MakeDraw(std::uint64_t seed, int index) {
 // polynomial ends there: docs/identification.md).
 double KvpError(const KvpBranchParams& fit, const KvpBranchParams& real, double step_V) {
   const double gap_high = std::ceil(real.u_sat_V / step_V - 1e-9) * step_V;
-  const double gap_low = gap_high - step_V;
-  const auto c_fit = MakeKvpCoefficients<double>(fit), c_true = MakeKvpCoefficients<double>(real);
-  double worst = 0;
-  for (int k = 0; k <= 1000; ++k) {
-    const double u = k / 1000.0;
-    if (u > gap_low && u <= gap_high) continue;
-    worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real.q_max_kg_per_s);
-  }
-  return worst;
+  return testing::WorstKvpError(fit, real, gap_high - step_V, gap_high);
 }
 
 bool Within(double value, double truth, double fraction, double floor) {

@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "../synth/synth_test_util.h"
+#include "kvp_test_util.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/kvp.h"
@@ -46,21 +47,7 @@ ValveParams Perturbed(const ValveParams& truth) {
   return prior;
 }
 
-// The largest |K_vp fitted - K_vp true| / q_max over u in [0, 1] outside the
-// gap (gap_low, gap_high] of the staircase that holds the true u_sat: no
-// plateau there tells where the polynomial ends.
-double WorstKvpError(const KvpBranchParams& fitted, const KvpBranchParams& real, double gap_low = 1,
-                     double gap_high = 1) {
-  const auto c_fit = MakeKvpCoefficients<double>(fitted);
-  const auto c_true = MakeKvpCoefficients<double>(real);
-  double worst = 0;
-  for (int k = 0; k <= 1000; ++k) {
-    const double u = k / 1000.0;
-    if (u > gap_low && u <= gap_high) continue;
-    worst = std::max(worst, std::fabs(Kvp(u, c_fit) - Kvp(u, c_true)) / real.q_max_kg_per_s);
-  }
-  return worst;
-}
+using testing::WorstKvpError;
 
 TEST(ValveFitTest, RecoversKvpWithinOnePercentOfQmaxOnTheBundledUnit) {
   const std::string dir = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig";
