@@ -4,6 +4,7 @@
 #include <map>
 
 #include "commands.h"
+#include "pneumaid/ident/fit_result.h"
 #include "pneumaid/io/input_error.h"
 
 int main(int argc, char** argv) {
@@ -40,6 +41,9 @@ int main(int argc, char** argv) {
   } catch (const pneumaid::InputError& error) {
     std::cerr << "error: " << error.what() << "\n";
     return kBadInput;
+  } catch (const pneumaid::FitError& error) {
+    std::cerr << "error: " << error.what() << " (nothing written)\n";
+    return kNumericalFailure;
   } catch (const std::exception& error) {
     std::cerr << "internal error: " << error.what() << "\n";
     return kUnexpected;

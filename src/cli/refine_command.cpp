@@ -33,19 +33,19 @@ int RunRefine(const RefineArgs& args) {
 
 int ReportAndSave(const RefineResult& result, const std::string& out_path) {
   std::cout << result.BriefReport();
-  if (result.parameters.empty()) {
-    std::cerr << "error: refinement failed: " << result.message << " (nothing written)\n";
+  if (!result.has_values()) {
+    std::cerr << "error: refinement failed: " << result.reason << " (nothing written)\n";
     return kNumericalFailure;
   }
   SaveParams(result.params, out_path);
   std::cout << "wrote " << out_path << "\n";
-  if (result.status == RefineStatus::kNotExplained) {
-    std::cerr << "error: " << result.message
+  if (result.status == FitStatus::kNotExplained) {
+    std::cerr << "error: " << result.reason
               << "\n  the best set found is written, with that verdict in its provenance\n";
     return kNumericalFailure;
   }
-  if (!result.converged) {
-    std::cerr << "warning: the refinement did not converge (" << result.message
+  if (result.status != FitStatus::kConverged) {
+    std::cerr << "warning: the refinement did not converge (" << result.reason
               << "); the parameters written are its best point\n";
     return kNumericalFailure;
   }

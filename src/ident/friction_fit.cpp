@@ -178,9 +178,35 @@ void Information(const std::vector<SegmentJacobian>& segments, Eigen::MatrixXd* 
   }
 }
 
-std::string ColumnName(int column) {
-  return std::string(column < kDirectionParameters ? "positive." : "negative.") +
+std::string ColumnPath(int column) {
+  return std::string(column < kDirectionParameters ? "friction.positive." : "friction.negative.") +
          kParameterNames[column % kDirectionParameters];
+}
+
+// Every coefficient (columns 0-3 positive, 4-7 negative) at `values`, the
+// `held` ones with their reason, the others with `covariance` (over `free`).
+void SetCoefficients(const Block (&starts)[2], const Block (&values)[2],
+                     const std::array<std::string, 2 * kDirectionParameters>& held,
+                     const std::vector<int>& free, const Eigen::MatrixXd& covariance,
+                     FitResult* result) {
+  result->coefficients.clear();
+  result->covariance = Eigen::MatrixXd::Zero(2 * kDirectionParameters, 2 * kDirectionParameters);
+  for (int c = 0; c < 2 * kDirectionParameters; ++c) {
+    const int d = c / kDirectionParameters, i = c % kDirectionParameters;
+    FittedCoefficient coefficient;
+    coefficient.path = ColumnPath(c);
+    coefficient.start = starts[d][i];
+    coefficient.value = values[d][i];
+    coefficient.held = held[c];
+    const auto at = std::find(free.begin(), free.end(), c) - free.begin();
+    if (held[c].empty() && at < static_cast<long>(free.size())) {
+      coefficient.standard_error = std::sqrt(std::max(covariance(at, at), 0.0));
+      coefficient.at_bound = values[d][i] <= kLowerBounds[i] || values[d][i] >= kUpperBounds[i];
+      for (std::size_t b = 0; b < free.size(); ++b)
+        result->covariance(c, free[b]) = covariance(at, static_cast<Eigen::Index>(b));
+    }
+    result->coefficients.push_back(coefficient);
+  }
 }
 
 }  // namespace
@@ -219,6 +245,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
   const double band = options.stuck_band_m + 6.0 * sigma_m;
   const StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
+  const Block prior_blocks[2] = {Pack(prior.positive), Pack(prior.negative)};
   result.excluded_segments = data.excluded;
   result.positive.segments = SegmentsOf(data, +1);
   result.negative.segments = SegmentsOf(data, -1);
@@ -230,12 +257,15 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   if (result.positive.segments + result.negative.segments + result.positive.smooth_slides +
           result.negative.smooth_slides ==
       0) {
-    result.note = "no slide found in the stroke logs " + data.skipped + "; the prior is kept";
+    const std::string why = "no slide found in the stroke logs " + data.skipped;
+    result.reason = why + "; the prior is kept";
+    std::array<std::string, 2 * kDirectionParameters> held;
+    held.fill(why);
+    SetCoefficients(prior_blocks, prior_blocks, held, {}, {}, &result);
     return result;
   }
   // Starts from the data: Fs from the breakaways, Fd, b, vs from the force
   // balance of the smooth slides; the prior where the logs give none.
-  const Block prior_blocks[2] = {Pack(prior.positive), Pack(prior.negative)};
   Block positive = prior_blocks[0], negative = prior_blocks[1];
   positive[0] = BreakawayMedian(data, +1, positive[0]);
   negative[0] = BreakawayMedian(data, -1, negative[0]);
@@ -263,6 +293,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   std::vector<double> huber_scale;  // empty: plain least squares
   std::vector<int> free;            // the columns fitted (then: determined)
   Eigen::MatrixXd covariance;
+  bool stopped = true;  // the last solve stopped before its iteration limit
   const std::array<double, kDirectionParameters> sigma = PriorSigmas(options);
   // One fit of every coefficient of a direction with slides (the weak prior
   // keeps it regular); what it finds undetermined is then reported as held,
@@ -305,8 +336,12 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
       if (pass == 0) result.initial_cost = summary.initial_cost;
       result.final_cost = summary.final_cost;
       result.iterations += static_cast<int>(summary.iterations.size());
+      stopped = summary.termination_type != ceres::NO_CONVERGENCE;
       const auto failed = [&] {
-        result.note = "Ceres did not converge (" + summary.message + "); the prior is kept";
+        result.reason = "Ceres failed (" + summary.message + "); the prior is kept";
+        std::array<std::string, 2 * kDirectionParameters> all;
+        all.fill("Ceres failed");
+        SetCoefficients(prior_blocks, prior_blocks, all, {}, {}, &result);
         return result;
       };
       if (!summary.IsSolutionUsable()) return failed();
@@ -413,73 +448,39 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     }
   }
   result.position_rms_m = std::sqrt(squares / std::max(result.samples, 1));
-  result.fitted = true;
-  for (int d = 0; d < 2; ++d) {
-    DirectionFit& fit = d == 0 ? result.positive : result.negative;
-    fit.params = Unpack(*blocks[d]);
-    for (int i = 0; i < kDirectionParameters; ++i) {
-      const int c = d * kDirectionParameters + i;
-      if (!held[c].empty()) {
-        fit.held[kParameterNames[i]] = held[c];
-        continue;
-      }
-      const auto at = std::find(free.begin(), free.end(), c) - free.begin();
-      fit.standard_errors[kParameterNames[i]] = std::sqrt(std::max(covariance(at, at), 0.0));
-    }
-    fit.fitted = !fit.standard_errors.empty();
-  }
-  for (std::size_t a = 0; a < free.size(); ++a) {
-    for (std::size_t b = a + 1; b < free.size(); ++b) {
-      result.correlations[ColumnName(free[a]) + "," + ColumnName(free[b])] =
-          covariance(a, b) / std::sqrt(covariance(a, a) * covariance(b, b));
-    }
-  }
-  if (!data.skipped.empty()) result.note = "not used: " + data.skipped;
+  result.status = stopped ? FitStatus::kConverged : FitStatus::kNotConverged;
+  result.positive.params = Unpack(positive);
+  result.negative.params = Unpack(negative);
+  const Block fitted[2] = {positive, negative};
+  SetCoefficients(prior_blocks, fitted, held, free, covariance, &result);
+  if (!stopped) result.reason = "the solver reached its iteration limit";
+  if (!data.skipped.empty())
+    result.reason += (result.reason.empty() ? "not used: " : "; not used: ") + data.skipped;
   return result;
 }
 
 std::string FrictionFitResult::BriefReport() const {
   std::ostringstream out;
-  out << "Friction fit: ";
-  if (!fitted) {
-    out << "not fitted (" << note << ")\n";
+  out << "Friction fit: " << ToString(status);
+  if (!has_values()) {
+    out << " (" << reason << ")\n";
     return out.str();
   }
   char line[320];
   std::snprintf(line, sizeof(line),
-                "%d segments (%d samples, %d near the stroke ends left out, %d outliers), %d "
+                ", %d segments (%d samples, %d near the stroke ends left out, %d outliers), %d "
                 "force-balance samples, cost %.4g -> %.4g in %d iterations, position RMS %.3g mm\n",
                 segments, samples, excluded_segments, outlier_segments, smooth_samples,
                 initial_cost, final_cost, iterations, position_rms_m * 1e3);
   out << line;
-  const char* const units[] = {"N", "N", "N s/m", "m/s"};
   for (const auto& [name, fit] :
        {std::make_pair("positive", &positive), std::make_pair("negative", &negative)}) {
-    std::snprintf(line, sizeof(line), "  %s: %d slides replayed, %d smooth slides;", name,
+    std::snprintf(line, sizeof(line), "  %s: %d slides replayed, %d smooth slides\n", name,
                   fit->segments, fit->smooth_slides);
     out << line;
-    const double values[] = {fit->params.static_force_N, fit->params.dynamic_force_N,
-                             fit->params.viscous_N_s_per_m, fit->params.stribeck_velocity_m_per_s};
-    for (int i = 0; i < kDirectionParameters; ++i) {
-      const auto error = fit->standard_errors.find(kParameterNames[i]);
-      if (error == fit->standard_errors.end()) {
-        std::snprintf(line, sizeof(line), " %s %.4g %s (held)", kParameterNames[i], values[i],
-                      units[i]);
-      } else {
-        std::snprintf(line, sizeof(line), " %s %.4g +- %.2g %s", kParameterNames[i], values[i],
-                      error->second, units[i]);
-      }
-      out << line << (i + 1 < kDirectionParameters ? "," : "\n");
-    }
-    for (const auto& [coefficient, why] : fit->held) {
-      if (why != "no slide this way" || coefficient == "Fs")
-        out << "    held " << coefficient << ": " << why << "\n";
-    }
   }
-  for (const auto& [pair, r] : correlations) {
-    if (std::fabs(r) > 0.95) out << "  poorly separable: " << pair << " correlation " << r << "\n";
-  }
-  if (!note.empty()) out << "  " << note << "\n";
+  out << CoefficientReport("  ");
+  if (!reason.empty()) out << "  " << reason << "\n";
   return out.str();
 }
 

@@ -10,23 +10,18 @@
 namespace pneumaid {
 namespace {
 
-void ApplyBranch(const BranchFit& fit, const std::string& prefix, Parameters* params,
-                 IdentifyReport* report) {
-  for (const char* name : {"q_max", "a", "b", "c", "d"}) {
-    const std::string path = prefix + "." + name;
-    if (fit.fitted) {
-      report->fitted.push_back(path);
-      params->uncertainty[path] = fit.standard_errors.at(name);
+// A fit's values into `params` (when it has any), its determined
+// coefficients' errors into the uncertainty, and each coefficient listed as
+// fitted, or as from the prior with why.
+void Record(const FitResult& fit, Parameters* params, IdentifyReport* report) {
+  fit.ApplyTo(params);
+  for (const FittedCoefficient& c : fit.coefficients) {
+    if (fit.has_values() && c.determined()) {
+      report->fitted.push_back(c.path);
+      params->uncertainty[c.path] = c.standard_error;
     } else {
-      report->priors.push_back(path + " (" + fit.note + ")");
+      report->priors.push_back(c.path + " (" + (c.held.empty() ? fit.reason : c.held) + ")");
     }
-  }
-  if (fit.fitted && fit.u_sat_fitted) {
-    report->fitted.push_back(prefix + ".u_sat");
-    params->uncertainty[prefix + ".u_sat"] = fit.standard_errors.at("u_sat");
-  } else {
-    report->priors.push_back(prefix + ".u_sat (" +
-                             (fit.note.empty() ? std::string("fixed") : fit.note) + ")");
   }
 }
 
@@ -68,15 +63,15 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
   out << "]";
   for (const auto& [name, fit] : {std::make_pair("valve_increasing", &report.valve.increasing),
                                   std::make_pair("valve_decreasing", &report.valve.decreasing)}) {
-    if (!fit->fitted) continue;
+    if (!fit->has_values()) continue;
     out << ", " << name << ": {final_cost: " << FormatDouble(fit->final_cost)
         << ", iterations: " << fit->iterations << ", plateaus: " << fit->plateaus << "}";
   }
-  if (report.pipeline.fitted) {
-    out << ", pipeline: {delta_at_rig: " << FormatDouble(report.pipeline.delta_at_rig_per_s)
+  if (report.pipeline.has_values()) {
+    out << ", pipeline: {delta_at_rig: " << FormatDouble(report.pipeline.coefficients.front().value)
         << ", tubes: " << report.pipeline.tubes.size() << "}";
   }
-  if (report.friction.fitted) {
+  if (report.friction.has_values()) {
     out << ", friction: {final_cost: " << FormatDouble(report.friction.final_cost)
         << ", iterations: " << report.friction.iterations
         << ", segments: " << report.friction.segments << "}";
@@ -104,18 +99,13 @@ void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyO
   pipeline_options.initial_delta_per_s = prior.pipeline.delta_per_s;
   report->pipeline = FitPipeline(unit, pipeline_options);
   const PipelineFitResult& fit = report->pipeline;
-  if (!fit.fitted) {
-    AddPriorsUnder("pipeline.", fit.note, report);
-    return;
-  }
+  Record(fit, params, report);
+  if (!fit.has_values()) return;
   params->pipeline.delta_by_length.clear();
   for (const auto& tube : fit.tubes) {
-    if (tube.fitted)
-      params->pipeline.delta_by_length.push_back({tube.tube_length_m, tube.delta_per_s});
+    if (tube.has_values())
+      params->pipeline.delta_by_length.push_back({tube.tube_length_m, tube.delta_per_s()});
   }
-  params->pipeline.delta_per_s = fit.delta_at_rig_per_s;
-  params->uncertainty["pipeline.delta"] = fit.delta_at_rig_standard_error;
-  report->fitted.push_back("pipeline.delta");
   report->fitted.push_back("pipeline.delta_by_length");
 }
 
@@ -135,23 +125,7 @@ void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyO
     return;
   }
   report->friction = FitFriction(unit, prior.friction, options.friction);
-  const FrictionFitResult& fit = report->friction;
-  for (const auto& [name, direction, target] :
-       {std::make_tuple("positive", &fit.positive, &params->friction.positive),
-        std::make_tuple("negative", &fit.negative, &params->friction.negative)}) {
-    const std::string prefix = std::string("friction.") + name + ".";
-    if (!fit.fitted) {
-      AddPriorsUnder(prefix, fit.note, report);
-      continue;
-    }
-    *target = direction->params;
-    for (const auto& [coefficient, error] : direction->standard_errors) {
-      report->fitted.push_back(prefix + coefficient);
-      params->uncertainty[prefix + coefficient] = error;
-    }
-    for (const auto& [coefficient, why] : direction->held)
-      report->priors.push_back(prefix + coefficient + " (" + why + ")");
-  }
+  Record(report->friction, params, report);
 }
 
 }  // namespace
@@ -193,10 +167,7 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   const bool valve_wanted = options.components.count(Component::kValve) > 0;
   if (valve_wanted && HasKind(unit, ExperimentKind::kValve)) {
     report->valve = FitValve(unit, prior.valve, options.valve);
-    params.valve.increasing = report->valve.increasing.params;
-    params.valve.decreasing = report->valve.decreasing.params;
-    ApplyBranch(report->valve.increasing, "valve.increasing", &params, report);
-    ApplyBranch(report->valve.decreasing, "valve.decreasing", &params, report);
+    Record(report->valve, &params, report);
   } else if (valve_wanted && options.components_explicit) {
     throw InputError(
         unit.manifest_path(), 0, 0,
@@ -209,9 +180,8 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   params.provenance_yaml = Provenance(unit, options, *report);
   const auto problems = Validate(params);
   if (!problems.empty()) {
-    throw InputError(unit.directory, 0, 0,
-                     "the identified set is not physical: " + problems.front().path + ": " +
-                         problems.front().message);
+    throw FitError("the identified set of unit " + unit.manifest.unit,
+                   "not physical: " + problems.front().path + ": " + problems.front().message);
   }
   return params;
 }

@@ -145,6 +145,14 @@ double ModelErrorFactor(const std::vector<double>& residuals, std::size_t n, dou
 
 TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFitOptions& options) {
   TubeFit fit;
+  fit.coefficients.push_back(
+      {"pipeline.delta", options.initial_delta_per_s, options.initial_delta_per_s, 0.0, "", false});
+  const auto not_fitted = [&fit](const std::string& why) {
+    fit.status = FitStatus::kNotFitted;
+    fit.reason = why;
+    fit.coefficients.front().held = why;
+    return fit;
+  };
   fit.experiment = e.entry.id;
   fit.tube_length_m = e.entry.tube_length_m.value_or(0.0);
   TubeLog log;
@@ -154,22 +162,15 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   const auto held = internal::HeldLevels(e.column("u"), options.level_change_V);
   const std::size_t n = log.t->size();
   fit.levels = log.levels = static_cast<int>(held.size());
-  if (n < 20) {
-    fit.note = "fewer than 20 samples";
-    return fit;
-  }
-  if (held.size() < 2) {
-    fit.note = "the command never changes: a step response is needed";
-    return fit;
-  }
+  if (n < 20) return not_fitted("fewer than 20 samples");
+  if (held.size() < 2) return not_fitted("the command never changes: a step response is needed");
   if (log.levels > options.max_levels) {
     char note[200];
     std::snprintf(note, sizeof(note),
                   "the command takes %d held levels (more than %d: a ramp or a sampled signal?); "
                   "each level is an unknown valve flow",
                   log.levels, options.max_levels);
-    fit.note = note;
-    return fit;
+    return not_fitted(note);
   }
   log.level.resize(n);
   for (std::size_t k = 0; k < held.size(); ++k) {
@@ -213,12 +214,10 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   solver_options.max_num_iterations = options.max_iterations;
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options, &problem, &summary);
+  fit.initial_cost = summary.initial_cost;
   fit.final_cost = summary.final_cost;
   fit.iterations = static_cast<int>(summary.iterations.size());
-  if (!summary.IsSolutionUsable()) {
-    fit.note = "Ceres did not converge: " + summary.message;
-    return fit;
-  }
+  if (!summary.IsSolutionUsable()) return not_fitted("Ceres failed: " + summary.message);
   const double delta = theta[log.levels];
   const int m = static_cast<int>(theta.size());
   const double dof = std::max(1.0, 2.0 * static_cast<double>(n) - m - 1);
@@ -238,8 +237,7 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
     std::snprintf(note, sizeof(note),
                   "delta is not determined by this log (singular covariance at delta %.3g 1/s)",
                   delta);
-    fit.note = note;
-    return fit;
+    return not_fitted(note);
   }
   // Model error counts: a fit worse than the noise widens its error.
   const double error = std::sqrt(c.back() * ModelErrorFactor(residuals, n, fit.reduced_chi_square));
@@ -248,12 +246,14 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
                   "delta is not determined by this log (%.3g +- %.2g 1/s; the sample rate or the "
                   "level changes do not resolve the tube's lag)",
                   delta, error);
-    fit.note = note;
-    return fit;
+    return not_fitted(note);
   }
-  fit.fitted = true;
-  fit.delta_per_s = delta;
-  fit.delta_standard_error = error;
+  fit.status = summary.termination_type == ceres::NO_CONVERGENCE ? FitStatus::kNotConverged
+                                                                 : FitStatus::kConverged;
+  if (fit.status == FitStatus::kNotConverged) fit.reason = summary.message;
+  fit.coefficients.front().value = delta;
+  fit.coefficients.front().standard_error = error;
+  fit.covariance = Eigen::MatrixXd::Constant(1, 1, error * error);
   for (int k = 0; k < log.levels; ++k) {
     if (std::fabs(theta[k]) > std::fabs(fit.flow_kg_per_s)) fit.flow_kg_per_s = theta[k];
   }
@@ -261,39 +261,48 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
 }
 
 // Weighted straight line through (L, delta) with its value and error at L0.
-void FitLaw(double rig_length_m, PipelineFitResult* result) {
+void FitLaw(double rig_length_m, double initial_delta_per_s, PipelineFitResult* result) {
   double s = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
   int count = 0;
   for (const auto& tube : result->tubes) {
-    if (!tube.fitted) continue;
-    const double w = 1.0 / (tube.delta_standard_error * tube.delta_standard_error);
+    if (!tube.has_values()) continue;
+    const double w = 1.0 / (tube.delta_standard_error() * tube.delta_standard_error());
     s += w;
     sx += w * tube.tube_length_m;
-    sy += w * tube.delta_per_s;
+    sy += w * tube.delta_per_s();
     sxx += w * tube.tube_length_m * tube.tube_length_m;
-    sxy += w * tube.tube_length_m * tube.delta_per_s;
+    sxy += w * tube.tube_length_m * tube.delta_per_s();
     ++count;
   }
-  if (count == 0) {
-    result->note = "no tube could be fitted";
-    return;
+  FittedCoefficient delta{
+      "pipeline.delta", initial_delta_per_s, initial_delta_per_s, 0.0, "", false};
+  result->status = count == 0 ? FitStatus::kNotFitted : FitStatus::kConverged;
+  for (const auto& tube : result->tubes) {
+    result->iterations += tube.iterations;
+    result->initial_cost += tube.initial_cost;
+    result->final_cost += tube.final_cost;
+    if (tube.has_values()) result->status = std::max(result->status, tube.status);
   }
-  result->fitted = true;
   const double det = s * sxx - sx * sx;
-  if (count == 1 || det <= 1e-12 * s * sxx) {  // one length: a flat law
+  if (count == 0) {
+    result->reason = result->tubes.empty() ? "no tube log" : "no tube could be fitted";
+    delta.held = result->reason;
+  } else if (count == 1 || det <= 1e-12 * s * sxx) {  // one length: a flat law
     result->law_intercept_per_s = sy / s;
     result->law_slope_per_s_m = 0;
-    result->delta_at_rig_per_s = sy / s;
-    result->delta_at_rig_standard_error = std::sqrt(1.0 / s);
-    result->note = "one tube length: delta(L) taken as flat";
-    return;
+    delta.value = sy / s;
+    delta.standard_error = std::sqrt(1.0 / s);
+    result->reason = "one tube length: delta(L) taken as flat";
+  } else {
+    result->law_slope_per_s_m = (s * sxy - sx * sy) / det;
+    result->law_intercept_per_s = (sxx * sy - sx * sxy) / det;
+    const double L = rig_length_m;
+    delta.value = result->law_intercept_per_s + result->law_slope_per_s_m * L;
+    // Var(a + b L) from the weighted normal equations' inverse.
+    delta.standard_error = std::sqrt((sxx - 2 * L * sx + L * L * s) / det);
   }
-  result->law_slope_per_s_m = (s * sxy - sx * sy) / det;
-  result->law_intercept_per_s = (sxx * sy - sx * sxy) / det;
-  const double L = rig_length_m;
-  result->delta_at_rig_per_s = result->law_intercept_per_s + result->law_slope_per_s_m * L;
-  // Var(a + b L) from the weighted normal equations' inverse.
-  result->delta_at_rig_standard_error = std::sqrt((sxx - 2 * L * sx + L * L * s) / det);
+  result->coefficients = {delta};
+  result->covariance = Eigen::MatrixXd::Constant(1, 1, delta.standard_error * delta.standard_error);
 }
 
 }  // namespace
@@ -321,34 +330,36 @@ PipelineFitResult FitPipeline(const Unit& unit, const PipelineFitOptions& option
       result.tubes.push_back(FitTube(e, unit.manifest, options));
     }
   }
-  FitLaw(unit.manifest.rig.tube_length_m, &result);
+  FitLaw(unit.manifest.rig.tube_length_m, options.initial_delta_per_s, &result);
   return result;
 }
 
 std::string PipelineFitResult::BriefReport() const {
   std::ostringstream out;
   char line[200];
-  out << "Pipeline delta fit: " << tubes.size() << " tube logs\n";
+  out << "Pipeline delta fit: " << tubes.size() << " tube logs, " << ToString(status) << "\n";
   for (const auto& tube : tubes) {
-    if (!tube.fitted) {
-      out << "  " << tube.experiment << ": not fitted (" << tube.note << ")\n";
+    if (!tube.has_values()) {
+      out << "  " << tube.experiment << ": not fitted (" << tube.reason << ")\n";
       continue;
     }
     std::snprintf(line, sizeof(line),
                   "  %s: L %.3g m, delta %.4g +- %.2g 1/s (%d levels, %d iterations, reduced "
-                  "chi-square %.3g)\n",
-                  tube.experiment.c_str(), tube.tube_length_m, tube.delta_per_s,
-                  tube.delta_standard_error, tube.levels, tube.iterations, tube.reduced_chi_square);
+                  "chi-square %.3g)%s\n",
+                  tube.experiment.c_str(), tube.tube_length_m, tube.delta_per_s(),
+                  tube.delta_standard_error(), tube.levels, tube.iterations,
+                  tube.reduced_chi_square,
+                  tube.status == FitStatus::kConverged ? "" : ", NOT converged");
     out << line;
   }
-  if (fitted) {
+  if (has_values()) {
     std::snprintf(line, sizeof(line),
                   "  law delta(L) = %.4g + %.4g L [1/s]; at the rig's tube %.4g +- %.2g 1/s\n",
-                  law_intercept_per_s, law_slope_per_s_m, delta_at_rig_per_s,
-                  delta_at_rig_standard_error);
+                  law_intercept_per_s, law_slope_per_s_m, coefficients.front().value,
+                  coefficients.front().standard_error);
     out << line;
   }
-  if (!note.empty()) out << "  " << note << "\n";
+  if (!reason.empty()) out << "  " << reason << "\n";
   out << "  pressure drop along the tube: not logged (p_in, p_out absent)\n";
   return out.str();
 }

@@ -38,14 +38,14 @@ ValidationReport HeldOut(const Parameters& params, const Unit& unit,
 std::string AppendProvenance(const std::string& provenance, const RefineResult& r,
                              const FitSpec& spec) {
   std::ostringstream entry;
-  entry << "refine: {spec: \"" << spec.source << "\", cost_before: " << r.cost_before
-        << ", cost_after: " << r.cost_after << ", iterations: " << r.iterations
+  entry << "refine: {spec: \"" << spec.source << "\", cost_before: " << r.initial_cost
+        << ", cost_after: " << r.final_cost << ", iterations: " << r.iterations
         << ", stages: " << r.stages << ", starts: " << r.starts
         << ", experiments: " << r.fitted.size()
         << ", initial_pressures: " << (spec.fit_initial_pressures ? "fit" : "logged")
         << ", status: " << ToString(r.status) << ", reduced_chi_square: " << r.reduced_chi_square
         << ", acceptable_reduced_chi_square: " << r.acceptable_reduced_chi_square
-        << ", converged: " << (r.converged ? "true" : "false") << "}";
+        << ", converged: " << (r.status == FitStatus::kConverged ? "true" : "false") << "}";
   const std::size_t close = provenance.rfind('}');
   if (provenance.empty() || close == std::string::npos) return "{" + entry.str() + "}";
   const bool empty = provenance.find_first_not_of("{} \n") == std::string::npos;
@@ -57,9 +57,7 @@ std::string AppendProvenance(const std::string& provenance, const RefineResult& 
 void ReplayFriction(const Unit& unit, Parameters* params, std::string* report) {
   const FrictionFitResult fit = FitFriction(unit, params->friction, FrictionFitOptions{});
   *report += fit.BriefReport();
-  if (!fit.fitted) return;
-  if (fit.positive.fitted) params->friction.positive = fit.positive.params;
-  if (fit.negative.fitted) params->friction.negative = fit.negative.params;
+  fit.ApplyTo(params);  // a direction without slides holds the current values
 }
 
 // The spec of one stage: its parameters only, in the order of `parameters`.
@@ -137,22 +135,22 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     iterations += r.iterations;
     if (first_fit) {
       before = r.fitted;
-      cost_before = r.cost_before;
+      cost_before = r.initial_cost;
       first_fit = false;
     }
-    if (r.parameters.empty()) {
-      r.message = "stage " + std::to_string(k + 1) + ": " + r.message;
+    if (!r.has_values()) {
+      r.reason = "stage " + std::to_string(k + 1) + ": " + r.reason;
       break;
     }
     current = r.params;
   }
   r.iterations = iterations;
   // The verdict: a windowed last stage's runs are judged whole.
-  if (stages.back().windows && !r.parameters.empty()) {
+  if (stages.back().windows && r.has_values()) {
     r.misfits = WholeRunMisfits(r.params, unit, spec, options);
   }
   Judge(options, &r);
-  if (r.status == RefineStatus::kNotExplained && options.rescue_starts > 0) {
+  if (r.status == FitStatus::kNotExplained && options.rescue_starts > 0) {
     // Stalled far above what the noise explains: the last stage again (from
     // what it started from, earlier stages included) from starts in a trust
     // box around the start's values (not the whole bounds), those alone.
@@ -163,13 +161,13 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
         before_last, unit, last, stages.back().windows, true, options,
         TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed),
         /*extra_starts_only=*/true);
-    if (stages.back().windows && !rescue.parameters.empty()) {
+    if (stages.back().windows && rescue.has_values()) {
       rescue.misfits = WholeRunMisfits(rescue.params, unit, spec, options);
     }
     Judge(options, &rescue);
     iterations += rescue.iterations;
     const int tried = rescue.starts;
-    if (!rescue.parameters.empty() && rescue.reduced_chi_square < r.reduced_chi_square) {
+    if (rescue.has_values() && rescue.reduced_chi_square < r.reduced_chi_square) {
       rescue.replay_report = r.replay_report;
       r = rescue;
     }
@@ -183,24 +181,23 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;
   }
-  if (stages.back().windows && !r.parameters.empty()) {
+  if (stages.back().windows && r.has_values()) {
     r.fitted = WholeRunCosts(r.params, unit, spec, options);
-    r.cost_after = 0;
-    for (const ExperimentCost& e : r.fitted) r.cost_after += e.after;
+    r.final_cost = 0;
+    for (const ExperimentCost& e : r.fitted) r.final_cost += e.after;
   }
-  r.cost_before = cost_before;
+  r.initial_cost = cost_before;
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
     r.fitted[k].before = before[k].before;
   }
   const Parameters conditioned = WithRigConditions(start, unit);
-  for (RefinedParameter& p : r.parameters) GetParameter(conditioned, p.path, &p.start);
-  if (!r.parameters.empty()) {
+  for (FittedCoefficient& p : r.coefficients) GetParameter(conditioned, p.path, &p.start);
+  if (r.has_values()) {
     r.params.provenance_yaml = AppendProvenance(r.params.provenance_yaml, r, spec);
   }
   const auto held_out = Select(unit, spec.hold_out, spec, false);
   r.held_out_before = HeldOut(conditioned, unit, held_out, options);
-  r.held_out_after =
-      HeldOut(r.parameters.empty() ? conditioned : r.params, unit, held_out, options);
+  r.held_out_after = HeldOut(r.has_values() ? r.params : conditioned, unit, held_out, options);
   r.stages = static_cast<int>(stages.size());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;
@@ -212,23 +209,9 @@ RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSp
   RefineResult r;
   r.params = params;
   r.misfits = WholeRunMisfits(params, unit, spec, options);
-  r.status = RefineStatus::kExplained;  // provisional: the verdict decides
+  r.status = FitStatus::kConverged;  // provisional: the verdict decides
   Judge(options, &r);
   return r;
-}
-
-const char* ToString(RefineStatus status) {
-  switch (status) {
-    case RefineStatus::kExplained:
-      return "converged";
-    case RefineStatus::kNotExplained:
-      return "the model does not explain these logs";
-    case RefineStatus::kNotConverged:
-      return "NOT converged";
-    case RefineStatus::kFailed:
-      return "failed";
-  }
-  return "?";
 }
 
 std::string RefineResult::BriefReport() const {
@@ -237,10 +220,10 @@ std::string RefineResult::BriefReport() const {
   std::snprintf(line, sizeof(line),
                 "Refinement: %s, cost %.6g -> %.6g, %d iterations in %d stage(s), %d start(s) "
                 "(best: %d), %.2f s\n",
-                ToString(status), cost_before, cost_after, iterations, stages, starts, best_start,
+                ToString(status), initial_cost, final_cost, iterations, stages, starts, best_start,
                 wall_time_s);
   out << line;
-  if (!message.empty()) out << "  " << message << "\n";
+  if (!reason.empty()) out << "  " << reason << "\n";
   if (!misfits.empty()) {
     std::snprintf(
         line, sizeof(line),
@@ -259,16 +242,7 @@ std::string RefineResult::BriefReport() const {
                   estimated_starts, largest_start_offset_sigma, largest_start_offset_Pa);
     out << line;
   }
-  for (const RefinedParameter& p : parameters) {
-    std::snprintf(line, sizeof(line), "  %-28s %12.6g -> %12.6g +- %.3g%s%s\n", p.path.c_str(),
-                  p.start, p.value, p.standard_error, p.at_bound ? "  (at a bound)" : "",
-                  p.held.empty() ? "" : "  (held: not determined by the fitted runs)");
-    out << line;
-  }
-  for (size_t i = 0; i < poorly_separable.size(); ++i) {
-    out << "  poorly separable: " << poorly_separable[i].first << ", " << poorly_separable[i].second
-        << " correlation " << poorly_separable_correlation[i] << "\n";
-  }
+  out << CoefficientReport("  ", correlation_flag);
   for (const ExperimentCost& e : fitted) {
     std::snprintf(line, sizeof(line), "  fitted   %-16s cost %.6g -> %.6g (%ld residuals)\n",
                   e.id.c_str(), e.before, e.after, e.residuals);

@@ -41,19 +41,11 @@ void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const Refine
                RefineResult* r) {
   const int m = map.size();
   if (cov.rows() != m) return;
-  r->correlation = Eigen::MatrixXd::Identity(m, m);
+  r->covariance = cov;
+  r->correlation_flag = options.correlation_flag;
   for (int i = 0; i < m; ++i) {
-    r->parameters[i].standard_error = std::sqrt(std::max(0.0, cov(i, i)));
-    r->params.uncertainty[map.free[i].path] = r->parameters[i].standard_error;
-    for (int j = 0; j < i; ++j) {
-      const double denominator = std::sqrt(cov(i, i) * cov(j, j));
-      const double rho = denominator > 0 ? cov(i, j) / denominator : 0.0;
-      r->correlation(i, j) = r->correlation(j, i) = rho;
-      if (std::fabs(rho) > options.correlation_flag) {
-        r->poorly_separable.emplace_back(map.free[j].path, map.free[i].path);
-        r->poorly_separable_correlation.push_back(rho);
-      }
-    }
+    r->coefficients[i].standard_error = std::sqrt(std::max(0.0, cov(i, i)));
+    r->params.uncertainty[map.free[i].path] = r->coefficients[i].standard_error;
   }
 }
 

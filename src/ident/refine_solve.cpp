@@ -121,12 +121,12 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       r.best_start = static_cast<int>(s);
       // Provisional: whether the runs are explained is the verdict's
       // (refine_verdict.h) once the last stage is done.
-      r.converged = summary.termination_type == ceres::CONVERGENCE ||
-                    summary.termination_type == ceres::USER_SUCCESS;
-      r.status = r.converged ? RefineStatus::kExplained : RefineStatus::kNotConverged;
-      r.message = r.converged ? "" : summary.message;
+      const bool stopped = summary.termination_type == ceres::CONVERGENCE ||
+                           summary.termination_type == ceres::USER_SUCCESS;
+      r.status = stopped ? FitStatus::kConverged : FitStatus::kNotConverged;
+      r.reason = stopped ? "" : summary.message;
     } else if (!std::isfinite(best_cost)) {
-      r.message = summary.message;
+      r.reason = summary.message;
     }
   }
   r.starts = static_cast<int>(starts.size());
@@ -134,15 +134,14 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     // Ceres' first evaluation is at the given start.
     r.fitted.push_back(
         {experiments[k].id, p.blocks[k]->FirstCost(), 0, experiments[k].residuals()});
-    r.cost_before += r.fitted.back().before;
+    r.initial_cost += r.fitted.back().before;
   }
   p.theta = best_theta;
   p.offsets = best_offsets;
   if (!std::isfinite(best_cost)) {
-    r.converged = false;
-    r.status = RefineStatus::kFailed;
+    r.status = FitStatus::kNotFitted;
     r.params = start;
-    r.message = "no start gave a usable solution: " + r.message;
+    r.reason = "no start gave a usable solution: " + r.reason;
   } else {
     r.params = WithValues(conditioned, map, p.theta.data());
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
@@ -156,7 +155,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         continue;
       }
       r.fitted[k].after = 0.5 * at_best->residuals.squaredNorm();
-      r.cost_after += r.fitted[k].after;
+      r.final_cost += r.fitted[k].after;
       if (normal.size() > 0) normal += ParameterInformation(*at_best, map.size());
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
       if (!windows) {
@@ -166,14 +165,14 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       }
     }
     for (int j = 0; j < map.size(); ++j) {
-      RefinedParameter rp;
+      FittedCoefficient rp;
       rp.path = map.free[j].path;
       GetParameter(conditioned, rp.path, &rp.start);
       rp.value = map.ToValue(j, p.theta[j]);
       const double span = map.free[j].upper - map.free[j].lower;
       rp.at_bound =
           std::min(rp.value - map.free[j].lower, map.free[j].upper - rp.value) < 1e-6 * span;
-      r.parameters.push_back(rp);
+      r.coefficients.push_back(rp);
     }
     // What the fitted runs determine: a parameter whose information from the
     // runs is below the prior's (its standard error from the runs alone
@@ -188,12 +187,12 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
                         "not determined by the fitted runs (less information than the prior "
                         "toward the start, sigma %.3g in %s); regularised toward the start",
                         prior.sigma[j], map.IsLog(j) ? "ln" : "SI");
-          r.parameters[j].held = why;
+          r.coefficients[j].held = why;
         }
         with_prior(j, j) += slope * slope;
       }
     }
-    Summarise(ParameterCovariance(with_prior, map, p.theta, r.cost_after, data_rows,
+    Summarise(ParameterCovariance(with_prior, map, p.theta, r.final_cost, data_rows,
                                   options.stall_tolerance),
               map, options, &r);
   }

@@ -77,29 +77,24 @@ void Judge(const RefineOptions& options, RefineResult* r) {
               if (a_nan != b_nan) return a_nan;  // NaN (not simulated) first
               return !a_nan && a.reduced_chi_square > b.reduced_chi_square;
             });
-  if (r->status == RefineStatus::kFailed || r->status == RefineStatus::kNotConverged) {
-    r->converged = false;
-    return;
-  }
+  if (r->status == FitStatus::kNotFitted || r->status == FitStatus::kNotConverged) return;
   if (r->reduced_chi_square <= options.acceptable_reduced_chi_square) {  // NaN: not
-    r->status = RefineStatus::kExplained;
-    r->converged = true;
+    r->status = FitStatus::kConverged;
     return;
   }
-  r->status = RefineStatus::kNotExplained;
-  r->converged = false;
+  r->status = FitStatus::kNotExplained;
   char text[400];
   std::snprintf(text, sizeof(text),
                 "the model does not explain these logs: the runs' median reduced chi-square is "
                 "%.3g, above the acceptable %.3g (1 is the declared noise alone)",
                 r->reduced_chi_square, options.acceptable_reduced_chi_square);
-  r->message = text;
+  r->reason = text;
   for (std::size_t k = 0; k < r->misfits.size() && k < 3; ++k) {
     const ChannelMisfit& m = r->misfits[k];
     std::snprintf(text, sizeof(text), "; %s %s: %.3g, worst %.3g over %.3g-%.3g s", m.run.c_str(),
                   m.channel.c_str(), m.reduced_chi_square, m.worst_reduced_chi_square,
                   m.worst_from_s, m.worst_to_s);
-    r->message += text;
+    r->reason += text;
   }
 }
 

@@ -83,16 +83,53 @@ KvpBand MakeBand(const double* theta, const double* covariance, double u_sat_V, 
   return band;
 }
 
+// Every coefficient of the branch at `values`, with the standard errors of
+// `covariance` (5 x 5 over q_max, a, b, c, d; nullptr: all held with `held`);
+// u_sat held at its value as fixed.
+void SetCoefficients(const std::string& prefix, const KvpBranchParams& start,
+                     const KvpBranchParams& values, const double* covariance,
+                     const std::string& held, BranchFit* fit) {
+  const auto starts = Pack(start), fitted = Pack(values);
+  fit->coefficients.clear();
+  for (int i = 0; i < kBranchParameters; ++i) {
+    FittedCoefficient c;
+    c.path = prefix + "." + kParameterNames[i];
+    c.start = starts[i];
+    c.value = fitted[i];
+    if (covariance != nullptr) {
+      c.standard_error = std::sqrt(covariance[i * kBranchParameters + i]);
+    } else {
+      c.held = held;
+    }
+    fit->coefficients.push_back(c);
+  }
+  FittedCoefficient u_sat;
+  u_sat.path = prefix + ".u_sat";
+  u_sat.start = start.u_sat_V;
+  u_sat.value = values.u_sat_V;
+  u_sat.held = covariance == nullptr ? held : "fixed at the prior's (fit_u_sat is off)";
+  fit->coefficients.push_back(u_sat);
+  fit->covariance = Eigen::MatrixXd::Zero(kBranchParameters + 1, kBranchParameters + 1);
+  if (covariance == nullptr) return;
+  for (int i = 0; i < kBranchParameters; ++i) {
+    for (int j = 0; j < kBranchParameters; ++j)
+      fit->covariance(i, j) = covariance[i * kBranchParameters + j];
+  }
+}
+
 BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpBranchParams& prior,
-                    const ValveFitOptions& options) {
+                    const std::string& prefix, const ValveFitOptions& options) {
   BranchFit fit;
   fit.params = prior;
   fit.plateaus = static_cast<int>(plateaus.size());
-  fit.note = Unidentifiable(plateaus, prior.u_sat_V);
-  if (!fit.note.empty()) {
-    fit.note += "; the prior is kept";
+  const auto not_fitted = [&](const std::string& why) {
+    fit.status = FitStatus::kNotFitted;
+    fit.reason = why + "; the prior is kept";
+    SetCoefficients(prefix, prior, prior, nullptr, why, &fit);
     return fit;
-  }
+  };
+  const std::string unidentifiable = Unidentifiable(plateaus, prior.u_sat_V);
+  if (!unidentifiable.empty()) return not_fitted(unidentifiable);
   std::array<double, kBranchParameters> theta = Pack(prior);
   ceres::Problem problem;
   for (const ValvePlateau* p : plateaus) {
@@ -111,31 +148,21 @@ BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpB
   fit.initial_cost = summary.initial_cost;
   fit.final_cost = summary.final_cost;
   fit.iterations = static_cast<int>(summary.iterations.size());
-  if (!summary.IsSolutionUsable()) {
-    fit.note = "Ceres did not converge (" + summary.message + "); the prior is kept";
-    return fit;
-  }
+  if (!summary.IsSolutionUsable()) return not_fitted("Ceres failed (" + summary.message + ")");
   ceres::Covariance::Options covariance_options;
   ceres::Covariance covariance(covariance_options);
   std::vector<std::pair<const double*, const double*>> blocks = {{theta.data(), theta.data()}};
   double c[kBranchParameters * kBranchParameters];
   if (!covariance.Compute(blocks, &problem) ||
       !covariance.GetCovarianceBlock(theta.data(), theta.data(), c)) {
-    fit.note =
-        "the parameters are not identifiable from these plateaus (singular covariance); "
-        "the prior is kept";
-    return fit;
+    return not_fitted(
+        "the coefficients are not identifiable from these plateaus (singular covariance)");
   }
-  fit.fitted = true;
+  fit.status = summary.termination_type == ceres::NO_CONVERGENCE ? FitStatus::kNotConverged
+                                                                 : FitStatus::kConverged;
+  if (fit.status == FitStatus::kNotConverged) fit.reason = summary.message;
   fit.params = Unpack(theta.data(), prior.u_sat_V);
-  for (int i = 0; i < kBranchParameters; ++i) {
-    fit.standard_errors[kParameterNames[i]] = std::sqrt(c[i * kBranchParameters + i]);
-    for (int j = i + 1; j < kBranchParameters; ++j) {
-      const double r = c[i * kBranchParameters + j] /
-                       std::sqrt(c[i * kBranchParameters + i] * c[j * kBranchParameters + j]);
-      fit.correlations[std::string(kParameterNames[i]) + "," + kParameterNames[j]] = r;
-    }
-  }
+  SetCoefficients(prefix, prior, fit.params, c, "", &fit);
   fit.band = MakeBand(theta.data(), c, prior.u_sat_V, options.band_sigmas);
   return fit;
 }
@@ -173,7 +200,8 @@ bool FlatAbove(const std::vector<const ValvePlateau*>& plateaus, double opening,
 
 // FitBranch with u_sat free (ValveFitOptions::fit_u_sat).
 BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateaus,
-                                 const KvpBranchParams& prior, const ValveFitOptions& options) {
+                                 const KvpBranchParams& prior, const std::string& prefix,
+                                 const ValveFitOptions& options) {
   std::vector<double> openings;
   for (const ValvePlateau* p : plateaus) openings.push_back(p->u_V);
   std::sort(openings.begin(), openings.end());
@@ -188,25 +216,34 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
     if (!FlatAbove(plateaus, openings[k], options.saturation_flatness)) continue;
     KvpBranchParams candidate = prior;
     candidate.u_sat_V = 0.5 * (openings[k] + openings[k + 1]);
-    const BranchFit fit = FitBranch(plateaus, candidate, options);
-    if (fit.fitted && (!best.fitted || fit.final_cost < best.final_cost)) {
+    const BranchFit fit = FitBranch(plateaus, candidate, prefix, options);
+    if (fit.has_values() && (!best.has_values() || fit.final_cost < best.final_cost)) {
       best = fit;
       gap_low = openings[k];
       gap_high = openings[k + 1];
     }
   }
-  if (!best.fitted) {
-    best = FitBranch(plateaus, prior, options);
-    best.note += (best.note.empty() ? "" : "; ") +
-                 std::string("u_sat held at the prior's: the staircase shows no saturation (no ") +
-                 std::to_string(saturated) + " or more top openings with one flat K_vp)";
+  if (!best.has_values()) {
+    best = FitBranch(plateaus, prior, prefix, options);
+    if (best.has_values()) {
+      best.coefficients.back().held =
+          "the staircase shows no saturation (no " + std::to_string(saturated) +
+          " or more top openings with one flat K_vp); held at the prior's";
+    }
     return best;
   }
   // Same split, same cost: only the value inside the gap changes.
   KvpBranchParams located = best.params;
   located.u_sat_V = ContinuousSaturation(best.params, gap_low, gap_high);
-  best = FitBranch(plateaus, located, options);
-  best.standard_errors["u_sat"] = (gap_high - gap_low) / std::sqrt(12.0);
+  best = FitBranch(plateaus, located, prefix, options);
+  const auto starts = Pack(prior);  // the search started from the prior, not the split
+  for (int i = 0; i < kBranchParameters; ++i) best.coefficients[i].start = starts[i];
+  FittedCoefficient& u_sat = best.coefficients.back();
+  u_sat.start = prior.u_sat_V;
+  u_sat.held.clear();
+  u_sat.standard_error = (gap_high - gap_low) / std::sqrt(12.0);  // uniform in the gap
+  best.covariance(kBranchParameters, kBranchParameters) =
+      u_sat.standard_error * u_sat.standard_error;
   best.u_sat_fitted = true;
   return best;
 }
@@ -329,8 +366,10 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
   std::vector<const ValvePlateau*> up, down;
   for (const auto& p : result.plateaus) (p.decreasing ? down : up).push_back(&p);
   const auto fit = options.fit_u_sat ? FitBranchAndSaturation : FitBranch;
-  result.increasing = fit(up, prior.increasing, options);
-  result.decreasing = fit(down, prior.decreasing, options);
+  result.increasing = fit(up, prior.increasing, "valve.increasing", options);
+  result.decreasing = fit(down, prior.decreasing, "valve.decreasing", options);
+  AppendFit(result.increasing, "increasing", &result);
+  AppendFit(result.decreasing, "decreasing", &result);
   return result;
 }
 
@@ -339,32 +378,17 @@ std::string ValveFitResult::BriefReport() const {
   out << "Valve K_vp fit: " << plateaus.size() << " plateaus\n";
   for (const auto& [name, fit] :
        {std::make_pair("increasing", &increasing), std::make_pair("decreasing", &decreasing)}) {
-    out << "  " << name << ": ";
-    if (!fit->fitted) {
-      out << "not fitted (" << fit->note << ")\n";
+    out << "  " << name << ": " << ToString(fit->status);
+    if (!fit->has_values()) {
+      out << " (" << fit->reason << ")\n";
       continue;
     }
     char line[256];
-    std::snprintf(line, sizeof(line),
-                  "%d plateaus, cost %.4g -> %.4g in %d iterations; q_max %.5g +- %.2g kg/s, "
-                  "a %.4g +- %.2g, b %.4g +- %.2g, c %.4g +- %.2g, d %.4g +- %.2g\n",
-                  fit->plateaus, fit->initial_cost, fit->final_cost, fit->iterations,
-                  fit->params.q_max_kg_per_s, fit->standard_errors.at("q_max"), fit->params.a,
-                  fit->standard_errors.at("a"), fit->params.b, fit->standard_errors.at("b"),
-                  fit->params.c, fit->standard_errors.at("c"), fit->params.d,
-                  fit->standard_errors.at("d"));
-    out << line;
-    if (fit->u_sat_fitted) {
-      std::snprintf(line, sizeof(line), "    u_sat %.4g +- %.2g V (the plateau spacing)\n",
-                    fit->params.u_sat_V, fit->standard_errors.at("u_sat"));
-      out << line;
-    }
-    for (const auto& [pair, r] : fit->correlations) {
-      if (std::fabs(r) > 0.95) {
-        out << "    poorly separable: " << pair << " correlation " << r
-            << " (the K_vp band below is the meaningful uncertainty)\n";
-      }
-    }
+    std::snprintf(line, sizeof(line), ", %d plateaus, cost %.4g -> %.4g in %d iterations\n",
+                  fit->plateaus, fit->initial_cost, fit->final_cost, fit->iterations);
+    out << line << fit->CoefficientReport("    ");
+    if (!fit->Correlated(0.95).empty())
+      out << "    (the K_vp band is the meaningful uncertainty of poorly separable pairs)\n";
   }
   return out.str();
 }

@@ -51,8 +51,8 @@ void RunRefine(benchmark::State& state, JacobianMethod method) {
   state.counters["samples"] = static_cast<double>(samples);
   state.counters["free"] = static_cast<double>(s.spec.parameters.size());
   state.counters["iterations"] = result.iterations;
-  state.counters["cost_after"] = result.cost_after;
-  state.counters["converged"] = result.converged ? 1 : 0;
+  state.counters["cost_after"] = result.final_cost;
+  state.counters["converged"] = result.status == FitStatus::kConverged ? 1 : 0;
 }
 
 void BM_Refine10Experiments10Parameters(benchmark::State& state) {

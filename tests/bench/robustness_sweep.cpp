@@ -203,9 +203,9 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
                     refine_options)
             .reduced_chi_square;
     out.status = ToString(refined.status);
-    out.explained = refined.status == RefineStatus::kExplained;
+    out.explained = refined.status == FitStatus::kConverged;
     out.chi_square = refined.reduced_chi_square;
-    const Parameters& fit = refined.parameters.empty() ? identified : refined.params;
+    const Parameters& fit = refined.has_values() ? refined.params : identified;
     const Parameters& t = d.truth;
     out.ok["kvp.increasing"] =
         KvpError(fit.valve.increasing, t.valve.increasing, d.staircase_step_V) <= 0.01;
@@ -222,7 +222,7 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
       out.ok[p + "vs"] =
           Within(f->stribeck_velocity_m_per_s, real->stribeck_velocity_m_per_s, 0.25, 1e-3);
     }
-    for (const RefinedParameter& rp : refined.parameters) {
+    for (const FittedCoefficient& rp : refined.coefficients) {
       double truth = 0;
       if (!(rp.standard_error > 0) || !GetParameter(t, rp.path, &truth)) continue;
       ++out.errors_checked;

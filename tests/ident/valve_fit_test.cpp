@@ -60,12 +60,12 @@ TEST(ValveFitTest, RecoversKvpWithinOnePercentOfQmaxOnTheBundledUnit) {
   for (const auto& [fitted, free_fit, real] :
        {std::make_tuple(&fit.increasing, &free.increasing, &truth.valve.increasing),
         std::make_tuple(&fit.decreasing, &free.decreasing, &truth.valve.decreasing)}) {
-    ASSERT_TRUE(fitted->fitted) << fitted->note;
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
     // issue 4: within 1 % of q_max at every u in [0, 1]
     EXPECT_LT(WorstKvpError(fitted->params, *real), 0.01);
     // u_sat fitted: in the staircase's gap (0.70, 0.75] that holds the
     // truth's, and K_vp within 1 % outside that gap.
-    ASSERT_TRUE(free_fit->u_sat_fitted) << free_fit->note;
+    ASSERT_TRUE(free_fit->u_sat_fitted) << free_fit->reason;
     EXPECT_GT(free_fit->params.u_sat_V, 0.70);
     EXPECT_LE(free_fit->params.u_sat_V, 0.75);
     EXPECT_LT(WorstKvpError(free_fit->params, *real, 0.70, 0.75), 0.01);
@@ -88,8 +88,8 @@ TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
   std::cout << fit.BriefReport();
   for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
                                      std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
-    ASSERT_TRUE(fitted->fitted) << fitted->note;
-    ASSERT_TRUE(fitted->u_sat_fitted) << fitted->note;
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
+    ASSERT_TRUE(fitted->u_sat_fitted) << fitted->reason;
     EXPECT_GT(fitted->params.u_sat_V, 0.60);
     EXPECT_LE(fitted->params.u_sat_V, 0.64);
     EXPECT_LT(WorstKvpError(fitted->params, *real, 0.60, 0.64), 0.01);
@@ -107,7 +107,7 @@ TEST(ValveFitTest, ShortHoldsAtALowRateAreReadThroughTheMetersLag) {
   EXPECT_EQ(fit.plateaus.size(), 39u);
   for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
                                      std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
-    ASSERT_TRUE(fitted->fitted) << fitted->note;
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
     EXPECT_LT(WorstKvpError(fitted->params, *real, 0.70, 0.75), 0.01);
   }
 }
@@ -128,6 +128,11 @@ TEST(ValveFitTest, AStaircaseWithoutSaturationKeepsThePriorsSaturation) {
   const ValveFitResult fit = FitValve(unit, truth.valve, ValveFitOptions{});
   EXPECT_FALSE(fit.increasing.u_sat_fitted);
   EXPECT_EQ(fit.increasing.params.u_sat_V, 0.75);
+  ASSERT_NE(fit.Find("valve.increasing.u_sat"), nullptr);
+  // Below 0.5 V no plateau reaches the prior's u_sat either: q_max and u_sat
+  // are held, saying so.
+  EXPECT_NE(fit.Find("valve.increasing.u_sat")->held.find("at or above u_sat"), std::string::npos)
+      << fit.BriefReport();
 }
 
 // u_sat fitted (the default): a unit saturating at 0.67 V while the prior says 0.75 V. The
@@ -144,11 +149,15 @@ TEST(ValveFitTest, FitsTheSaturationOpeningToThePlateauGapThatHoldsIt) {
   std::cout << fit.BriefReport();
   for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
                                      std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
-    ASSERT_TRUE(fitted->fitted) << fitted->note;
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
     EXPECT_TRUE(fitted->u_sat_fitted);
     EXPECT_GT(fitted->params.u_sat_V, 0.65);
     EXPECT_LE(fitted->params.u_sat_V, 0.70);
-    EXPECT_NEAR(fitted->standard_errors.at("u_sat"), 0.05 / std::sqrt(12.0), 1e-12);
+    const FittedCoefficient& u_sat = fitted->coefficients.back();
+    EXPECT_TRUE(u_sat.determined());
+    EXPECT_EQ(u_sat.start, 0.75);
+    EXPECT_EQ(u_sat.value, fitted->params.u_sat_V);
+    EXPECT_NEAR(u_sat.standard_error, 0.05 / std::sqrt(12.0), 1e-12);
     EXPECT_LT(WorstKvpError(fitted->params, *real, 0.65, 0.70), 0.01);
   }
   // With u_sat fixed (identify --fix-u-sat) the prior's 0.75 V is kept, and
@@ -158,6 +167,8 @@ TEST(ValveFitTest, FitsTheSaturationOpeningToThePlateauGapThatHoldsIt) {
   const ValveFitResult fixed = FitValve(SyntheticValveUnit(truth, 41), prior, fixed_options);
   EXPECT_DOUBLE_EQ(fixed.increasing.params.u_sat_V, 0.75);
   EXPECT_FALSE(fixed.increasing.u_sat_fitted);
+  ASSERT_NE(fixed.Find("valve.increasing.u_sat"), nullptr);
+  EXPECT_NE(fixed.Find("valve.increasing.u_sat")->held.find("fixed"), std::string::npos);
   EXPECT_GT(fixed.increasing.final_cost, fit.increasing.final_cost + 1.0);  // chi^2 up by > 2
 }
 
@@ -170,13 +181,15 @@ TEST(ValveFitTest, StandardErrorsAndBandAreHonestOverSeeds) {
         FitValve(SyntheticValveUnit(truth, seed), truth.valve, ValveFitOptions{});
     for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
                                        std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
-      ASSERT_TRUE(fitted->fitted) << fitted->note;
+      ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
       const double values[] = {fitted->params.q_max_kg_per_s, fitted->params.a, fitted->params.b,
                                fitted->params.c, fitted->params.d};
       const double truths[] = {real->q_max_kg_per_s, real->a, real->b, real->c, real->d};
       const char* names[] = {"q_max", "a", "b", "c", "d"};
       for (int i = 0; i < 5; ++i) {
-        const double score = (values[i] - truths[i]) / fitted->standard_errors.at(names[i]);
+        const FittedCoefficient& c = fitted->coefficients[i];
+        ASSERT_EQ(c.path.substr(c.path.rfind('.') + 1), names[i]);
+        const double score = (values[i] - truths[i]) / c.standard_error;
         z.push_back(score);
         inside += std::fabs(score) <= 3.0;
         ++total;
@@ -204,9 +217,15 @@ TEST(ValveFitTest, TooFewPlateausKeepThePriorAndSaySo) {
   Unit unit;
   unit.manifest.unit = "empty";
   const ValveFitResult fit = FitValve(unit, ValveParams{}, ValveFitOptions{});
-  EXPECT_FALSE(fit.increasing.fitted);
-  EXPECT_NE(fit.increasing.note.find("not identifiable"), std::string::npos);
+  EXPECT_EQ(fit.increasing.status, FitStatus::kNotFitted);
+  EXPECT_EQ(fit.status, FitStatus::kNotFitted);  // neither branch
+  EXPECT_NE(fit.increasing.reason.find("not identifiable"), std::string::npos);
   EXPECT_EQ(fit.increasing.params.a, ValveParams{}.increasing.a);
+  ASSERT_EQ(fit.coefficients.size(), 12u);  // both branches' six, each held and saying why
+  for (const FittedCoefficient& c : fit.coefficients) {
+    EXPECT_NE(c.held.find("not identifiable"), std::string::npos) << c.path;
+    EXPECT_EQ(c.value, c.start) << c.path;
+  }
 }
 
 }  // namespace

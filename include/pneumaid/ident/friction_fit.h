@@ -21,10 +21,10 @@
 // bread and the meat; docs/identification.md derives it.
 #pragma once
 
-#include <map>
 #include <string>
 #include <vector>
 
+#include "pneumaid/ident/fit_result.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/parameters.h"
 
@@ -94,25 +94,21 @@ struct FrictionFitOptions {
   bool IsValid(std::string* error) const;
 };
 
-// The fit of one direction's coefficients.
+// What one direction's slides were, and its coefficients as a branch.
 struct DirectionFit {
-  bool fitted = false;  // false: no coefficient of this direction fitted
-  StribeckParams params;
-  std::map<std::string, double> standard_errors;  // the fitted of "Fs", "Fd", "b", "vs"
-  std::map<std::string, std::string> held;  // the others (held_at_prior says their values): why
-  int segments = 0;                         // replayed segments whose slide goes this way
-  int smooth_slides = 0;                    // force-balance clusters (smooth slides) this way
+  StribeckParams params;  // the values of this direction's coefficients
+  int segments = 0;       // replayed segments whose slide goes this way
+  int smooth_slides = 0;  // force-balance clusters (smooth slides) this way
 };
 
-struct FrictionFitResult {
-  bool fitted = false;
-  std::string note;  // why not, or warnings
+// Coefficients "friction.<direction>.Fs", "Fd", "b", "vs" (positive first);
+// each one the logs do not determine is held with the reason
+// (FrictionFitOptions::held_at_prior says at which value). Not fitted: no
+// slide in the stroke logs, or the solver failed; the prior is kept.
+struct FrictionFitResult : FitResult {
   DirectionFit positive, negative;
-  std::map<std::string, double> correlations;  // "positive.Fs,negative.b" -> r
   int segments = 0, samples = 0, excluded_segments = 0, outlier_segments = 0;
-  int smooth_samples = 0;  // force-balance samples
-  double initial_cost = 0, final_cost = 0;
-  int iterations = 0;
+  int smooth_samples = 0;     // force-balance samples
   double position_rms_m = 0;  // replay vs log over all fitted samples
   std::string BriefReport() const;
 };

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "pneumaid/ident/fit_result.h"
 #include "pneumaid/io/rig_data.h"
 
 namespace pneumaid {
@@ -38,28 +39,28 @@ struct PipelineFitOptions {
   bool IsValid(std::string* error) const;
 };
 
-struct TubeFit {
+// One tube log's fit: the one coefficient "pipeline.delta" at this tube's
+// length (not fitted, with the reason, when the log does not determine it).
+struct TubeFit : FitResult {
   std::string experiment;
   double tube_length_m = 0;
-  bool fitted = false;
-  std::string note;
-  double delta_per_s = 0, delta_standard_error = 0;
   double flow_kg_per_s = 0;       // the largest steady valve flow of the held levels
   int levels = 0;                 // held command levels in the log
   double valve_lag_s = 0;         // the valve's own opening lag, fitted as a nuisance
   double reduced_chi_square = 0;  // final cost per degree of freedom (1: noise alone)
-  double final_cost = 0;
-  int iterations = 0;
+
+  double delta_per_s() const { return coefficients.front().value; }
+  double delta_standard_error() const { return coefficients.front().standard_error; }
 };
 
-struct PipelineFitResult {
+// The one coefficient "pipeline.delta" at the rig's tube, from the law
+// delta(L) through the tubes that were fitted; the rig's tube length's value
+// of the law and its error. The tubes' own fits beside it.
+struct PipelineFitResult : FitResult {
   std::vector<TubeFit> tubes;
   // delta(L) = intercept + slope L, weighted least squares over the fitted
-  // tubes (slope 0 with one tube); the law's value and error at the rig's tube.
+  // tubes (slope 0 with one tube).
   double law_intercept_per_s = 0, law_slope_per_s_m = 0;
-  double delta_at_rig_per_s = 0, delta_at_rig_standard_error = 0;
-  bool fitted = false;
-  std::string note;
   std::string BriefReport() const;
 };
 

@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "pneumaid/ident/fit_result.h"
 #include "pneumaid/ident/fit_spec.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/parameters.h"
@@ -108,44 +109,25 @@ struct ChannelMisfit {
   double worst_from_s = 0, worst_to_s = 0, worst_reduced_chi_square = 0;
 };
 
-enum class RefineStatus {
-  kExplained,     // the solver stopped and the verdict holds
-  kNotExplained,  // the best point found leaves more than the acceptable misfit
-  kNotConverged,  // the solver ran out of iterations without stopping
-  kFailed,        // no start gave a usable solution (nothing to write)
-};
-
-const char* ToString(RefineStatus status);
-
-struct RefinedParameter {
-  std::string path;
-  double start = 0;
-  double value = 0;
-  double standard_error = 0;  // 0 when the covariance was not available
-  bool at_bound = false;
-  // Not empty: the fitted runs do not determine it (why); its value is the
-  // prior toward the start's pull.
-  std::string held;
-};
-
-struct RefineResult {
-  RefineStatus status = RefineStatus::kFailed;
-  bool converged = false;  // status == kExplained: stopped, and the verdict holds
-  std::string message;     // why not, when not
+// The fit's status: kConverged when the solver stopped and the verdict holds
+// (the median run's reduced chi-square at most the acceptable); kNotExplained
+// when the best point found leaves more; kNotConverged when the solver ran
+// out of iterations; kNotFitted when no start gave a usable solution (nothing
+// to write). Coefficients: the spec's free parameters, in its order; a
+// parameter the fitted runs do not determine is held (its value the pull of
+// the prior toward the start), with its prior-widened standard error.
+// initial_cost / final_cost: the whole runs' at the start and at the end.
+struct RefineResult : FitResult {
   // The verdict: the median over the fitted runs of each run's reduced
   // chi-square, the threshold it was held to, each run's channels (worst
   // first), and how many rescue starts were tried.
   double reduced_chi_square = 0, acceptable_reduced_chi_square = 0;
   std::vector<ChannelMisfit> misfits;
   int rescue_starts = 0;
-  Parameters params;  // the refined set (start values elsewhere), with uncertainty
-  std::vector<RefinedParameter> parameters;
-  Eigen::MatrixXd correlation;  // of the free parameters, in the order above
-  std::vector<std::pair<std::string, std::string>> poorly_separable;
-  std::vector<double> poorly_separable_correlation;
+  Parameters params;                   // the refined set (start values elsewhere), with uncertainty
+  double correlation_flag = 0.95;      // |correlation| reported as poorly separable
   std::vector<ExperimentCost> fitted;  // before: at the start, after: after the last stage
-  double cost_before = 0, cost_after = 0;
-  int stages = 0, starts = 0, best_start = 0, iterations = 0;  // starts, best: last stage
+  int stages = 0, starts = 0, best_start = 0;  // starts, best: last stage
   double wall_time_s = 0;
   // Estimated starts (FitSpec::fit_initial_pressures), last stage: how many,
   // and the largest move of an initial pressure from its logged value, in
@@ -160,10 +142,6 @@ struct RefineResult {
   std::string BriefReport() const;
 };
 
-// Refines the free parameters of `spec` from `start` on `unit`'s logs. Throws
-// InputError for a spec that does not fit the unit (unknown experiments, a
-// parameter the set lacks, a start outside the bounds). Solver trouble is
-// reported in the result (converged false), never thrown.
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options);
 

@@ -5,10 +5,10 @@
 // step that reached the plateau), with covariance.
 #pragma once
 
-#include <map>
 #include <string>
 #include <vector>
 
+#include "pneumaid/ident/fit_result.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/parameters.h"
 
@@ -63,20 +63,18 @@ struct KvpBand {
   std::vector<double> u_V, kvp, lower, upper;
 };
 
-struct BranchFit {
-  bool fitted = false;  // false: too few plateaus, the prior is kept
-  std::string note;     // why not, or warnings
-  KvpBranchParams params;
-  std::map<std::string, double> standard_errors;  // "a" .. "q_max" (and "u_sat" when fitted)
-  bool u_sat_fitted = false;  // ValveFitOptions::fit_u_sat and the staircase shows saturation
-  std::map<std::string, double> correlations;  // "a,b" -> r, |r| > 0.95 flagged
+// One branch's fit: coefficients "valve.<branch>.q_max", "a", "b", "c", "d"
+// and "u_sat" (held at the prior's unless ValveFitOptions::fit_u_sat and the
+// staircase shows saturation). Not fitted: too few plateaus, the prior is kept.
+struct BranchFit : FitResult {
+  KvpBranchParams params;     // the coefficients as a branch (the prior's when not fitted)
+  bool u_sat_fitted = false;  // u_sat was read off the staircase
   int plateaus = 0;
-  double initial_cost = 0, final_cost = 0;
-  int iterations = 0;
   KvpBand band;
 };
 
-struct ValveFitResult {
+// Both branches as one result (their coefficients in turn), and each alone.
+struct ValveFitResult : FitResult {
   BranchFit increasing, decreasing;
   std::vector<ValvePlateau> plateaus;
   std::string BriefReport() const;
