@@ -29,6 +29,8 @@ ActuatorLayout ActuatorLayout::For(const Parameters& params) {
                            (params.pipeline.model == PipelineModel::kNone && has("pipeline_lag"));
   layout.flow_lag = params.pipeline.model == PipelineModel::kFlowLag;
   layout.flow_sensor_lag = has("flow_sensor_lag");
+  layout.heat_transfer = has("heat_transfer");
+  layout.supply_droop = has("supply_droop");
   int next = 4;
   const auto take = [&next](bool present, int count) {
     if (!present) return -1;
@@ -40,6 +42,7 @@ ActuatorLayout ActuatorLayout::For(const Parameters& params) {
   layout.conductance_begin = take(layout.conductance_lag, kValvePairCount);
   layout.flow_begin = take(layout.flow_lag, 2);
   layout.sensor_begin = take(layout.flow_sensor_lag, 2);
+  layout.temperature_begin = take(layout.heat_transfer, 2);
   layout.size = next;
   return layout;
 }

@@ -93,6 +93,9 @@ void InitialLagStates(const ActuatorLayout& layout, const ActuatorCoefficients<T
                       const CommandSignal& command, const ValveCommandTracker& fresh,
                       const ValveCommand& initial_command, const InitialState& initial, double t0,
                       T* y) {
+  // heat_transfer: the gas starts at the wall's temperature.
+  for (int i = 0; i < 2 && layout.heat_transfer; ++i)
+    y[layout.temperature_begin + i] = c.supply_temperature_K;
   if (std::isnan(initial.lag_history_from_s)) {
     SetLagStatesToEquilibrium(layout, c, initial_command, y);
   } else {

@@ -41,15 +41,15 @@ TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
   std::ifstream paper(kPaper);
   std::string text((std::istreambuf_iterator<char>(paper)), {});
   const std::string typo = Write("typo.yaml", text + "colour: blue\n");
-  text.replace(text.find("effects: {}"), 11, "effects: {heat_transfer: {h: 0.1}}");
-  const std::string unsimulated = Write("heat.yaml", text);
+  text.replace(text.find("effects: {}"), 11, "effects: {heat_transfer: {h: -0.1}}");
+  const std::string negative = Write("heat.yaml", text);
   const std::string ragged = Write("ragged.csv", "t [s],u [V]\n0,0\n0.1\n");
   struct Case {
     std::string arguments;
     std::string message;
   } cases[] = {
       {"--params " + typo + " --step 1@0 --until 1", "typo.yaml:34:1: unknown key 'colour'"},
-      {"--params " + unsimulated + " --step 1@0 --until 1", "heat_transfer"},
+      {"--params " + negative + " --step 1@0 --until 1", "heat_transfer"},
       {"--params " + kPaper + " --step 1at0 --until 1", "expected U@T0"},
       {"--params " + kPaper + " --step 2@0 --until 1", "expected U@T0"},
       {"--params " + kPaper + " --step 1@0", "--until"},

@@ -18,6 +18,8 @@ Parameters WithAllSimulatedEffects() {
   p.effects["cross_leakage"] = {{"c", 1e-11}};
   p.effects["friction_pressure"] = {{"kp", 1e-6}};
   p.effects["valve_deadzone"] = {{"u0", 0.05}};
+  p.effects["heat_transfer"] = {{"h", 0.3}};
+  p.effects["supply_droop"] = {{"r", 3e7}};
   return p;
 }
 
@@ -31,7 +33,9 @@ TEST(ActuatorTest, LayoutCountsTheStatesOfEachOption) {
   EXPECT_EQ(ActuatorLayout::For(p).size, 4);
   p.effects["pipeline_lag"] = {{"delta", 8.0}};
   EXPECT_EQ(ActuatorLayout::For(p).size, 6);
-  EXPECT_EQ(ActuatorLayout::For(WithAllSimulatedEffects()).size, 10);
+  // valve_lag 2, the tube 2, flow_sensor_lag 2, heat_transfer 2 (two gas
+  // temperatures); supply_droop has no state.
+  EXPECT_EQ(ActuatorLayout::For(WithAllSimulatedEffects()).size, 12);
 }
 
 // The Jacobian CVODE uses (forward-mode autodiff) against central differences
@@ -55,6 +59,7 @@ TEST(ActuatorTest, AutodiffJacobianMatchesCentralDifferences) {
       y[kVelocity] = (unit(rng) - 0.5) * 0.4;  // well outside the stick band
       SetChamberPressures(cd, 1.2e5 + 3e5 * unit(rng), 1.2e5 + 3e5 * unit(rng), y.data());
       for (int i = 4; i < layout.size; ++i) y[i] = 3e-5 * unit(rng);
+      for (int i = 0; i < 2; ++i) y[layout.temperature_begin + i] = 250.0 + 80.0 * unit(rng);
       if (layout.valve_lag) {
         for (int i = 0; i < kValvePairCount; ++i) {
           y[layout.opening_begin + i] = 0.2 + 0.6 * unit(rng);
@@ -64,7 +69,7 @@ TEST(ActuatorTest, AutodiffJacobianMatchesCentralDifferences) {
       for (int i = 0; i < layout.size; ++i) yj[i] = Jet(y[i], i);
       ActuatorDerivatives<Jet>(layout, cj, command, MotionMode::kRegularized, yj, fj, nullptr);
       for (int col = 0; col < layout.size; ++col) {
-        const double h = 1e-7 * std::max(std::fabs(y[col]), 1e-6);
+        const double h = 1e-6 * std::max(std::fabs(y[col]), 1e-6);
         auto plus = y, minus = y;
         plus[col] += h;
         minus[col] -= h;
@@ -110,7 +115,10 @@ TEST(ActuatorTest, EquilibriumLagStatesHaveZeroRates) {
   SetLagStatesToEquilibrium(layout, c, command, y.data());
   ActuatorDerivatives<double>(layout, c, command, MotionMode::kRegularized, y.data(), f.data(),
                               nullptr);
-  for (int i = 4; i < layout.size; ++i) EXPECT_NEAR(f[i], 0.0, 1e-12) << "state " << i;
+  for (int i = 4; i < layout.size; ++i) {
+    if (i >= layout.temperature_begin && i < layout.temperature_begin + 2) continue;  // not a lag
+    EXPECT_NEAR(f[i], 0.0, 1e-12) << "state " << i;
+  }
 }
 
 }  // namespace

@@ -76,6 +76,11 @@ Case PaperStep() {
   return c;
 }
 
+SimulationSummary SimulateCase(const Case& c, Trajectory* run, TrajectorySensitivities* sens) {
+  return SimulateWithSensitivities(c.params, c.command, c.initial, c.times, c.options,
+                                   c.sensitivity, run, sens);
+}
+
 Trajectory Run(const Case& c, const Parameters& params, SimulationSummary* summary = nullptr) {
   Trajectory out;
   const SimulationSummary s = Simulate(params, c.command, c.initial, c.times, c.options, &out);
@@ -159,8 +164,7 @@ TEST(SensitivitiesTest, MatchCentralDifferencesOnASmoothSlide) {
   const Case c = SmoothSlide();
   Trajectory run;
   TrajectorySensitivities sens;
-  const SimulationSummary summary = SimulateWithSensitivities(
-      c.params, c.command, c.initial, c.times, c.options, c.sensitivity, &run, &sens);
+  const SimulationSummary summary = SimulateCase(c, &run, &sens);
   ASSERT_TRUE(summary.ok()) << summary.message;
   EXPECT_EQ(summary.events, 0) << "the slide must neither stick nor reach a stop";
   EXPECT_GT(run.x_m.back(), run.x_m.front() + 1e-3);
@@ -168,6 +172,31 @@ TEST(SensitivitiesTest, MatchCentralDifferencesOnASmoothSlide) {
   const double worst = WorstError(c, run, sens, 1e-4, 1e-4, &mismatch);
   std::cout << "worst |J - J_fd| / (|J_fd| + 1): " << worst << "\n";
   EXPECT_LE(worst, 1e-4);
+}
+
+// The effects whose parameters reach the model through a gas-temperature
+// state (heat_transfer) and through the implicit supply pressure
+// (supply_droop, derivatives -f_theta / f'), with the base parameters they
+// interact with, on the smooth slide.
+TEST(SensitivitiesTest, MatchCentralDifferencesWithHeatTransferAndSupplyDroop) {
+  Case c = SmoothSlide();
+  c.params.effects["heat_transfer"] = {{"h", 0.05}};
+  c.params.effects["supply_droop"] = {{"r", 3e8}};
+  c.sensitivity = FreeParameters(c.params, {"effects.heat_transfer.h", "effects.supply_droop.r",
+                                            "pipeline.delta", "friction.positive.b"});
+  c.sensitivity.error_control = true;
+  Trajectory run;
+  TrajectorySensitivities sens;
+  const SimulationSummary summary = SimulateCase(c, &run, &sens);
+  ASSERT_TRUE(summary.ok()) << summary.message;
+  EXPECT_EQ(summary.events, 0);
+  long mismatch = 0;
+  const double worst = WorstError(c, run, sens, 1e-4, 1e-4, &mismatch);
+  std::cout << "worst |J - J_fd| / (|J_fd| + 1): " << worst << "\n";
+  EXPECT_LE(worst, 1e-4);
+  // Both effects move the outputs (their columns are not zero).
+  EXPECT_GT(sens.p1.col(0).cwiseAbs().maxCoeff() * 0.05, 10.0);  // Pa per 100 % of h
+  EXPECT_GT(sens.p1.col(1).cwiseAbs().maxCoeff() * 3e8, 10.0);   // Pa per 100 % of r
 }
 
 // Stick/slip and the end stop: the jump conditions make the sensitivities the
@@ -181,8 +210,7 @@ TEST(SensitivitiesTest, MatchCentralDifferencesAcrossStickSlipAndTheEndStop) {
   const Case c = PaperStep();
   Trajectory run;
   TrajectorySensitivities sens;
-  const SimulationSummary summary = SimulateWithSensitivities(
-      c.params, c.command, c.initial, c.times, c.options, c.sensitivity, &run, &sens);
+  const SimulationSummary summary = SimulateCase(c, &run, &sens);
   ASSERT_TRUE(summary.ok()) << summary.message;
   EXPECT_GT(summary.events, 10);
   EXPECT_DOUBLE_EQ(run.x_m.back(), 0.5 * c.params.cylinder.stroke_m);
@@ -217,8 +245,7 @@ TEST(SensitivitiesTest, InitialPressureColumnsMatchCentralDifferences) {
   ASSERT_EQ(c.sensitivity.Columns(), 3);
   Trajectory run;
   TrajectorySensitivities sens;
-  const SimulationSummary summary = SimulateWithSensitivities(
-      c.params, c.command, c.initial, c.times, c.options, c.sensitivity, &run, &sens);
+  const SimulationSummary summary = SimulateCase(c, &run, &sens);
   ASSERT_TRUE(summary.ok()) << summary.message;
   double worst = 0;
   for (const ChannelCheck& channel : kChannels) {

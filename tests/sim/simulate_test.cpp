@@ -232,7 +232,7 @@ TEST(SimulateTest, InvalidInputsAreReportedNotThrown) {
   EXPECT_EQ(Simulate(p, CommandSignal{}, InitialState{}, {0.0, 1.0}, {}, &run).status,
             SimulationStatus::kInvalidInput);
   p = Parameters{};
-  p.effects["heat_transfer"] = {{"h", 0.1}};
+  p.effects["heat_transfer"] = {{"h", -0.1}};  // below its physical range
   const auto refused = Simulate(p, CommandSignal{}, InitialState{}, {0.0, 1.0}, {}, &run);
   EXPECT_EQ(refused.status, SimulationStatus::kInvalidInput);
   EXPECT_NE(refused.message.find("heat_transfer"), std::string::npos);

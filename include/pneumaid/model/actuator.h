@@ -53,14 +53,19 @@ struct ModelRegularization {
 // ChamberPressures() / SetChamberPressures() to read and write pressures.
 enum StateIndex : int { kPosition = 0, kVelocity = 1, kChamber1 = 2, kChamber2 = 3 };
 
-inline constexpr int kMaxStates = 12;  // 4 + 2 per optional group
+// 4 + 2 per optional group: valve_lag, the pipeline's lag (conductance_lag or
+// flow_lag, never both), flow_sensor_lag, heat_transfer.
+inline constexpr int kMaxStates = 12;
 
 struct ActuatorLayout {
   bool valve_lag = false;        // 2 states: lagged opening of each valve pair [V]
   bool conductance_lag = false;  // 2 states: lagged K_vp of each valve pair [kg/s]
   bool flow_lag = false;         // 2 states: lagged mass flows into chambers [kg/s]
   bool flow_sensor_lag = false;  // 2 states: flows as the meters read them [kg/s]
+  bool heat_transfer = false;    // 2 states: each chamber's gas temperature [K]
+  bool supply_droop = false;     // no state: the supply pressure is solved per call
   int opening_begin = -1, conductance_begin = -1, flow_begin = -1, sensor_begin = -1;
+  int temperature_begin = -1;
   int size = 4;
 
   // Which states the parameter set needs. Requires a validated parameter set.
@@ -72,6 +77,7 @@ struct ActuatorCoefficients {
   OrificeCoefficients<T> orifice;
   KvpCoefficients<T> increasing, decreasing;
   T heat_capacity_ratio, k_RT;
+  T gas_constant_J_per_kgK, supply_temperature_K;  // the wall's and the inflow's temperature
   T supply_pressure_Pa, atmospheric_pressure_Pa;
   ChamberGeometry<T> chamber_1, chamber_2;
   T area_1_m2, area_2_m2, load_mass_kg, weight_N;
@@ -83,7 +89,28 @@ struct ActuatorCoefficients {
   // Effects; zero when the effect is absent (and then unused).
   T valve_lag_tau_s, flow_sensor_tau_s, leak_conductance_kg_per_s_Pa;
   T friction_pressure_per_Pa, deadzone_V;
+  T heat_transfer_W_per_K, supply_resistance_Pa_s_per_kg;
 };
+
+// The coefficients seen as a flat array of scalars: every member of
+// ActuatorCoefficients<T> is a T (checked where this is used), so parameter
+// sensitivities can be carried coefficient by coefficient.
+template <typename T>
+inline constexpr int kCoefficientCount = static_cast<int>(sizeof(ActuatorCoefficients<T>) /
+                                                          sizeof(T));
+
+template <typename T>
+T* CoefficientArray(ActuatorCoefficients<T>* c) {
+  static_assert(std::is_standard_layout_v<ActuatorCoefficients<T>>);
+  static_assert(sizeof(ActuatorCoefficients<T>) % sizeof(T) == 0);
+  static_assert(kCoefficientCount<T> == kCoefficientCount<double>);
+  return reinterpret_cast<T*>(c);
+}
+
+template <typename T>
+const T* CoefficientArray(const ActuatorCoefficients<T>& c) {
+  return CoefficientArray(const_cast<ActuatorCoefficients<T>*>(&c));
+}
 
 // The valve inputs held constant over one input segment.
 struct ValveCommand {
@@ -116,6 +143,8 @@ ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
   c.decreasing = MakeKvpCoefficients<T>(p.valve.decreasing);
   c.heat_capacity_ratio = T(k);
   c.k_RT = T(k * p.gas.gas_constant_J_per_kgK * p.gas.temperature_K);
+  c.gas_constant_J_per_kgK = T(p.gas.gas_constant_J_per_kgK);
+  c.supply_temperature_K = T(p.gas.temperature_K);
   c.supply_pressure_Pa = T(p.supply.supply_pressure_Pa);
   c.atmospheric_pressure_Pa = T(p.supply.atmospheric_pressure_Pa);
   const auto& cyl = p.cylinder;
@@ -154,6 +183,8 @@ ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
   c.leak_conductance_kg_per_s_Pa = T(internal::EffectValue(p, "cross_leakage", "c"));
   c.friction_pressure_per_Pa = T(internal::EffectValue(p, "friction_pressure", "kp"));
   c.deadzone_V = T(internal::EffectValue(p, "valve_deadzone", "u0"));
+  c.heat_transfer_W_per_K = T(internal::EffectValue(p, "heat_transfer", "h"));
+  c.supply_resistance_Pa_s_per_kg = T(internal::EffectValue(p, "supply_droop", "r"));
   return c;
 }
 
@@ -191,18 +222,79 @@ std::array<T, kValveCount> ValveGains(const ActuatorCoefficients<T>& c, const Va
   return gain;
 }
 
-// Mass flows [kg/s] into chambers 1 and 2 through the valves, for given gains.
+// Mass flow [kg/s] through one valve for its gain; a closed valve passes
+// nothing (skipping it saves the costly powers).
+template <typename T>
+T ValveFlow(const ActuatorCoefficients<T>& c, const std::array<T, kValveCount>& gain, int valve,
+            const T& from_Pa, const T& to_Pa) {
+  return gain[valve] > T(0.0) ? OrificeMassFlow(gain[valve], from_Pa, to_Pa, c.orifice) : T(0.0);
+}
+
+// supply_droop: the supply pressure p_s at the valves solves
+// p_s = p_supply - r q_s(p_s), q_s the mass flow drawn through both supply
+// valves. f(p_s) = p_s - p_supply + r q_s(p_s) rises with p_s (q_s does), so
+// the root is unique; it is bracketed in [p_atm / 2, p_supply] and found in
+// doubles by safeguarded Newton steps, then one Newton step in T from that
+// root gives the implicit derivatives -f_theta / f' exactly (f = 0 there).
+template <typename T>
+T DroopedSupplyPressure(const ActuatorCoefficients<T>& c, const std::array<T, kValveCount>& gain,
+                        const T& p1, const T& p2) {
+  const auto residual = [&](const auto& supply, const auto& g, const auto& q1, const auto& q2,
+                            const auto& cc) {
+    using S = std::decay_t<decltype(supply)>;
+    const S drawn = ValveFlow(cc, g, kSupplyToChamber1, supply, q1) +
+                    ValveFlow(cc, g, kSupplyToChamber2, supply, q2);
+    return supply - cc.supply_pressure_Pa + cc.supply_resistance_Pa_s_per_kg * drawn;
+  };
+  const auto value = [](const T& x) {
+    if constexpr (std::is_same_v<T, double>) {
+      return x;
+    } else {
+      return x.a;
+    }
+  };
+  ActuatorCoefficients<double> plain;
+  const T* from = CoefficientArray(c);
+  double* to = CoefficientArray(&plain);
+  for (int k = 0; k < kCoefficientCount<double>; ++k) to[k] = value(from[k]);
+  std::array<double, kValveCount> g;
+  for (int i = 0; i < kValveCount; ++i) g[i] = value(gain[i]);
+  const double q1 = value(p1), q2 = value(p2);
+  const auto f = [&](double supply) { return residual(supply, g, q1, q2, plain); };
+  double low = 0.5 * plain.atmospheric_pressure_Pa, high = plain.supply_pressure_Pa;
+  double root = high, slope = 1.0;
+  const double tolerance = 1e-13 * plain.supply_pressure_Pa;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    const double step = 1e-7 * plain.supply_pressure_Pa;
+    const double at = f(root);
+    slope = (f(root + step) - f(root - step)) / (2 * step);
+    const double newton = root - at / slope;
+    if (std::fabs(newton - root) <= tolerance) break;  // converged (before any bracket test)
+    (at > 0 ? high : low) = root;
+    root = newton > low && newton < high ? newton : 0.5 * (low + high);  // else bisect
+  }
+  return T(root) - residual(T(root), gain, p1, p2, c) / slope;
+}
+
+// Mass flows [kg/s] into chambers 1 and 2 through the valves, for given gains
+// and the supply pressure at the valves.
 template <typename T>
 std::array<T, 2> ValveFlows(const ActuatorCoefficients<T>& c,
-                            const std::array<T, kValveCount>& gain, const T& p1, const T& p2) {
-  const auto flow = [&](int valve, const T& from, const T& to) {
-    // A closed valve passes nothing; skipping it saves the costly powers.
-    return gain[valve] > T(0.0) ? OrificeMassFlow(gain[valve], from, to, c.orifice) : T(0.0);
-  };
-  return {flow(kSupplyToChamber1, c.supply_pressure_Pa, p1) -
-              flow(kChamber1ToExhaust, p1, c.atmospheric_pressure_Pa),
-          flow(kSupplyToChamber2, c.supply_pressure_Pa, p2) -
-              flow(kChamber2ToExhaust, p2, c.atmospheric_pressure_Pa)};
+                            const std::array<T, kValveCount>& gain, const T& p1, const T& p2,
+                            const T& supply_Pa) {
+  return {ValveFlow(c, gain, kSupplyToChamber1, supply_Pa, p1) -
+              ValveFlow(c, gain, kChamber1ToExhaust, p1, c.atmospheric_pressure_Pa),
+          ValveFlow(c, gain, kSupplyToChamber2, supply_Pa, p2) -
+              ValveFlow(c, gain, kChamber2ToExhaust, p2, c.atmospheric_pressure_Pa)};
+}
+
+// Mass flows [kg/s] into chambers 1 and 2 through the valves, with the
+// supply pressure p_supply or, with supply_droop, the drooped one.
+template <typename T>
+std::array<T, 2> ChamberInflows(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                                const std::array<T, kValveCount>& gain, const T& p1, const T& p2) {
+  if (!layout.supply_droop) return ValveFlows(c, gain, p1, p2, c.supply_pressure_Pa);
+  return ValveFlows(c, gain, p1, p2, DroopedSupplyPressure(c, gain, p1, p2));
 }
 
 // flow_lag guard: fades an outflow out between floor and 2 x floor.
@@ -298,11 +390,50 @@ T RodAcceleration(const ActuatorCoefficients<T>& c, MotionMode motion, const T* 
   return (DrivingForce(c, y, p) - FrictionScale(c, p) * friction) / c.load_mass_kg;
 }
 
-// The right-hand side dy/dt = f(y, command, motion). `outputs` may be null.
+// heat_transfer: the chambers' states and gas temperatures T_i. Energy of
+// each chamber's gas: inflow enters at the supply temperature, outflow (and
+// the seal leak) leaves at its source chamber's temperature, the wall (at the
+// supply temperature) exchanges h (T_wall - T_i):
+//   dp/dt = (k R (T_in q_in - T_i q_out) + (k - 1) h (T_wall - T_i) - k p dV/dt) / V
+//   dT/dt = T_i (dp/dt / p + dV/dt / V - R T_i q_net / (p V))   (m = p V / (R T_i))
+// in the chamber state sigma of chamber.h: d sigma/dt = dp/dt / p + k dV/dt / V.
 template <typename T>
-void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
-                         const ValveCommand& command, MotionMode motion, const T* y, T* dydt,
-                         ActuatorOutputs<T>* outputs) {
+void ChamberRatesWithHeat(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                          MotionMode motion, const T* y, const ChamberPressures<T>& chambers,
+                          const std::array<T, 2>& flow, const T& leak, T* dydt) {
+  const T* temperature = y + layout.temperature_begin;
+  const T leak_temperature = leak > T(0.0) ? temperature[0] : temperature[1];
+  const T k = c.heat_capacity_ratio, R = c.gas_constant_J_per_kgK;
+  const T speed = motion == MotionMode::kStuck ? T(0.0) : y[kVelocity];
+  const T pressure[2] = {chambers.p1_Pa, chambers.p2_Pa};
+  const T volume[2] = {chambers.volume_1_m3, chambers.volume_2_m3};
+  const T volume_rate[2] = {c.chamber_1.direction * c.area_1_m2 * speed,
+                            c.chamber_2.direction * c.area_2_m2 * speed};
+  const T leak_in[2] = {-leak, leak};
+  for (int i = 0; i < 2; ++i) {
+    const T& gas = temperature[i];
+    const T carried = (flow[i] > T(0.0) ? c.supply_temperature_K : gas) * flow[i] +
+                      leak_temperature * leak_in[i];  // [K kg/s]
+    const T heat = c.heat_transfer_W_per_K * (c.supply_temperature_K - gas);
+    const T pV = pressure[i] * volume[i];
+    const T sigma_rate = (k * R * carried + (k - T(1.0)) * heat) / pV;
+    dydt[kChamber1 + i] = sigma_rate;
+    dydt[layout.temperature_begin + i] =
+        gas * (sigma_rate - (k - T(1.0)) * volume_rate[i] / volume[i] -
+               R * gas * (flow[i] + leak_in[i]) / pV);
+  }
+}
+
+namespace internal {
+
+// ActuatorDerivatives for a model with (kThermal) or without heat_transfer
+// and supply_droop: two instantiations, so that the base model's right-hand
+// side has no trace of the effects it lacks (a run-time branch around them
+// cost 0.5 % of the paper step's instructions in spilled registers).
+template <typename T, bool kThermal>
+void Derivatives(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                 const ValveCommand& command, MotionMode motion, const T* y, T* dydt,
+                 ActuatorOutputs<T>* outputs) {
   const ChamberPressures<T> chambers = DecodeChambers(c, y);
   const T& p1 = chambers.p1_Pa;
   const T& p2 = chambers.p2_Pa;
@@ -324,7 +455,8 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
       gain[valves.lead] = gain[valves.partner] = lagged;
     }
   }
-  auto flow = ValveFlows(c, gain, p1, p2);
+  auto flow = kThermal ? ChamberInflows(layout, c, gain, p1, p2)
+                       : ValveFlows(c, gain, p1, p2, c.supply_pressure_Pa);
   if (layout.flow_lag) {
     const T* lagged = y + layout.flow_begin;
     dydt[layout.flow_begin] = c.pipeline_delta_per_s * (flow[0] - lagged[0]);
@@ -345,11 +477,29 @@ void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficient
   }
 
   const T leak = c.leak_conductance_kg_per_s_Pa * (p1 - p2);  // cross_leakage, 1 -> 2
-  dydt[kChamber1] = ChamberStateRate(p1, chambers.volume_1_m3, flow[0] - leak, c.k_RT);
-  dydt[kChamber2] = ChamberStateRate(p2, chambers.volume_2_m3, flow[1] + leak, c.k_RT);
+  if (kThermal && layout.heat_transfer) {
+    ChamberRatesWithHeat(layout, c, motion, y, chambers, flow, leak, dydt);
+  } else {
+    dydt[kChamber1] = ChamberStateRate(p1, chambers.volume_1_m3, flow[0] - leak, c.k_RT);
+    dydt[kChamber2] = ChamberStateRate(p2, chambers.volume_2_m3, flow[1] + leak, c.k_RT);
+  }
 
   dydt[kPosition] = motion == MotionMode::kStuck ? T(0.0) : y[kVelocity];
   dydt[kVelocity] = RodAcceleration(c, motion, y, chambers);
+}
+
+}  // namespace internal
+
+// The right-hand side dy/dt = f(y, command, motion). `outputs` may be null.
+template <typename T>
+void ActuatorDerivatives(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
+                         const ValveCommand& command, MotionMode motion, const T* y, T* dydt,
+                         ActuatorOutputs<T>* outputs) {
+  if (layout.heat_transfer || layout.supply_droop) {
+    internal::Derivatives<T, true>(layout, c, command, motion, y, dydt, outputs);
+  } else {
+    internal::Derivatives<T, false>(layout, c, command, motion, y, dydt, outputs);
+  }
 }
 
 // Sets the lag states of `y` to their steady values for `command` at the
@@ -366,26 +516,11 @@ void SetLagStatesToEquilibrium(const ActuatorLayout& layout, const ActuatorCoeff
     y[layout.conductance_begin + pair] = gain[kValvePairs[pair].lead];
   }
   const ChamberPressures<T> chambers = DecodeChambers(c, y);
-  const auto flow = ValveFlows(c, gain, chambers.p1_Pa, chambers.p2_Pa);
+  const auto flow = ChamberInflows(layout, c, gain, chambers.p1_Pa, chambers.p2_Pa);
   for (int i = 0; i < 2; ++i) {
     if (layout.flow_lag) y[layout.flow_begin + i] = flow[i];
     if (layout.flow_sensor_lag) y[layout.sensor_begin + i] = flow[i];
   }
-}
-
-// The coefficients seen as a flat array of scalars: every member of
-// ActuatorCoefficients<T> is a T (checked where this is used), so parameter
-// sensitivities can be carried coefficient by coefficient.
-template <typename T>
-inline constexpr int kCoefficientCount = static_cast<int>(sizeof(ActuatorCoefficients<T>) /
-                                                          sizeof(T));
-
-template <typename T>
-T* CoefficientArray(ActuatorCoefficients<T>* c) {
-  static_assert(std::is_standard_layout_v<ActuatorCoefficients<T>>);
-  static_assert(sizeof(ActuatorCoefficients<T>) % sizeof(T) == 0);
-  static_assert(kCoefficientCount<T> == kCoefficientCount<double>);
-  return reinterpret_cast<T*>(c);
 }
 
 }  // namespace pneumaid

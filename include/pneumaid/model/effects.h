@@ -16,7 +16,10 @@ struct EffectParameterInfo {
   const char* name;  // "tau"
   const char* unit;  // "s"
   const char* doc;
-  ValueRange range;
+  ValueRange range;  // what the model accepts (validation)
+  // What a real rig plausibly has: the bounds a fit of the effect (diagnose)
+  // searches, and a typical size it starts from. docs/effects.md gives why.
+  double plausible_min, plausible_max, typical;
 };
 
 struct EffectInfo {
