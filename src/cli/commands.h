@@ -39,5 +39,6 @@ CommandRunner AddCheckCommand(CLI::App* app);
 CommandRunner AddValidateCommand(CLI::App* app);
 CommandRunner AddIdentifyCommand(CLI::App* app);
 CommandRunner AddRefineCommand(CLI::App* app);
+CommandRunner AddDiagnoseCommand(CLI::App* app);
 
 }  // namespace pneumaid::cli

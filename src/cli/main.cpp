@@ -25,6 +25,10 @@ int main(int argc, char** argv) {
   CLI::App* validate =
       app.add_subcommand("validate", "simulate a unit's validation runs and compare");
   runners[validate] = AddValidateCommand(validate);
+  CLI::App* diagnose = app.add_subcommand(
+      "diagnose",
+      "find where a parameter set and a unit's logs disagree and which effect explains it");
+  runners[diagnose] = AddDiagnoseCommand(diagnose);
   CLI::App* synth =
       app.add_subcommand("synth", "write a synthetic unit directory from a truth set");
   runners[synth] = AddSynthCommand(synth);

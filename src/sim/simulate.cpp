@@ -341,11 +341,12 @@ class Integrator {
     atol[kChamber1] = sigma_tolerance;
     atol[kChamber2] = sigma_tolerance;
     for (int i = 4; i < size_; ++i) atol[i] = options.mass_flow_tolerance_kg_per_s;
-    if (layout.valve_lag) {
-      for (int i = 0; i < kValveCount; ++i) {
-        atol[layout.opening_begin + i] = options.opening_tolerance_V;
-      }
-    }
+    // One state per valve pair (kValveCount here wrote past the state vector
+    // when the valve lag was its last group, and over the tube's otherwise).
+    for (int i = 0; i < kValvePairCount && layout.valve_lag; ++i)
+      atol[layout.opening_begin + i] = options.opening_tolerance_V;
+    for (int i = 0; i < 2 && layout.heat_transfer; ++i)
+      atol[layout.temperature_begin + i] = options.temperature_tolerance_K;
   }
 
   ModelData* data_;
@@ -536,7 +537,8 @@ bool SimulationOptions::IsValid(std::string* error) const {
     return fail("relative_tolerance must be in (0, 1)");
   }
   if (!(position_tolerance_m > 0 && velocity_tolerance_m_per_s > 0 && pressure_tolerance_Pa > 0 &&
-        mass_flow_tolerance_kg_per_s > 0 && opening_tolerance_V > 0)) {
+        mass_flow_tolerance_kg_per_s > 0 && opening_tolerance_V > 0 &&
+        temperature_tolerance_K > 0)) {
     return fail("absolute tolerances must be > 0");
   }
   if (max_steps <= 0) return fail("max_steps must be > 0");

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/json.h"
 
 namespace pneumaid {
 namespace {
@@ -161,38 +162,19 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
 }  // namespace pneumaid
 
 namespace pneumaid {
-namespace {
-
-std::string JsonNumber(double value) {
-  if (!std::isfinite(value)) return "null";
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.9g", value);
-  return buffer;
-}
-
-std::string JsonString(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      char escaped[8];
-      std::snprintf(escaped, sizeof(escaped), "\\u%04x", c);
-      out += escaped;
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
-
-}  // namespace
 
 std::string ReportToJson(const ValidationReport& report) {
   std::ostringstream out;
   out << "{\"format\": \"pneumaid-report/1\", \"unit\": " << JsonString(report.unit)
       << ", \"thresholds_met\": " << (report.thresholds_met() ? "true" : "false")
       << ", \"numerical_failure\": " << (report.numerical_failure() ? "true" : "false")
-      << ",\n \"experiments\": [";
+      << ",\n \"experiments\": " << ExperimentsToJson(report) << "}\n";
+  return out.str();
+}
+
+std::string ExperimentsToJson(const ValidationReport& report) {
+  std::ostringstream out;
+  out << "[";
   for (std::size_t i = 0; i < report.experiments.size(); ++i) {
     const auto& e = report.experiments[i];
     out << (i ? ",\n  " : "\n  ") << "{\"id\": " << JsonString(e.id);
@@ -209,7 +191,7 @@ std::string ReportToJson(const ValidationReport& report) {
       out << (m ? ", " : "") << JsonString(e.missed[m]);
     out << "]}";
   }
-  out << "]}\n";
+  out << "]";
   return out.str();
 }
 

@@ -225,6 +225,20 @@ TEST(SimulateTest, ARunRestartedFromItsOwnStateWithTheLagHistoryContinuesTheSame
   EXPECT_GT(settled_x, 10 * worst_x);
 }
 
+// The valve lag as the last group of states (no tube lag after it): its
+// tolerances once filled four entries for its two states, past the state
+// vector (the sanitizer pass catches a regression) and, with a tube lag
+// after it, over the tube's.
+TEST(SimulateTest, AValveLagWithoutATubeLagRunsAStroke) {
+  Parameters p;
+  p.pipeline.model = PipelineModel::kNone;
+  p.effects["valve_lag"] = {{"tau", 0.03}};
+  const Trajectory run = testing::MustSimulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p),
+                                               UniformTimes(0, 1.0, 1000));
+  ASSERT_EQ(run.size(), 1001u);
+  EXPECT_GT(run.x_m.back(), 0.0);  // the rod went out
+}
+
 TEST(SimulateTest, InvalidInputsAreReportedNotThrown) {
   Parameters p;
   Trajectory run;

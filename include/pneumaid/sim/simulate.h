@@ -36,6 +36,8 @@ struct SimulationOptions {
   double mass_flow_tolerance_kg_per_s = 1e-11;
   // Lagged valve openings (valve_lag effect).
   double opening_tolerance_V = 1e-7;
+  // Chamber gas temperatures (heat_transfer effect).
+  double temperature_tolerance_K = 1e-4;
   // Work bound: the run fails (never hangs) past this many solver steps.
   long max_steps = 5'000'000;
   // Hysteresis mode: change of a valve opening that re-latches its branch.

@@ -61,6 +61,9 @@ namespace pneumaid {
 // undefined), SI units.
 std::string ReportToJson(const ValidationReport& report);
 
+// The "experiments" array of that report, for reports that embed it (diagnose).
+std::string ExperimentsToJson(const ValidationReport& report);
+
 // Measured and simulated channels side by side, SI, one row per sample:
 // t,u,x,x_sim,p1,p1_sim,... (what a plot or a spreadsheet needs).
 std::string ComparisonToCsv(const ExperimentValidation& experiment);

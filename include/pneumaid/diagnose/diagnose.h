@@ -1,0 +1,118 @@
+// The discrepancy workflow: where a parameter set and a unit's logs disagree,
+// which effect of the catalog (effects.h) explains it, that effect fitted and
+// added, and the gap before and after. docs/diagnose.md gives the method and
+// the decision rule.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "pneumaid/ident/fit_result.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/parameters.h"
+#include "pneumaid/validate/validate.h"
+
+namespace pneumaid {
+
+struct DiagnoseOptions {
+  // At most this many effects are added, one per iteration.
+  int max_effects = 2;
+  // Candidate effects; empty: every catalog effect the parameter set lacks.
+  std::vector<std::string> effects;
+  // Candidate fits run in parallel on this many threads (each fit one thread).
+  int threads = 1;
+  // Solver iterations per candidate fit.
+  int max_iterations = 25;
+  // The decision rule (docs/diagnose.md). A candidate is named only when,
+  // on the runs held back from its fit, its cost (each channel's mean square
+  // in units of the base model's own mean square, summed) is below the
+  // refitted base model's by at least this fraction, pooled over the folds ...
+  double min_held_back_gain = 0.10;
+  // ... and at least this share of the held-back (fold, channel) mean
+  // squares are smaller than the refitted base model's ...
+  double min_improved_share = 0.5;
+  // ... and at least this share of its gain lies in the channels it can
+  // change (a measurement effect: its instrument's) ...
+  double min_signature_share = 0.5;
+  // ... and the gap it closes is above the noise: some channel's mean square
+  // with the base model exceeds the declared noise variance by this factor.
+  double min_gap_over_noise = 4.0;
+  // Windows for "where": their length, and how many of the worst are listed.
+  double window_s = 0.2;
+  int worst_windows = 5;
+  // The first stretch after a command change counts as its own regime.
+  double after_change_s = 0.1;
+  // Optional progress lines (no printing from the library).
+  std::function<void(const std::string&)> log;
+
+  bool IsValid(std::string* error) const;
+};
+
+// One channel's residual in one regime, pooled over the runs.
+struct RegimeResidual {
+  std::string channel, regime;
+  long samples = 0;
+  double rmse = 0;                // SI
+  double mean = 0;                // SI, measured - simulated (the sign of the gap)
+  double reduced_chi_square = 0;  // mean square / declared noise variance (0: no noise declared)
+};
+
+struct ResidualWindow {
+  std::string run, channel;
+  double from_s = 0, to_s = 0;
+  double rmse = 0;  // SI
+  double mean = 0;  // SI
+};
+
+// "Where": every run simulated from its logged start and compared.
+struct DiscrepancyMap {
+  std::vector<RegimeResidual> regimes;  // every channel x regime with samples
+  std::vector<ResidualWindow> worst;    // worst windows, in units of the channel's noise
+  std::map<std::string, double> rmse;   // per channel, pooled over the runs (SI)
+  std::map<std::string, double> noise;  // declared noise sigma per channel (SI, 0: none)
+};
+
+// One candidate effect, fitted and scored.
+struct CandidateScore {
+  std::string effect;
+  FitResult fit;              // on all runs: the effect's parameters and the base's it frees
+  double train_gain = 0;      // relative cost drop on the fitted runs, pooled over folds
+  double held_back_gain = 0;  // relative cost drop on the held-back runs, pooled
+  double worst_fold_gain = 0;
+  std::vector<double> fold_gains;  // held-back gain of each fold (its runs held back)
+  double improved_share = 0;       // of the held-back (fold, channel) mean squares, improved
+  std::map<std::string, double> channel_gain;  // held-back, per channel (relative)
+  double signature_share = 0;                  // of the held-back gain, in its channels
+  double bic_change = 0;                       // for reference only (docs/diagnose.md)
+  std::vector<std::string> moved_base;         // base coefficients moved beyond tolerance
+  bool significant = false;
+  std::string verdict;  // why (not) named
+};
+
+struct DiagnoseIteration {
+  DiscrepancyMap where;                                   // with the model before this iteration
+  std::vector<CandidateScore> ranking;                    // best first
+  std::string named;                                      // the effect added, or empty
+  std::map<std::string, double> rmse_before, rmse_after;  // per channel, pooled (SI)
+};
+
+struct DiagnoseResult {
+  std::vector<DiagnoseIteration> iterations;
+  std::vector<std::string> named_effects;  // in the order added
+  Parameters params;                       // the augmented set (the input when none named)
+  ValidationReport before, after;          // every simulable run, first and last model
+  std::string conclusion;                  // one paragraph: what was found
+  std::string MarkdownReport() const;
+  std::string BriefReport() const;
+};
+
+// Throws InputError for bad options, an unknown or present effect, or a unit
+// without simulable runs.
+DiagnoseResult Diagnose(const Parameters& params, const Unit& unit, const DiagnoseOptions& options);
+
+// The pneumaid-report/1 JSON of a diagnose run (docs/params-format.md).
+std::string DiagnoseToJson(const DiagnoseResult& result);
+
+}  // namespace pneumaid

@@ -1,0 +1,53 @@
+// Diagnose (diagnose.h), the candidates: which base coefficients a candidate
+// fit frees, each effect's residual signature, and the cross-validated fits
+// and scores of the decision rule (docs/diagnose.md).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "discrepancy_map.h"
+#include "pneumaid/diagnose/diagnose.h"
+#include "pneumaid/ident/fit_spec.h"
+
+namespace pneumaid::diagnose_internal {
+
+// The channels an effect can change: a measurement effect's instrument alone,
+// a plant effect's every channel.
+std::vector<std::string> SignatureChannels(const std::string& effect);
+
+// The catalog effects a parameter set lacks and could gain (pipeline_lag
+// only when the base has no tube lag).
+std::vector<std::string> AbsentEffects(const Parameters& params);
+
+// The base coefficients the reference fit and every candidate fit free: the
+// valve's gain, the tube's lag (when the base has one) and the sliding
+// friction of each direction, in a box around their values.
+std::vector<FreeParameter> BaseParameters(const Parameters& params);
+
+// `params` with `effect` added at its typical size.
+Parameters WithEffect(const Parameters& params, const std::string& effect);
+
+// The free parameters of a candidate: the effect's, within its plausible
+// range, then the base's.
+std::vector<FreeParameter> CandidateParameters(const Parameters& with_effect,
+                                               const std::string& effect);
+
+// A fit spec of `parameters` on runs `fit`, every channel weighted by
+// `scale` (its variance with the base model, at least the noise's).
+FitSpec MakeSpec(const std::vector<FreeParameter>& parameters, const std::vector<std::string>& fit,
+                 const std::map<std::string, double>& scale, const DiagnoseOptions& options,
+                 const std::string& name);
+
+// Folds of the runs for held-back scoring: with k runs, k folds of one run
+// each (at most 3 folds, runs dealt round-robin); each fold's runs are held
+// back from its fits.
+std::vector<std::vector<std::string>> Folds(const std::vector<std::string>& runs);
+
+// Base coefficients that `candidate` moved beyond the identification
+// tolerances from `reference` (by path, with both values).
+std::vector<std::string> MovedBase(const Parameters& reference, const Parameters& candidate,
+                                   const std::vector<FreeParameter>& base);
+
+}  // namespace pneumaid::diagnose_internal

@@ -1,0 +1,372 @@
+#include "pneumaid/diagnose/diagnose.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "candidates.h"
+#include "discrepancy_map.h"
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/model/effects.h"
+
+// Diagnose's orchestration: per iteration "where", the candidates' folds
+// (candidates.h), the decision rule, the named effect fitted on every run,
+// the gap before and after. Parts: discrepancy_map (residuals per channel and
+// regime), candidates (signatures, free parameters, specs, folds),
+// diagnose_report (Markdown, text, JSON).
+namespace pneumaid {
+namespace {
+
+using namespace diagnose_internal;
+
+// One fit's outcome: its parameters (the input set with the fitted values)
+// and the channel sums of every run under them.
+struct Outcome {
+  bool ok = false;
+  std::string why;
+  FitResult fit;
+  Parameters params;
+  std::map<std::string, ChannelSums> runs;
+};
+
+ValidationReport Evaluate(const Parameters& params, const Unit& unit,
+                          const std::vector<std::string>& runs) {
+  ValidationOptions v;
+  v.experiment_ids = runs;
+  return ValidateUnit(params, unit, v);
+}
+
+Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                       const std::vector<std::string>& runs) {
+  Outcome out;
+  RefineOptions options;
+  options.rescue_starts = 0;
+  options.start_prior = false;
+  const RefineResult r = Refine(start, unit, spec, options);
+  out.fit = r;
+  if (!r.has_values()) {
+    out.why = r.reason;
+    return out;
+  }
+  out.params = start;
+  r.ApplyTo(&out.params);  // the input's constants, the fitted values
+  for (const FittedCoefficient& c : r.coefficients) {
+    if (c.determined()) out.params.uncertainty[c.path] = c.standard_error;
+  }
+  out.runs = RunSums(Evaluate(out.params, unit, runs));
+  out.ok = true;
+  return out;
+}
+
+// Runs `tasks` on up to `threads` threads.
+void RunAll(std::vector<std::function<void()>>* tasks, int threads) {
+  std::atomic<std::size_t> next{0};
+  const auto worker = [&] {
+    for (std::size_t i = next++; i < tasks->size(); i = next++) (*tasks)[i]();
+  };
+  std::vector<std::thread> pool;
+  const int extra = std::min<int>(threads, static_cast<int>(tasks->size())) - 1;
+  for (int t = 0; t < extra; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+}
+
+std::vector<std::string> Complement(const std::vector<std::string>& all,
+                                    const std::vector<std::string>& some) {
+  std::vector<std::string> out;
+  for (const std::string& r : all) {
+    if (std::find(some.begin(), some.end(), r) == some.end()) out.push_back(r);
+  }
+  return out;
+}
+
+// The decision rule's numbers for one candidate from its folds
+// (docs/diagnose.md).
+void Score(const std::vector<Outcome>& reference, const std::vector<Outcome>& candidate,
+           const std::vector<std::vector<std::string>>& folds, const std::vector<std::string>& runs,
+           const std::map<std::string, double>& scale, const DiagnoseOptions& options,
+           bool gap_above_noise, CandidateScore* score) {
+  double ref_test = 0, cand_test = 0, ref_train = 0, cand_train = 0;
+  long train_samples = 0;
+  score->worst_fold_gain = INFINITY;
+  ChannelSums ref_pooled, cand_pooled;
+  int pairs = 0, improved = 0;
+  for (std::size_t f = 0; f < folds.size(); ++f) {
+    const std::vector<std::string> train = Complement(runs, folds[f]);
+    const ChannelSums rt = Pool(reference[f].runs, folds[f]);
+    const ChannelSums ct = Pool(candidate[f].runs, folds[f]);
+    const double a = NormalisedCost(rt, scale), b = NormalisedCost(ct, scale);
+    for (const auto& [channel, variance] : scale) {
+      const double before = rt.MeanSquare(channel), after = ct.MeanSquare(channel);
+      if (std::isnan(before) || std::isnan(after)) continue;
+      ++pairs;
+      improved += after < before;
+    }
+    ref_test += a;
+    cand_test += b;
+    score->fold_gains.push_back(1.0 - b / a);
+    if (options.log) {
+      char line[300];
+      std::snprintf(line, sizeof(line), "    %s fold %zu: held-back cost %.4g (base refit %.4g)",
+                    score->effect.c_str(), f + 1, b, a);
+      options.log(line);
+      for (const auto& [channel, variance] : scale) {
+        std::snprintf(line, sizeof(line), "      %s: %.4g vs %.4g", channel.c_str(),
+                      ct.MeanSquare(channel) / variance, rt.MeanSquare(channel) / variance);
+        options.log(line);
+      }
+    }
+    score->worst_fold_gain = std::min(score->worst_fold_gain, 1.0 - b / a);
+    ref_pooled.Add(rt);
+    cand_pooled.Add(ct);
+    const ChannelSums rr = Pool(reference[f].runs, train);
+    ref_train += NormalisedCost(rr, scale);
+    cand_train += NormalisedCost(Pool(candidate[f].runs, train), scale);
+    for (const auto& [channel, n] : rr.samples) train_samples += n;
+  }
+  score->held_back_gain = 1.0 - cand_test / ref_test;
+  score->improved_share = pairs > 0 ? static_cast<double>(improved) / pairs : 0.0;
+  score->train_gain = 1.0 - cand_train / ref_train;
+  double gained = 0, in_signature = 0;
+  const std::vector<std::string> signature = SignatureChannels(score->effect);
+  for (const auto& [channel, variance] : scale) {
+    const double before = ref_pooled.MeanSquare(channel), after = cand_pooled.MeanSquare(channel);
+    if (std::isnan(before) || std::isnan(after)) continue;
+    score->channel_gain[channel] = 1.0 - after / before;
+    const double gain = std::max(0.0, (before - after) / variance);
+    gained += gain;
+    if (std::count(signature.begin(), signature.end(), channel)) in_signature += gain;
+  }
+  score->signature_share = gained > 0 ? in_signature / gained : 0.0;
+  const double k = static_cast<double>(FindEffect(score->effect)->parameters.size());
+  const double n = static_cast<double>(train_samples);
+  score->bic_change = n * std::log(cand_train / ref_train) + k * std::log(n);
+  char why[300];
+  if (!gap_above_noise) {
+    score->verdict = "no channel's gap is above its declared noise";
+  } else if (!(score->held_back_gain >= options.min_held_back_gain)) {
+    std::snprintf(why, sizeof(why), "held-back gain %.1f %% < %.0f %%", 100 * score->held_back_gain,
+                  100 * options.min_held_back_gain);
+    score->verdict = why;
+  } else if (!(score->improved_share >= options.min_improved_share)) {
+    std::snprintf(why, sizeof(why),
+                  "its held-back gain is not consistent: %.0f %% of the held-back runs' channels "
+                  "improve",
+                  100 * score->improved_share);
+    score->verdict = why;
+  } else if (!(score->signature_share >= options.min_signature_share)) {
+    std::snprintf(why, sizeof(why), "its gain is not in the channels it can change (%.0f %%)",
+                  100 * score->signature_share);
+    score->verdict = why;
+  } else {
+    score->significant = true;
+    std::snprintf(why, sizeof(why),
+                  "held-back gain %.1f %% (%.0f %% of the held-back channels improve), %.0f %% of "
+                  "it in the channels it can change",
+                  100 * score->held_back_gain, 100 * score->improved_share,
+                  100 * score->signature_share);
+    score->verdict = why;
+  }
+}
+
+void CheckInputs(const Parameters& params, const Unit& unit, const DiagnoseOptions& options,
+                 std::vector<std::string>* runs) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("diagnose options", 0, 0, error);
+  const std::vector<std::string> absent = AbsentEffects(params);
+  for (const std::string& effect : options.effects) {
+    if (FindEffect(effect) == nullptr) {
+      throw InputError("diagnose options", 0, 0,
+                       "effects: unknown effect '" + effect + "' (docs/effects.md lists them)");
+    }
+    if (std::find(absent.begin(), absent.end(), effect) == absent.end()) {
+      throw InputError("diagnose options", 0, 0,
+                       "effects: '" + effect + "' is already in the parameter set" +
+                           (effect == "pipeline_lag" ? " (or its base model has a tube lag)" : ""));
+    }
+  }
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind == ExperimentKind::kValidation || e.entry.kind == ExperimentKind::kStroke)
+      runs->push_back(e.entry.id);
+  }
+  if (runs->empty()) {
+    throw InputError(unit.manifest_path(), 0, 0,
+                     "no stroke or validation run to simulate: diagnose compares simulated and "
+                     "measured runs");
+  }
+}
+
+}  // namespace
+
+bool DiagnoseOptions::IsValid(std::string* error) const {
+  const auto fail = [error](const char* what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (max_effects < 0) return fail("max_effects must be >= 0");
+  if (threads < 1) return fail("threads must be >= 1");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(min_held_back_gain > 0 && min_held_back_gain < 1))
+    return fail("min_held_back_gain must be in (0, 1)");
+  if (!(min_improved_share >= 0 && min_improved_share <= 1))
+    return fail("min_improved_share must be in [0, 1]");
+  if (!(min_signature_share >= 0 && min_signature_share <= 1))
+    return fail("min_signature_share must be in [0, 1]");
+  if (!(min_gap_over_noise >= 1)) return fail("min_gap_over_noise must be >= 1");
+  if (!(window_s > 0) || worst_windows < 0 || !(after_change_s >= 0))
+    return fail("window_s must be > 0, worst_windows >= 0, after_change_s >= 0");
+  return true;
+}
+
+DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
+                        const DiagnoseOptions& options) {
+  std::vector<std::string> runs;
+  CheckInputs(params, unit, options, &runs);
+  const auto log = [&options](const std::string& line) {
+    if (options.log) options.log(line);
+  };
+  DiagnoseResult result;
+  result.params = params;
+  const double half_stroke_m = 0.5 * params.cylinder.stroke_m;
+  const std::vector<std::vector<std::string>> folds = Folds(runs);
+  std::vector<std::string> tried_effects = options.effects;
+  for (int iteration = 0; iteration <= options.max_effects; ++iteration) {
+    DiagnoseIteration it;
+    const ValidationReport base = Evaluate(result.params, unit, runs);
+    if (iteration == 0) result.before = base;
+    result.after = base;
+    it.where = MapDiscrepancy(base, unit, half_stroke_m, options);
+    it.rmse_before = it.where.rmse;
+    // Each channel weighted by its mean square with this model (at least the
+    // noise's): every channel counts the same, whatever its mismatch.
+    std::map<std::string, double> scale;
+    bool gap_above_noise = false;
+    const ChannelSums all = Pool(RunSums(base), runs);
+    for (const auto& [channel, n] : all.samples) {
+      const double ms = all.MeanSquare(channel), noise = it.where.noise[channel];
+      if (!(ms > 0) || !std::isfinite(ms)) continue;
+      scale[channel] = std::max(ms, noise * noise);
+      if (noise > 0 && ms > options.min_gap_over_noise * noise * noise) gap_above_noise = true;
+    }
+    std::vector<std::string> candidates;
+    for (const std::string& effect : AbsentEffects(result.params)) {
+      if (options.effects.empty() ||
+          std::count(options.effects.begin(), options.effects.end(), effect))
+        candidates.push_back(effect);
+    }
+    if (iteration == options.max_effects || candidates.empty() || folds.size() < 2 ||
+        scale.empty()) {
+      if (folds.size() < 2)
+        result.conclusion = "one simulable run: nothing can be held back, so no effect is named";
+      result.iterations.push_back(it);
+      break;
+    }
+    log("iteration " + std::to_string(iteration + 1) + ": " + std::to_string(candidates.size()) +
+        " candidates, " + std::to_string(folds.size()) + " folds");
+    // The refitted base model per fold, then every candidate per fold.
+    std::vector<Outcome> reference(folds.size());
+    std::vector<std::vector<Outcome>> fits(candidates.size(), std::vector<Outcome>(folds.size()));
+    std::vector<std::function<void()>> tasks;
+    for (std::size_t f = 0; f < folds.size(); ++f) {
+      tasks.push_back([&, f] {
+        const auto train = Complement(runs, folds[f]);
+        reference[f] = FitAndEvaluate(
+            result.params, unit,
+            MakeSpec(BaseParameters(result.params), train, scale, options, "base"), runs);
+      });
+    }
+    RunAll(&tasks, options.threads);
+    tasks.clear();
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      for (std::size_t f = 0; f < folds.size(); ++f) {
+        tasks.push_back([&, c, f] {
+          if (!reference[f].ok) return;
+          const Parameters start = WithEffect(reference[f].params, candidates[c]);
+          const auto train = Complement(runs, folds[f]);
+          fits[c][f] = FitAndEvaluate(start, unit,
+                                      MakeSpec(CandidateParameters(start, candidates[c]), train,
+                                               scale, options, candidates[c]),
+                                      runs);
+          log("  " + candidates[c] + ", fold " + std::to_string(f + 1) + ": " +
+              (fits[c][f].ok ? "fitted" : "failed: " + fits[c][f].why));
+        });
+      }
+    }
+    RunAll(&tasks, options.threads);
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      CandidateScore score;
+      score.effect = candidates[c];
+      const bool all_ok =
+          std::all_of(reference.begin(), reference.end(), [](const Outcome& o) { return o.ok; }) &&
+          std::all_of(fits[c].begin(), fits[c].end(), [](const Outcome& o) { return o.ok; });
+      if (!all_ok) {
+        score.verdict = "a fit failed";
+        for (const Outcome& o : fits[c]) {
+          if (!o.ok && !o.why.empty()) score.verdict += ": " + o.why;
+        }
+      } else {
+        Score(reference, fits[c], folds, runs, scale, options, gap_above_noise, &score);
+        score.fit = fits[c][0].fit;
+      }
+      it.ranking.push_back(score);
+    }
+    std::stable_sort(it.ranking.begin(), it.ranking.end(),
+                     [](const CandidateScore& a, const CandidateScore& b) {
+                       const double x = std::isnan(a.held_back_gain) ? -INFINITY : a.held_back_gain;
+                       const double y = std::isnan(b.held_back_gain) ? -INFINITY : b.held_back_gain;
+                       return x > y;
+                     });
+    CandidateScore& best = it.ranking.front();
+    if (!best.significant) {
+      result.iterations.push_back(it);
+      break;
+    }
+    // Named: the base refitted on every run alone, and with the effect.
+    const Outcome base_all =
+        FitAndEvaluate(result.params, unit,
+                       MakeSpec(BaseParameters(result.params), runs, scale, options, "base"), runs);
+    const Parameters start = WithEffect(base_all.ok ? base_all.params : result.params, best.effect);
+    const Outcome named = FitAndEvaluate(
+        start, unit,
+        MakeSpec(CandidateParameters(start, best.effect), runs, scale, options, best.effect), runs);
+    if (!named.ok) {
+      best.significant = false;
+      best.verdict += "; but its fit on every run failed: " + named.why;
+      result.iterations.push_back(it);
+      break;
+    }
+    best.fit = named.fit;
+    best.moved_base = MovedBase(base_all.ok ? base_all.params : result.params, named.params,
+                                BaseParameters(result.params));
+    it.named = best.effect;
+    result.params = named.params;
+    result.named_effects.push_back(best.effect);
+    const ValidationReport after = Evaluate(result.params, unit, runs);
+    it.rmse_after = MapDiscrepancy(after, unit, half_stroke_m, options).rmse;
+    result.after = after;
+    log("  named " + best.effect + " (" + best.verdict + ")");
+    result.iterations.push_back(it);
+  }
+  if (result.conclusion.empty()) {
+    result.conclusion =
+        result.named_effects.empty()
+            ? "No catalog effect explains the gap by the decision rule; the residuals per "
+              "regime and the worst windows show where it sits."
+            : "Named, in order: " +
+                  [&] {
+                    std::string list;
+                    for (const std::string& e : result.named_effects)
+                      list += (list.empty() ? "" : ", ") + e;
+                    return list;
+                  }() +
+                  ".";
+  }
+  return result;
+}
+
+}  // namespace pneumaid
