@@ -29,7 +29,7 @@ std::vector<std::string> AbsentEffects(const Parameters& params) {
   return absent;
 }
 
-std::vector<FreeParameter> BaseParameters(const Parameters& params) {
+std::vector<FreeParameter> BaseParameters(const Parameters& params, bool static_friction) {
   std::vector<FreeParameter> base;
   const auto around = [&params](const std::string& path, double low, double high,
                                 ParameterScale scale) {
@@ -43,7 +43,10 @@ std::vector<FreeParameter> BaseParameters(const Parameters& params) {
   } else if (params.effects.count("pipeline_lag")) {
     base.push_back(around("effects.pipeline_lag.delta", 0.25, 4.0, ParameterScale::kLog));
   }
-  for (const char* path : {"friction.positive.Fd", "friction.negative.Fd"}) {
+  std::vector<std::string> friction = {"friction.positive.Fd", "friction.negative.Fd"};
+  if (static_friction)
+    friction.insert(friction.end(), {"friction.positive.Fs", "friction.negative.Fs"});
+  for (const std::string& path : friction) {
     double value = 0;
     GetParameter(params, path, &value);
     base.push_back({path, 0.0, 3.0 * value + 2.0, ParameterScale::kLinear});
@@ -60,14 +63,14 @@ Parameters WithEffect(const Parameters& params, const std::string& effect) {
 }
 
 std::vector<FreeParameter> CandidateParameters(const Parameters& with_effect,
-                                               const std::string& effect) {
+                                               const std::string& effect, bool static_friction) {
   std::vector<FreeParameter> free;
   for (const EffectParameterInfo& p : FindEffect(effect)->parameters) {
     const bool log = p.plausible_min > 0;
     free.push_back({"effects." + effect + "." + p.name, p.plausible_min, p.plausible_max,
                     log ? ParameterScale::kLog : ParameterScale::kLinear});
   }
-  for (const FreeParameter& b : BaseParameters(with_effect)) {
+  for (const FreeParameter& b : BaseParameters(with_effect, static_friction)) {
     const bool taken = std::any_of(free.begin(), free.end(),
                                    [&b](const FreeParameter& f) { return f.path == b.path; });
     if (!taken) free.push_back(b);  // pipeline_lag's delta is the effect's own

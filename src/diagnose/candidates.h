@@ -23,8 +23,11 @@ std::vector<std::string> AbsentEffects(const Parameters& params);
 
 // The base coefficients the reference fit and every candidate fit free: the
 // valve's gain, the tube's lag (when the base has one) and the sliding
-// friction of each direction, in a box around their values.
-std::vector<FreeParameter> BaseParameters(const Parameters& params);
+// friction of each direction, in a box around their values; with
+// `static_friction` also each direction's Fs (the named effect's final fit:
+// freeing Fs in the decision lets it absorb a pressure-dependent friction,
+// measured: friction_pressure's held-back gain fell from 47 % to 8 %).
+std::vector<FreeParameter> BaseParameters(const Parameters& params, bool static_friction = false);
 
 // `params` with `effect` added at its typical size.
 Parameters WithEffect(const Parameters& params, const std::string& effect);
@@ -32,7 +35,8 @@ Parameters WithEffect(const Parameters& params, const std::string& effect);
 // The free parameters of a candidate: the effect's, within its plausible
 // range, then the base's.
 std::vector<FreeParameter> CandidateParameters(const Parameters& with_effect,
-                                               const std::string& effect);
+                                               const std::string& effect,
+                                               bool static_friction = false);
 
 // A fit spec of `parameters` on runs `fit`, every channel weighted by
 // `scale` (its variance with the base model, at least the noise's).

@@ -158,6 +158,7 @@ std::string DiagnoseToJson(const DiagnoseResult& result) {
       const CandidateScore& s = it.ranking[c];
       out << (c ? ", " : "") << "{\"effect\": " << JsonString(s.effect)
           << ", \"held_back_gain\": " << JsonNumber(s.held_back_gain)
+          << ", \"own_channel_gain\": " << JsonNumber(s.own_channel_gain)
           << ", \"worst_fold_gain\": " << JsonNumber(s.worst_fold_gain) << ", \"fold_gains\": [";
       for (std::size_t f = 0; f < s.fold_gains.size(); ++f)
         out << (f ? ", " : "") << JsonNumber(s.fold_gains[f]);

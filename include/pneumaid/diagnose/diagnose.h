@@ -32,7 +32,7 @@ struct DiagnoseOptions {
   double min_held_back_gain = 0.10;
   // ... and at least this share of the held-back (fold, channel) mean
   // squares are smaller than the refitted base model's ...
-  double min_improved_share = 0.5;
+  double min_improved_share = 0.6;
   // ... and at least this share of its gain lies in the channels it can
   // change (a measurement effect: its instrument's) ...
   double min_signature_share = 0.5;
@@ -79,7 +79,8 @@ struct CandidateScore {
   std::string effect;
   FitResult fit;              // on all runs: the effect's parameters and the base's it frees
   double train_gain = 0;      // relative cost drop on the fitted runs, pooled over folds
-  double held_back_gain = 0;  // relative cost drop on the held-back runs, pooled
+  double held_back_gain = 0;    // relative cost drop on the held-back runs, pooled (ranks)
+  double own_channel_gain = 0;  // the same in the channels it can change (the rule's)
   double worst_fold_gain = 0;
   std::vector<double> fold_gains;  // held-back gain of each fold (its runs held back)
   double improved_share = 0;       // of the held-back (fold, channel) mean squares, improved
