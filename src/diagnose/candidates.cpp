@@ -54,11 +54,13 @@ std::vector<FreeParameter> BaseParameters(const Parameters& params, bool static_
   return base;
 }
 
-Parameters WithEffect(const Parameters& params, const std::string& effect) {
+Parameters WithEffect(const Parameters& params, const std::string& effect, double fraction) {
   Parameters out = params;
   const EffectInfo* info = FindEffect(effect);
   auto& values = out.effects[effect];
-  for (const EffectParameterInfo& p : info->parameters) values[p.name] = p.typical;
+  for (const EffectParameterInfo& p : info->parameters) {
+    values[p.name] = std::max(fraction * p.typical, p.plausible_min);
+  }
   return out;
 }
 

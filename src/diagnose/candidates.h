@@ -29,8 +29,9 @@ std::vector<std::string> AbsentEffects(const Parameters& params);
 // measured: friction_pressure's held-back gain fell from 47 % to 8 %).
 std::vector<FreeParameter> BaseParameters(const Parameters& params, bool static_friction = false);
 
-// `params` with `effect` added at its typical size.
-Parameters WithEffect(const Parameters& params, const std::string& effect);
+// `params` with `effect` added at `fraction` of its typical size (at least
+// its plausible minimum).
+Parameters WithEffect(const Parameters& params, const std::string& effect, double fraction = 1.0);
 
 // The free parameters of a candidate: the effect's, within its plausible
 // range, then the base's.

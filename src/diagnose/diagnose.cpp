@@ -28,6 +28,7 @@ using namespace diagnose_internal;
 // and the channel sums of every run under them.
 struct Outcome {
   bool ok = false;
+  bool fell_back = false;  // scored as the reference (FitCandidate)
   std::string why;
   FitResult fit;
   Parameters params;
@@ -63,6 +64,45 @@ Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec&
   return out;
 }
 
+std::vector<std::string> Complement(const std::vector<std::string>& all,
+                                    const std::vector<std::string>& some) {
+  std::vector<std::string> out;
+  for (const std::string& r : all) {
+    if (std::find(some.begin(), some.end(), r) == some.end()) out.push_back(r);
+  }
+  return out;
+}
+
+// One candidate on one fold: fitted from its typical size and from a tenth of
+// it (near the base model, which it contains), the better on its training
+// runs kept. A fit that still ends above the refitted base model on its own
+// training runs did not find its way back to the base model it contains: it
+// is scored as that base model (no gain), never as a loss.
+Outcome FitCandidate(const Outcome& reference, const std::string& effect, const Unit& unit,
+                     const std::vector<std::string>& runs, const std::vector<std::string>& held,
+                     const std::map<std::string, double>& scale, const DiagnoseOptions& options) {
+  const std::vector<std::string> train = Complement(runs, held);
+  Outcome best;
+  double best_cost = INFINITY;
+  for (double fraction : {1.0, 0.1}) {
+    const Parameters start = WithEffect(reference.params, effect, fraction);
+    Outcome o = FitAndEvaluate(
+        start, unit, MakeSpec(CandidateParameters(start, effect), train, scale, options, effect),
+        runs);
+    if (!o.ok) {
+      if (!best.ok) best = std::move(o);
+      continue;
+    }
+    const double cost = NormalisedCost(Pool(o.runs, train), scale);
+    if (cost < best_cost) best_cost = cost, best = std::move(o);
+  }
+  if (best.ok && best_cost > NormalisedCost(Pool(reference.runs, train), scale)) {
+    best.runs = reference.runs;
+    best.fell_back = true;
+  }
+  return best;
+}
+
 // Runs `tasks` on up to `threads` threads.
 void RunAll(std::vector<std::function<void()>>* tasks, int threads) {
   std::atomic<std::size_t> next{0};
@@ -74,15 +114,6 @@ void RunAll(std::vector<std::function<void()>>* tasks, int threads) {
   for (int t = 0; t < extra; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
-}
-
-std::vector<std::string> Complement(const std::vector<std::string>& all,
-                                    const std::vector<std::string>& some) {
-  std::vector<std::string> out;
-  for (const std::string& r : all) {
-    if (std::find(some.begin(), some.end(), r) == some.end()) out.push_back(r);
-  }
-  return out;
 }
 
 // The decision rule's numbers for one candidate from its folds
@@ -298,14 +329,11 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
       for (std::size_t f = 0; f < folds.size(); ++f) {
         tasks.push_back([&, c, f] {
           if (!reference[f].ok) return;
-          const Parameters start = WithEffect(reference[f].params, candidates[c]);
-          const auto train = Complement(runs, folds[f]);
-          fits[c][f] = FitAndEvaluate(start, unit,
-                                      MakeSpec(CandidateParameters(start, candidates[c]), train,
-                                               scale, options, candidates[c]),
-                                      runs);
+          fits[c][f] =
+              FitCandidate(reference[f], candidates[c], unit, runs, folds[f], scale, options);
           log("  " + candidates[c] + ", fold " + std::to_string(f + 1) + ": " +
-              (fits[c][f].ok ? "fitted" : "failed: " + fits[c][f].why));
+              (fits[c][f].ok ? "fitted" : "failed: " + fits[c][f].why) +
+              (fits[c][f].fell_back ? " (no better than the base model on its own runs)" : ""));
         });
       }
     }
@@ -324,6 +352,13 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
       } else {
         Score(reference, fits[c], folds, runs, scale, options, gap_above_noise, &score);
         score.fit = fits[c][0].fit;
+        const auto fell_back = std::count_if(fits[c].begin(), fits[c].end(),
+                                             [](const Outcome& o) { return o.fell_back; });
+        if (fell_back > 0) {
+          score.verdict += "; on " + std::to_string(fell_back) +
+                           " fold(s) its fit ended above the base model on its own runs and "
+                           "counts as the base model";
+        }
       }
       it.ranking.push_back(score);
     }
