@@ -4,7 +4,8 @@
 # friction per direction), validate the identified set on the unit's
 # validation runs, refine it through the simulator on the stroke logs
 # (configs/fit-default.yaml, about 10-20 s) and validate the refined set.
-# Results go to out/.
+# Then the discrepancy workflow on datasets/hidden/valve-lag (a unit whose
+# rig has a valve lag the paper's model lacks). Results go to out/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,6 +25,9 @@ $pneumaid refine datasets/paper-rig --params out/paper-rig.yaml --out out/paper-
 echo "== pneumaid validate --params out/paper-rig-refined.yaml datasets/paper-rig"
 $pneumaid validate --params out/paper-rig-refined.yaml datasets/paper-rig \
   --json out/paper-rig-refined-validation.json
+echo "== pneumaid diagnose --params configs/paper.yaml datasets/hidden/valve-lag --out out/diagnose-valve-lag"
+$pneumaid diagnose --params configs/paper.yaml datasets/hidden/valve-lag --out out/diagnose-valve-lag \
+  --threads "$(nproc)"
 echo "results: out/paper-rig.yaml (component fits), out/paper-rig-refined.yaml (refined),"
 echo "  out/paper-rig-validation.json, out/paper-rig-refined-validation.json,"
-echo "  out/paper-rig-validation/*.csv"
+echo "  out/paper-rig-validation/*.csv, out/diagnose-valve-lag/ (report.md, params.yaml, CSVs)"

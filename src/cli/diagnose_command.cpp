@@ -47,8 +47,11 @@ int RunDiagnose(const DiagnoseArgs& args) {
   try {
     result = Diagnose(params, unit, options);
   } catch (const InputError& error) {
-    if (error.file() != "diagnose options") throw;
-    throw InputError("--effects", 0, 0, error.message());
+    // The library names its option ("effects: ..."); the user typed a flag.
+    const std::string object = "effects: ";
+    if (error.file() != "diagnose options" || error.message().compare(0, object.size(), object))
+      throw;
+    throw InputError("--effects", 0, 0, error.message().substr(object.size()));
   }
   std::cout << result.BriefReport();
   // Everything is computed before anything is written; each file is atomic.
