@@ -1,4 +1,5 @@
 #include <cstdlib>
+#include <ctime>
 
 #include "commands.h"
 #include "pneumaid/io/input_error.h"
@@ -21,6 +22,15 @@ std::map<std::string, double> ParseAssignments(
     out[key] = value;
   }
   return out;
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);  // thread-safe, unlike std::gmtime
+  char text[32];
+  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
 }
 
 }  // namespace pneumaid::cli

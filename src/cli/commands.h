@@ -33,6 +33,9 @@ std::map<std::string, double> ParseAssignments(
 // says whether it converged (refine, identify --refine).
 int ReportAndSave(const RefineResult& result, const std::string& out_path);
 
+// The current time, UTC, ISO 8601 (for provenance).
+std::string UtcNow();
+
 CommandRunner AddSimulateCommand(CLI::App* app);
 CommandRunner AddSynthCommand(CLI::App* app);
 CommandRunner AddCheckCommand(CLI::App* app);
@@ -40,5 +43,8 @@ CommandRunner AddValidateCommand(CLI::App* app);
 CommandRunner AddIdentifyCommand(CLI::App* app);
 CommandRunner AddRefineCommand(CLI::App* app);
 CommandRunner AddDiagnoseCommand(CLI::App* app);
+CommandRunner AddBatchCommand(CLI::App* app);
+CommandRunner AddMergeCommand(CLI::App* app);
+CommandRunner AddExportCommand(CLI::App* app);
 
 }  // namespace pneumaid::cli

@@ -24,13 +24,6 @@ struct IdentifyArgs {
   int threads = 1;
 };
 
-std::string UtcNow() {
-  const std::time_t now = std::time(nullptr);
-  char text[32];
-  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
-  return text;
-}
-
 std::set<Component> ParseComponents(const std::string& list) {
   std::set<Component> out;
   std::stringstream items(list);

@@ -12,26 +12,31 @@ int main(int argc, char** argv) {
   CLI::App app{"pneumaid: identify pneumatic actuators from rig logs"};
   app.set_version_flag("--version", std::string(PNEUMAID_VERSION));
   app.require_subcommand(1);
+  // One row per subcommand: its name, what it does, what adds its options.
+  const struct {
+    const char* name;
+    const char* help;
+    CommandRunner (*add)(CLI::App*);
+  } kCommands[] = {
+      {"simulate", "simulate a parameter set for a command", AddSimulateCommand},
+      {"check", "validate unit directories without fitting", AddCheckCommand},
+      {"identify", "fit a parameter set to a unit's logs", AddIdentifyCommand},
+      {"refine", "refit chosen parameters through the simulator on several experiments",
+       AddRefineCommand},
+      {"validate", "simulate a unit's validation runs and compare", AddValidateCommand},
+      {"diagnose",
+       "find where a parameter set and a unit's logs disagree and which effect explains it",
+       AddDiagnoseCommand},
+      {"batch", "identify every unit of a fleet directory", AddBatchCommand},
+      {"merge", "combine batch results into the fleet summary", AddMergeCommand},
+      {"export", "write a parameter set for controller teams", AddExportCommand},
+      {"synth", "write a synthetic unit directory from a truth set", AddSynthCommand},
+  };
   std::map<CLI::App*, CommandRunner> runners;
-  CLI::App* simulate = app.add_subcommand("simulate", "simulate a parameter set for a command");
-  runners[simulate] = AddSimulateCommand(simulate);
-  CLI::App* check = app.add_subcommand("check", "validate unit directories without fitting");
-  runners[check] = AddCheckCommand(check);
-  CLI::App* identify = app.add_subcommand("identify", "fit a parameter set to a unit's logs");
-  runners[identify] = AddIdentifyCommand(identify);
-  CLI::App* refine = app.add_subcommand(
-      "refine", "refit chosen parameters through the simulator on several experiments");
-  runners[refine] = AddRefineCommand(refine);
-  CLI::App* validate =
-      app.add_subcommand("validate", "simulate a unit's validation runs and compare");
-  runners[validate] = AddValidateCommand(validate);
-  CLI::App* diagnose = app.add_subcommand(
-      "diagnose",
-      "find where a parameter set and a unit's logs disagree and which effect explains it");
-  runners[diagnose] = AddDiagnoseCommand(diagnose);
-  CLI::App* synth =
-      app.add_subcommand("synth", "write a synthetic unit directory from a truth set");
-  runners[synth] = AddSynthCommand(synth);
+  for (const auto& command : kCommands) {
+    CLI::App* sub = app.add_subcommand(command.name, command.help);
+    runners[sub] = command.add(sub);
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -3,17 +3,31 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include "pneumaid/io/input_error.h"
 
 namespace pneumaid {
 
+std::string UniqueTemporaryName(const std::string& target) {
+  // The process id alone collided when two threads wrote one target; 64
+  // random bits per call (no shared state) make a collision negligible.
+  std::random_device random;
+  const std::uint64_t bits = (static_cast<std::uint64_t>(random()) << 32) ^ random();
+  char suffix[40];
+  std::snprintf(suffix, sizeof(suffix), ".tmp.%ld.%016llx", static_cast<long>(::getpid()),
+                static_cast<unsigned long long>(bits));
+  return target + suffix;
+}
+
 void WriteFileAtomically(const std::string& path, const std::string& contents) {
-  const std::string temporary = path + ".tmp." + std::to_string(::getpid());
+  const std::string temporary = UniqueTemporaryName(path);
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     if (!out) {
@@ -30,6 +44,34 @@ void WriteFileAtomically(const std::string& path, const std::string& contents) {
     const int error = errno;
     std::remove(temporary.c_str());
     throw InputError(path, 0, 0, std::string("cannot rename into place: ") + std::strerror(error));
+  }
+}
+
+void ReplaceDirectoryAtomically(const std::string& directory,
+                                const std::map<std::string, std::string>& files) {
+  namespace fs = std::filesystem;
+  const fs::path target(directory);
+  const fs::path temporary = UniqueTemporaryName(directory);
+  std::error_code error;
+  if (!fs::create_directories(temporary, error) && error) {
+    throw InputError(directory, 0, 0, "cannot create a directory beside it: " + error.message());
+  }
+  try {
+    for (const auto& [name, contents] : files)
+      WriteFileAtomically((temporary / name).string(), contents);
+    fs::path old;
+    if (fs::exists(target)) {
+      old = UniqueTemporaryName(directory + ".old");
+      fs::rename(target, old);
+    }
+    fs::rename(temporary, target);
+    if (!old.empty()) fs::remove_all(old, error);
+  } catch (const fs::filesystem_error& failure) {
+    fs::remove_all(temporary, error);
+    throw InputError(directory, 0, 0, std::string("cannot move into place: ") + failure.what());
+  } catch (...) {
+    fs::remove_all(temporary, error);
+    throw;
   }
 }
 

@@ -1,5 +1,6 @@
 #include "pneumaid/io/json.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 
@@ -8,8 +9,11 @@ namespace pneumaid {
 std::string JsonNumber(double value) {
   if (!std::isfinite(value)) return "null";
   char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.9g", value);  // snprintf: "C" locale unless changed
-  return buffer;
+  // to_chars: never the locale's decimal comma (snprintf would take a host
+  // program's setlocale); 9 significant digits as before.
+  const auto result =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 9);
+  return std::string(buffer, result.ptr);
 }
 
 std::string JsonString(const std::string& text) {

@@ -104,24 +104,7 @@ void WriteDirectoryAtomically(const std::string& directory,
   if (fs::exists(target) && !(fs::is_directory(target) && fs::is_empty(target))) {
     throw InputError(directory, 0, 0, "output directory exists and is not empty; not overwriting");
   }
-  const fs::path temporary = target.string() + ".tmp." + std::to_string(::getpid());
-  std::error_code error;
-  fs::remove_all(temporary, error);
-  if (!fs::create_directories(temporary, error) && error) {
-    throw InputError(directory, 0, 0, "cannot create output directory: " + error.message());
-  }
-  try {
-    for (const auto& [name, contents] : files)
-      WriteFileAtomically((temporary / name).string(), contents);
-    if (fs::exists(target)) fs::remove(target);  // empty, checked above
-    fs::rename(temporary, target);
-  } catch (const fs::filesystem_error& failure) {
-    fs::remove_all(temporary, error);
-    throw InputError(directory, 0, 0, std::string("cannot move into place: ") + failure.what());
-  } catch (...) {
-    fs::remove_all(temporary, error);
-    throw;
-  }
+  ReplaceDirectoryAtomically(directory, files);  // `target` is absent or empty
 }
 
 }  // namespace pneumaid

@@ -513,6 +513,8 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
       t = t_out;
     }
     if (integrator.steps() > options.max_steps) return fail("step budget exhausted");
+    if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed))
+      return fail("stopped (the caller's time limit)");
     if (integrator.events() > options.max_events) return fail("stick/slip event budget exhausted");
     if (sensitivity != nullptr) {
       const N_Vector* s = integrator.Sensitivities();

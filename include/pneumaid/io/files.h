@@ -3,13 +3,26 @@
 // half-written file and a failed run leaves the old file (or none) in place.
 #pragma once
 
+#include <map>
 #include <string>
 
 namespace pneumaid {
 
+// A name beside `target` for writing it first: the process id and 64 random
+// bits, so that threads and processes writing one target never share it.
+std::string UniqueTemporaryName(const std::string& target);
+
 // Writes `contents` to `path` atomically. Throws InputError when the target
 // directory cannot be written.
 void WriteFileAtomically(const std::string& path, const std::string& contents);
+
+// Writes `files` (name -> contents) as the directory `directory`, replacing
+// any directory of that name: written under a unique temporary name, then
+// renamed into place (an old one renamed away first, then removed), so a
+// reader or a killed run sees the old directory, the new one, or none,
+// never a part of one. Throws InputError when it cannot.
+void ReplaceDirectoryAtomically(const std::string& directory,
+                                const std::map<std::string, std::string>& files);
 
 // The whole contents of `path`; throws InputError "cannot open <what>" when it
 // cannot be read.

@@ -6,7 +6,8 @@
 
 namespace pneumaid {
 
-// %.9g; "null" for NaN and infinities.
+// 9 significant digits (%.9g-like, never a locale's decimal comma); "null"
+// for NaN and infinities.
 std::string JsonNumber(double value);
 
 // A quoted, escaped JSON string.

@@ -2,6 +2,7 @@
 // dense, exact Jacobian from automatic differentiation of the model).
 #pragma once
 
+#include <atomic>
 #include <limits>
 #include <string>
 #include <vector>
@@ -40,6 +41,9 @@ struct SimulationOptions {
   double temperature_tolerance_K = 1e-4;
   // Work bound: the run fails (never hangs) past this many solver steps.
   long max_steps = 5'000'000;
+  // Cooperative stop (a batch unit's time limit): when set and true, the run
+  // fails at its next output sample with "stopped". Not owned.
+  const std::atomic<bool>* stop = nullptr;
   // Hysteresis mode: change of a valve opening that re-latches its branch.
   double hysteresis_threshold_V = 0.01;
   // A command change at a knot larger than this (or a branch switch) restarts

@@ -1,0 +1,346 @@
+#include "pneumaid/batch/batch.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/io/files.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/json.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/io/sha256.h"
+#include "pneumaid/validate/validate.h"
+
+// The batch: units in worker threads, each unit's result written as one
+// directory rename, a monitor that raises a unit's stop flag at its time
+// limit, the shard's failure and summary files at the end.
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// What a unit's result depends on besides its own files: the tool, the
+// prior, the steps asked for and the refinement spec.
+std::string OptionsFingerprint(const BatchOptions& o) {
+  std::ostringstream text;
+  text << "tool " << o.identify.tool_version << "\nprior " << Sha256Hex(ParamsToYaml(o.prior))
+       << "\ncomponents";
+  for (Component c : o.identify.components) text << " " << ToString(c);
+  text << "\nfit_u_sat " << o.identify.valve.fit_u_sat << "\nrefine " << o.refine << " "
+       << o.spec.source << "\nvalidate " << o.validate << "\ndiagnose " << o.diagnose << "\n";
+  return text.str();
+}
+
+// The stamp of a unit's result: the options' fingerprint and the SHA-256 of
+// every file of the unit directory, by name.
+std::string Stamp(const fs::path& unit_dir, const std::string& fingerprint) {
+  std::vector<fs::path> files;
+  for (const auto& entry : fs::directory_iterator(unit_dir)) {
+    if (entry.is_regular_file()) files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::string stamp = fingerprint;
+  for (const fs::path& file : files) {
+    stamp += file.filename().string() + " " +
+             Sha256Hex(ReadTextFile(file.string(), "a unit file")) + "\n";
+  }
+  return stamp;
+}
+
+bool UpToDate(const fs::path& result_dir, const std::string& stamp) {
+  const fs::path stamp_file = result_dir / "stamp.txt";
+  if (!fs::exists(stamp_file) || !fs::exists(result_dir / "params.yaml")) return false;
+  return ReadTextFile(stamp_file.string(), "a stamp") == stamp;
+}
+
+// One unit, start to finish; throws on failure (InputError, FitError, ...).
+UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
+                        const fs::path& results_dir, const BatchOptions& options,
+                        const std::string& fingerprint, const std::atomic<bool>* stop) {
+  UnitOutcome outcome;
+  outcome.unit = name;
+  const std::string stamp = Stamp(unit_dir, fingerprint);
+  if (options.resume && UpToDate(results_dir / name, stamp)) {
+    outcome.status = UnitOutcome::Status::kUpToDate;
+    outcome.verdict = "up to date";
+    return outcome;
+  }
+  const Unit unit = ReadUnit(unit_dir.string());
+  std::ostringstream report;
+  std::ostringstream json;
+  IdentifyReport identified;
+  Parameters params = Identify(unit, options.prior, options.identify, &identified);
+  report << identified.BriefReport();
+  json << "{\"format\": \"pneumaid-batch-unit/1\", \"unit\": " << JsonString(name)
+       << ", \"directory\": " << JsonString(unit_dir.string());
+  std::string verdict = "identified";
+  if (options.refine) {
+    RefineOptions refine;
+    refine.simulation.stop = stop;
+    refine.validation.stop = stop;
+    const RefineResult r = Refine(params, unit, options.spec, refine);
+    report << r.BriefReport();
+    if (!r.has_values()) throw FitError("refinement of unit " + name, r.reason);
+    if (stop != nullptr && stop->load()) throw FitError("unit " + name, "time limit reached");
+    params = r.params;
+    verdict = std::string("refine: ") + ToString(r.status);
+    json << ", \"refine\": {\"status\": " << JsonString(ToString(r.status))
+         << ", \"reduced_chi_square\": " << JsonNumber(r.reduced_chi_square) << "}";
+  }
+  if (options.validate) {
+    ValidationOptions v;
+    v.simulation.stop = stop;
+    const ValidationReport validation = ValidateUnit(params, unit, v);
+    if (validation.numerical_failure()) {
+      throw FitError("validation of unit " + name, "a simulation failed");
+    }
+    report << validation.BriefReport();
+    verdict += validation.thresholds_met() ? "; validation met" : "; validation missed";
+    json << ", \"validation\": " << ReportToJson(validation);
+  }
+  if (options.diagnose) {
+    DiagnoseOptions d;
+    d.max_effects = 1;
+    const DiagnoseResult diagnosis = Diagnose(params, unit, d);
+    report << diagnosis.BriefReport();
+    verdict += diagnosis.named_effects.empty() ? "; diagnose: none named"
+                                               : "; diagnose: " + diagnosis.named_effects.front();
+    json << ", \"diagnose\": " << DiagnoseToJson(diagnosis);
+  }
+  json << ", \"verdict\": " << JsonString(verdict) << "}\n";
+  ReplaceDirectoryAtomically((results_dir / name).string(),
+                             {{"params.yaml", ParamsToYaml(params)},
+                              {"report.txt", report.str()},
+                              {"report.json", json.str()},
+                              {"stamp.txt", stamp}});  // last in the check, first to be trusted
+  outcome.status = UnitOutcome::Status::kDone;
+  outcome.verdict = verdict;
+  return outcome;
+}
+
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"') out += '"';
+    out += c == '\n' ? ' ' : c;
+  }
+  return out + "\"";
+}
+
+const char* StatusName(UnitOutcome::Status status) {
+  switch (status) {
+    case UnitOutcome::Status::kDone:
+      return "done";
+    case UnitOutcome::Status::kUpToDate:
+      return "up to date";
+    case UnitOutcome::Status::kFailed:
+      return "failed";
+  }
+  return "?";
+}
+
+}  // namespace
+
+bool Shard::Contains(const std::string& unit) const {
+  std::uint64_t hash = 1469598103934665603ull;  // FNV-1a 64
+  for (unsigned char c : unit) {
+    hash ^= c;
+    hash *= 1099511628211ull;
+  }
+  return static_cast<int>(hash % static_cast<std::uint64_t>(count)) == index;
+}
+
+std::string Shard::Suffix() const {
+  return count == 1 ? "" : "." + std::to_string(index) + "-of-" + std::to_string(count);
+}
+
+bool ShardFromEnvironment(const std::function<const char*(const char*)>& getenv, Shard* shard,
+                          std::string* why) {
+  const auto number = [&getenv](const char* name, long* value) {
+    const char* text = getenv(name);
+    if (text == nullptr || *text == '\0') return false;
+    char* end = nullptr;
+    *value = std::strtol(text, &end, 10);  // integers: no locale involved
+    return *end == '\0';
+  };
+  long id = 0, min = 0, step = 1, count = 0, rank = 0, size = 0;
+  if (number("SLURM_ARRAY_TASK_ID", &id) && number("SLURM_ARRAY_TASK_COUNT", &count)) {
+    if (!number("SLURM_ARRAY_TASK_MIN", &min)) min = 0;
+    if (!number("SLURM_ARRAY_TASK_STEP", &step)) step = 1;
+    if (step <= 0 || (id - min) % step != 0) {
+      *why = "SLURM_ARRAY_TASK_ID, _MIN and _STEP do not give a whole index";
+      return false;
+    }
+    rank = (id - min) / step;
+    size = count;
+  } else if (number("OMPI_COMM_WORLD_RANK", &rank) && number("OMPI_COMM_WORLD_SIZE", &size)) {
+  } else if (number("PMI_RANK", &rank) && number("PMI_SIZE", &size)) {
+  } else {
+    *why =
+        "no Slurm array (SLURM_ARRAY_TASK_ID, SLURM_ARRAY_TASK_COUNT), Open MPI "
+        "(OMPI_COMM_WORLD_RANK, OMPI_COMM_WORLD_SIZE) or PMI (PMI_RANK, PMI_SIZE) variables set";
+    return false;
+  }
+  if (size < 1 || rank < 0 || rank >= size) {
+    *why = "the launcher's index " + std::to_string(rank) + " is not in 0.." +
+           std::to_string(size - 1);
+    return false;
+  }
+  shard->index = static_cast<int>(rank);
+  shard->count = static_cast<int>(size);
+  return true;
+}
+
+bool BatchOptions::IsValid(std::string* error) const {
+  const auto fail = [error](const std::string& what) {
+    if (error != nullptr) *error = what;
+    return false;
+  };
+  if (jobs < 1) return fail("jobs must be >= 1");
+  if (shard.count < 1 || shard.index < 0 || shard.index >= shard.count)
+    return fail("shard: expected 0 <= index < count");
+  if (!(timeout_per_unit_s >= 0)) return fail("timeout_per_unit_s must be >= 0");
+  if (!identify.IsValid(error)) return false;
+  if (refine && !spec.IsValid(error)) return false;
+  return true;
+}
+
+int BatchSummary::failed() const {
+  return static_cast<int>(std::count_if(units.begin(), units.end(), [](const UnitOutcome& u) {
+    return u.status == UnitOutcome::Status::kFailed;
+  }));
+}
+
+std::string BatchSummary::BriefReport() const {
+  std::ostringstream out;
+  int up_to_date = 0;
+  for (const UnitOutcome& u : units) up_to_date += u.status == UnitOutcome::Status::kUpToDate;
+  out << "Batch: " << units.size() << " units, " << failed() << " failed, " << up_to_date
+      << " up to date\n";
+  for (const UnitOutcome& u : units) {
+    char seconds[32];
+    std::snprintf(seconds, sizeof(seconds), "%.1f s", u.seconds);
+    out << "  " << u.unit << ": " << StatusName(u.status) << " ("
+        << (u.status == UnitOutcome::Status::kFailed ? u.reason : u.verdict) << ", " << seconds
+        << ")\n";
+  }
+  return out.str();
+}
+
+BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_dir,
+                      const BatchOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("batch options", 0, 0, error);
+  // A unit is keyed by its directory's name: a corrupt manifest has no id
+  // to trust.
+  const std::vector<std::string> fleet = FleetUnits(fleet_dir);
+  if (fleet.empty()) {
+    throw InputError(fleet_dir, 0, 0,
+                     "no unit directories (subdirectories holding a unit.yaml) in the fleet");
+  }
+  std::vector<std::string> units;
+  for (const std::string& path : fleet) {
+    const std::string unit = fs::path(path).filename().string();
+    if (options.shard.Contains(unit)) units.push_back(unit);
+  }
+  std::error_code created;
+  fs::create_directories(results_dir, created);
+  if (created) throw InputError(results_dir, 0, 0, "cannot create: " + created.message());
+  const std::string fingerprint = OptionsFingerprint(options);
+  BatchSummary summary;
+  summary.units.resize(units.size());
+  // One stop flag and deadline per worker; a monitor raises the flags.
+  const int workers = std::max(1, std::min<int>(options.jobs, static_cast<int>(units.size())));
+  std::vector<std::atomic<bool>> stop(static_cast<std::size_t>(workers));
+  std::vector<std::atomic<long long>> deadline(static_cast<std::size_t>(workers));
+  for (auto& d : deadline) d = 0;
+  std::atomic<bool> finished{false};
+  std::atomic<std::size_t> next{0}, done{0};
+  std::mutex progress_mutex;
+  const auto started = Clock::now();
+  const auto worker = [&](int w) {
+    for (std::size_t i = next++; i < units.size(); i = next++) {
+      UnitOutcome& outcome = summary.units[i];
+      const auto unit_start = Clock::now();
+      stop[w] = false;
+      if (options.timeout_per_unit_s > 0) {
+        deadline[w] = (unit_start + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(options.timeout_per_unit_s)))
+                          .time_since_epoch()
+                          .count();
+      }
+      try {
+        outcome = ProcessUnit(units[i], fs::path(fleet_dir) / units[i], results_dir, options,
+                              fingerprint, &stop[w]);
+      } catch (const std::exception& failure) {
+        outcome = UnitOutcome{};
+        outcome.unit = units[i];
+        outcome.status = UnitOutcome::Status::kFailed;
+        outcome.reason = stop[w] ? "time limit of " + std::to_string(options.timeout_per_unit_s) +
+                                       " s reached (" + failure.what() + ")"
+                                 : failure.what();
+      }
+      deadline[w] = 0;
+      outcome.seconds = std::chrono::duration<double>(Clock::now() - unit_start).count();
+      const std::size_t count = ++done;
+      if (options.progress) {
+        const double elapsed = std::chrono::duration<double>(Clock::now() - started).count();
+        const double eta = elapsed / count * (units.size() - count);
+        char line[400];
+        std::snprintf(line, sizeof(line), "[%zu/%zu, %.0f s left] %s: %s", count, units.size(), eta,
+                      outcome.unit.c_str(),
+                      outcome.status == UnitOutcome::Status::kFailed
+                          ? ("FAILED: " + outcome.reason).c_str()
+                          : outcome.verdict.c_str());
+        std::lock_guard<std::mutex> lock(progress_mutex);
+        options.progress(line);
+      }
+    }
+  };
+  std::thread monitor([&] {
+    while (!finished) {
+      const long long now = Clock::now().time_since_epoch().count();
+      for (int w = 0; w < workers; ++w) {
+        const long long d = deadline[w];
+        if (d != 0 && now > d) stop[w] = true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  std::vector<std::thread> pool;
+  for (int w = 1; w < workers; ++w) pool.emplace_back(worker, w);
+  worker(0);
+  for (std::thread& t : pool) t.join();
+  finished = true;
+  monitor.join();
+  // The shard's own files: failures and the per-unit summary.
+  std::ostringstream failures, table;
+  failures << "unit,reason\n";
+  table << "unit,status,verdict,seconds\n";
+  for (const UnitOutcome& u : summary.units) {
+    if (u.status == UnitOutcome::Status::kFailed)
+      failures << CsvField(u.unit) << "," << CsvField(u.reason) << "\n";
+    char seconds[32];
+    std::snprintf(seconds, sizeof(seconds), "%.3f", u.seconds);
+    table << CsvField(u.unit) << "," << StatusName(u.status) << ","
+          << CsvField(u.status == UnitOutcome::Status::kFailed ? u.reason : u.verdict) << ","
+          << seconds << "\n";
+  }
+  const std::string suffix = options.shard.Suffix();
+  WriteFileAtomically((fs::path(results_dir) / ("failures" + suffix + ".csv")).string(),
+                      failures.str());
+  WriteFileAtomically((fs::path(results_dir) / ("summary" + suffix + ".csv")).string(),
+                      table.str());
+  return summary;
+}
+
+}  // namespace pneumaid

@@ -1,0 +1,230 @@
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "pneumaid/batch/batch.h"
+#include "pneumaid/io/files.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/model/parameter_table.h"
+
+// `pneumaid merge`: the fleet summary of results directories (shards of one
+// batch, or several batches): per parameter the median and a robust spread,
+// units whose robust z-score exceeds the limit, every shard's failures.
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+
+double Median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// Rows of a small CSV written by the batch (unit,... with quoted fields).
+std::vector<std::vector<std::string>> ReadRows(const fs::path& file) {
+  const std::string text = ReadTextFile(file.string(), "a batch table");
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> row;
+  std::string field;
+  bool quoted = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == ',') {
+      row.push_back(field);
+      field.clear();
+    } else if (c == '\n') {
+      row.push_back(field);
+      field.clear();
+      rows.push_back(row);
+      row.clear();
+    } else {
+      field += c;
+    }
+  }
+  if (!field.empty() || !row.empty()) {
+    row.push_back(field);
+    rows.push_back(row);
+  }
+  if (!rows.empty()) rows.erase(rows.begin());  // the header
+  return rows;
+}
+
+std::string Format(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.6g", value);
+  return text;
+}
+
+}  // namespace
+
+FleetSummary MergeResults(const std::vector<std::string>& results_dirs, double outlier_z) {
+  FleetSummary summary;
+  for (const std::string& dir : results_dirs) {
+    bool any = false;
+    std::map<std::string, std::string> verdicts;
+    std::error_code error;
+    if (!fs::is_directory(dir, error)) {
+      throw InputError(dir, 0, 0, "not a results directory (pneumaid batch --out)");
+    }
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.is_regular_file() && name.rfind("failures", 0) == 0 &&
+          entry.path().extension() == ".csv") {
+        any = true;
+        for (const auto& row : ReadRows(entry.path())) {
+          if (row.size() >= 2) summary.failures.push_back({row[0], row[1], entry.path().string()});
+        }
+      } else if (entry.is_regular_file() && name.rfind("summary", 0) == 0 &&
+                 entry.path().extension() == ".csv") {
+        any = true;
+        for (const auto& row : ReadRows(entry.path())) {
+          if (row.size() >= 3) verdicts[row[0]] = row[2];
+        }
+      }
+    }
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      const fs::path params = entry.path() / "params.yaml";
+      if (!entry.is_directory() || !fs::exists(params)) continue;
+      any = true;
+      FleetUnit unit;
+      unit.unit = entry.path().filename().string();
+      unit.results_dir = dir;
+      unit.verdict = verdicts.count(unit.unit) ? verdicts[unit.unit] : "";
+      const Parameters p = LoadParams(params.string());
+      unit.standard_errors = p.uncertainty;
+      for (const ScalarParameterInfo& info : ScalarParameterTable())
+        unit.values[info.path] = info.get(p);
+      for (const auto& [effect, values] : p.effects) {
+        for (const auto& [name, value] : values)
+          unit.values["effects." + effect + "." + name] = value;
+      }
+      summary.units.push_back(unit);
+    }
+    if (!any) throw InputError(dir, 0, 0, "not a results directory (pneumaid batch --out)");
+  }
+  std::sort(summary.units.begin(), summary.units.end(),
+            [](const FleetUnit& a, const FleetUnit& b) { return a.unit < b.unit; });
+  // A unit failed in one shard and done in another (a rerun) is not a failure.
+  summary.failures.erase(
+      std::remove_if(summary.failures.begin(), summary.failures.end(),
+                     [&summary](const FleetFailure& f) {
+                       return std::any_of(summary.units.begin(), summary.units.end(),
+                                          [&f](const FleetUnit& u) { return u.unit == f.unit; });
+                     }),
+      summary.failures.end());
+  std::map<std::string, std::vector<double>> by_path;
+  for (const FleetUnit& u : summary.units) {
+    for (const auto& [path, value] : u.values) by_path[path].push_back(value);
+  }
+  for (const auto& [path, values] : by_path) {
+    FleetParameter parameter;
+    parameter.path = path;
+    parameter.units = static_cast<int>(values.size());
+    parameter.median = Median(values);
+    std::vector<double> deviations;
+    for (double v : values) deviations.push_back(std::fabs(v - parameter.median));
+    parameter.mad = 1.4826 * Median(deviations);
+    summary.parameters.push_back(parameter);
+    // Compared where at least 5 units have it and it varies at all (a
+    // parameter from the prior is the same everywhere).
+    const double floor = 1e-9 * std::fabs(parameter.median);
+    if (parameter.units < 5 || !(parameter.mad > floor)) continue;
+    for (FleetUnit& u : summary.units) {
+      const auto found = u.values.find(path);
+      if (found == u.values.end()) continue;
+      // In units of the fleet's spread and the unit's own standard error
+      // together: a coefficient its logs hardly determine (poorly separable
+      // polynomial terms, a held Stribeck velocity) is no evidence.
+      const auto error = u.standard_errors.find(path);
+      // A unit whose set carries standard errors but none for this path did
+      // not determine it (held, or from the prior): no evidence either way.
+      if (error == u.standard_errors.end() && !u.standard_errors.empty()) continue;
+      const double se = error == u.standard_errors.end() ? 0.0 : error->second;
+      const double z = (found->second - parameter.median) / std::hypot(parameter.mad, se);
+      if (std::fabs(z) > outlier_z) u.outlying.emplace_back(path, z);
+    }
+  }
+  return summary;
+}
+
+std::string FleetSummary::Csv() const {
+  std::ostringstream out;
+  out << "unit,results,verdict,outlier,outlying_parameters";
+  for (const FleetParameter& p : parameters) out << "," << p.path;
+  out << "\n";
+  for (const FleetUnit& u : units) {
+    std::string outlying;
+    for (const auto& [path, z] : u.outlying) outlying += (outlying.empty() ? "" : " ") + path;
+    out << u.unit << "," << u.results_dir << ",\"" << u.verdict << "\","
+        << (u.outlying.empty() ? "no" : "yes") << "," << outlying;
+    for (const FleetParameter& p : parameters) {
+      const auto found = u.values.find(p.path);
+      out << "," << (found == u.values.end() ? "" : Format(found->second));
+    }
+    out << "\n";
+  }
+  out << "median,,,,";
+  for (const FleetParameter& p : parameters) out << "," << Format(p.median);
+  out << "\nmad,,,,";
+  for (const FleetParameter& p : parameters) out << "," << Format(p.mad);
+  out << "\n";
+  for (const FleetFailure& f : failures) {
+    out << f.unit << "," << f.file << ",\"FAILED: " << f.reason << "\",,";
+    for (std::size_t k = 0; k < parameters.size(); ++k) out << ",";
+    out << "\n";
+  }
+  return out.str();
+}
+
+std::string FleetSummary::Markdown() const {
+  std::ostringstream out;
+  out << "# Fleet summary\n\n"
+      << units.size() << " units with a parameter set, " << failures.size()
+      << " failed.\n\n## Outliers (robust z-score > 3.5)\n\n";
+  bool any = false;
+  for (const FleetUnit& u : units) {
+    if (u.outlying.empty()) continue;
+    any = true;
+    out << "- **" << u.unit << "**:";
+    for (const auto& [path, z] : u.outlying) {
+      char text[64];
+      std::snprintf(text, sizeof(text), " z %+.1f", z);
+      out << " " << path << text << " (" << Format(u.values.at(path)) << ")";
+    }
+    out << "\n";
+  }
+  if (!any) out << "none\n";
+  out << "\n## Failures\n\n";
+  for (const FleetFailure& f : failures) out << "- " << f.unit << ": " << f.reason << "\n";
+  if (failures.empty()) out << "none\n";
+  out << "\n## Units\n\n| unit | verdict | outlier |\n|---|---|---|\n";
+  for (const FleetUnit& u : units) {
+    out << "| " << u.unit << " | " << u.verdict << " | " << (u.outlying.empty() ? "" : "**yes**")
+        << " |\n";
+  }
+  out << "\n## Parameters (varying across the fleet)\n\n| parameter | median | MAD (sigma) | "
+         "units |\n|---|---|---|---|\n";
+  for (const FleetParameter& p : parameters) {
+    if (!(p.mad > 0)) continue;
+    out << "| " << p.path << " | " << Format(p.median) << " | " << Format(p.mad) << " | " << p.units
+        << " |\n";
+  }
+  return out.str();
+}
+
+}  // namespace pneumaid
