@@ -1,0 +1,207 @@
+// Fleet work on datasets/fleet (13 good units, one outlier with three times
+// the static friction, one with a corrupt log): results per unit, failures
+// recorded, the outlier flagged alone; shards disjoint and covering; the
+// launchers' variables; resume; time limits; threads give what one thread does.
+#include "pneumaid/batch/batch.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "pneumaid/io/files.h"
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
+
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kFleet = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/fleet";
+
+fs::path Fresh(const std::string& name) {
+  const fs::path dir = fs::path(::testing::TempDir()) / ("batch_" + name);
+  fs::remove_all(dir);
+  return dir;
+}
+
+BatchOptions Options(int jobs = 2) {
+  BatchOptions options;
+  options.prior = LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper.yaml");
+  options.identify.tool_version = "test";
+  options.identify.date = "2026-01-01T00:00:00Z";
+  options.jobs = jobs;
+  return options;
+}
+
+std::string Read(const fs::path& path) { return ReadTextFile(path.string(), "a result"); }
+
+TEST(BatchTest, AFleetGetsItsSetsItsFailureAndItsOutlier) {
+  const fs::path results = Fresh("fleet");
+  const BatchSummary summary = RunBatch(kFleet, results.string(), Options());
+  ASSERT_EQ(summary.units.size(), 14u);
+  EXPECT_EQ(summary.failed(), 1);
+  for (const UnitOutcome& u : summary.units) {
+    if (u.unit == "PVQ13-0014") {
+      EXPECT_EQ(u.status, UnitOutcome::Status::kFailed);
+      EXPECT_NE(u.reason.find("step-1.csv:1623: ragged row"), std::string::npos) << u.reason;
+      EXPECT_FALSE(fs::exists(results / u.unit));
+      continue;
+    }
+    EXPECT_EQ(u.status, UnitOutcome::Status::kDone) << u.unit << ": " << u.reason;
+    for (const char* file : {"params.yaml", "report.txt", "report.json", "stamp.txt"})
+      EXPECT_TRUE(fs::exists(results / u.unit / file)) << u.unit << " " << file;
+  }
+  EXPECT_NE(Read(results / "failures.csv").find("PVQ13-0014,"), std::string::npos);
+  const FleetSummary fleet = MergeResults({results.string()});
+  ASSERT_EQ(fleet.units.size(), 13u);
+  ASSERT_EQ(fleet.failures.size(), 1u);
+  EXPECT_EQ(fleet.failures[0].unit, "PVQ13-0014");
+  for (const FleetUnit& u : fleet.units) {
+    if (u.unit != "PVQ13-0013") {
+      EXPECT_TRUE(u.outlying.empty()) << u.unit << " flagged for " << u.outlying.front().first;
+      continue;
+    }
+    bool static_friction = false;
+    for (const auto& [path, z] : u.outlying)
+      static_friction = static_friction || path.find(".Fs") != std::string::npos;
+    EXPECT_TRUE(static_friction) << "the outlier must be flagged for its static friction";
+  }
+  EXPECT_NE(fleet.Markdown().find("**PVQ13-0013**"), std::string::npos);
+  EXPECT_NE(fleet.Csv().find("FAILED: "), std::string::npos);
+}
+
+TEST(BatchTest, ShardsAreDisjointAndCoverTheFleet) {
+  std::vector<std::string> units;
+  for (const auto& entry : fs::directory_iterator(kFleet)) {
+    if (entry.is_directory()) units.push_back(entry.path().filename().string());
+  }
+  for (int count : {2, 3, 5}) {
+    std::map<std::string, int> owners;
+    for (int index = 0; index < count; ++index) {
+      for (const std::string& u : units) owners[u] += Shard{index, count}.Contains(u);
+    }
+    for (const std::string& u : units) EXPECT_EQ(owners[u], 1) << u << " in " << count << " shards";
+  }
+  // Two shards into one results directory: their own failure files, and the
+  // merge of the directory is the whole fleet.
+  const fs::path results = Fresh("shards");
+  int done = 0;
+  for (int index = 0; index < 2; ++index) {
+    BatchOptions options = Options(1);
+    options.shard = {index, 2};
+    for (const UnitOutcome& u : RunBatch(kFleet, results.string(), options).units)
+      done += u.status == UnitOutcome::Status::kDone;
+    EXPECT_TRUE(fs::exists(results / ("failures." + std::to_string(index) + "-of-2.csv")));
+  }
+  EXPECT_EQ(done, 13);
+  EXPECT_EQ(MergeResults({results.string()}).units.size(), 13u);
+}
+
+TEST(BatchTest, TheLaunchersVariablesGiveTheShard) {
+  const auto from = [](std::map<std::string, std::string> env, Shard* shard, std::string* why) {
+    return ShardFromEnvironment(
+        [&env](const char* name) {
+          const auto found = env.find(name);
+          return found == env.end() ? nullptr : found->second.c_str();
+        },
+        shard, why);
+  };
+  Shard shard;
+  std::string why;
+  ASSERT_TRUE(from({{"SLURM_ARRAY_TASK_ID", "7"},
+                    {"SLURM_ARRAY_TASK_MIN", "5"},
+                    {"SLURM_ARRAY_TASK_STEP", "2"},
+                    {"SLURM_ARRAY_TASK_COUNT", "4"}},
+                   &shard, &why))
+      << why;
+  EXPECT_EQ(shard.index, 1);
+  EXPECT_EQ(shard.count, 4);
+  ASSERT_TRUE(from({{"OMPI_COMM_WORLD_RANK", "1"}, {"OMPI_COMM_WORLD_SIZE", "2"}}, &shard, &why));
+  EXPECT_EQ(shard.index, 1);
+  EXPECT_EQ(shard.count, 2);
+  ASSERT_TRUE(from({{"PMI_RANK", "0"}, {"PMI_SIZE", "3"}}, &shard, &why));
+  EXPECT_EQ(shard.count, 3);
+  EXPECT_FALSE(from({}, &shard, &why));
+  EXPECT_NE(why.find("SLURM_ARRAY_TASK_ID"), std::string::npos);
+  EXPECT_FALSE(from({{"PMI_RANK", "3"}, {"PMI_SIZE", "3"}}, &shard, &why));
+  EXPECT_FALSE(from({{"SLURM_ARRAY_TASK_ID", "6"},
+                     {"SLURM_ARRAY_TASK_MIN", "5"},
+                     {"SLURM_ARRAY_TASK_STEP", "2"},
+                     {"SLURM_ARRAY_TASK_COUNT", "4"}},
+                    &shard, &why));
+}
+
+TEST(BatchTest, ResumeSkipsWhatIsUpToDateAndRedoesWhatChanged) {
+  const fs::path fleet = Fresh("resume_fleet");
+  fs::create_directories(fleet);
+  for (const char* unit : {"PVQ13-0001", "PVQ13-0002", "PVQ13-0003"})
+    fs::copy(fs::path(kFleet) / unit, fleet / unit, fs::copy_options::recursive);
+  const fs::path results = Fresh("resume_results");
+  BatchOptions options = Options();
+  RunBatch(fleet.string(), results.string(), options);
+  const std::string before = Read(results / "PVQ13-0001" / "params.yaml");
+  options.resume = true;
+  for (const UnitOutcome& u : RunBatch(fleet.string(), results.string(), options).units)
+    EXPECT_EQ(u.status, UnitOutcome::Status::kUpToDate) << u.unit;
+  // A changed input (a re-exported manifest with a comment) is redone.
+  std::ofstream(fleet / "PVQ13-0002" / "unit.yaml", std::ios::app) << "# re-exported\n";
+  for (const UnitOutcome& u : RunBatch(fleet.string(), results.string(), options).units) {
+    EXPECT_EQ(u.status,
+              u.unit == "PVQ13-0002" ? UnitOutcome::Status::kDone : UnitOutcome::Status::kUpToDate)
+        << u.unit;
+  }
+  // Other options are another result.
+  options.identify.valve.fit_u_sat = false;
+  for (const UnitOutcome& u : RunBatch(fleet.string(), results.string(), options).units)
+    EXPECT_EQ(u.status, UnitOutcome::Status::kDone) << u.unit;
+  EXPECT_NE(Read(results / "PVQ13-0001" / "params.yaml"), before);
+}
+
+TEST(BatchTest, ATimeLimitStopsAUnitsWorkAndRecordsWhy) {
+  const fs::path fleet = Fresh("timeout_fleet");
+  fs::create_directories(fleet);
+  fs::copy(fs::path(kFleet) / "PVQ13-0001", fleet / "PVQ13-0001", fs::copy_options::recursive);
+  BatchOptions options = Options(1);
+  options.refine = true;
+  options.spec = LoadFitSpec(std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml");
+  options.timeout_per_unit_s = 0.05;
+  const BatchSummary summary = RunBatch(fleet.string(), Fresh("timeout").string(), options);
+  ASSERT_EQ(summary.units.size(), 1u);
+  EXPECT_EQ(summary.units[0].status, UnitOutcome::Status::kFailed);
+  EXPECT_NE(summary.units[0].reason.find("time limit"), std::string::npos)
+      << summary.units[0].reason;
+  EXPECT_LT(summary.units[0].seconds, 2.0);  // stopped, not run to the end
+}
+
+// The concurrency test (also the ThreadSanitizer pass's): units identified on
+// four threads give exactly what one thread gives.
+TEST(BatchTest, ThreadsGiveWhatOneThreadGives) {
+  const fs::path one = Fresh("one_thread"), four = Fresh("four_threads");
+  RunBatch(kFleet, one.string(), Options(1));
+  RunBatch(kFleet, four.string(), Options(4));
+  for (const auto& entry : fs::directory_iterator(one)) {
+    if (!entry.is_directory()) continue;
+    EXPECT_EQ(Read(entry.path() / "params.yaml"),
+              Read(four / entry.path().filename() / "params.yaml"))
+        << entry.path().filename();
+  }
+}
+
+TEST(BatchTest, BadFleetsAndOptionsAreInputErrors) {
+  EXPECT_THROW(RunBatch("/nonexistent/fleet", Fresh("bad").string(), Options()), InputError);
+  const fs::path empty = Fresh("empty_fleet");
+  fs::create_directories(empty);
+  EXPECT_THROW(RunBatch(empty.string(), Fresh("bad").string(), Options()), InputError);
+  BatchOptions options = Options();
+  options.shard = {2, 2};
+  std::string error;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("shard"), std::string::npos);
+  EXPECT_THROW(MergeResults({empty.string()}), InputError);
+}
+
+}  // namespace
+}  // namespace pneumaid

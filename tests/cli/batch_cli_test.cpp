@@ -1,0 +1,126 @@
+// `pneumaid batch`, `merge` and `export` end to end: exit statuses, a kill
+// mid-run then --resume, two shard processes, the exports read back.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <regex>
+
+#include "cli_test_util.h"
+
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+using BatchCliTest = testing::CliTest;
+
+std::string WithoutDates(std::string text) {
+  return std::regex_replace(text, std::regex("date: [^,}]*"), "date: ");
+}
+
+TEST_F(BatchCliTest, AFleetWithACorruptUnitExitsThreeAndMergeFlagsTheOutlier) {
+  const std::string results = (dir_ / "results").string();
+  EXPECT_EQ(Run("batch " + testing::Source("datasets/fleet") + " --out " + results + " -j 2"), 3)
+      << Stderr();
+  EXPECT_NE(Stdout().find("PVQ13-0014: failed"), std::string::npos) << Stdout();
+  EXPECT_EQ(Run("merge " + results + " --out " + dir_.string()), 0) << Stderr();
+  const std::string summary = Read(dir_ / "fleet-summary.md");
+  EXPECT_NE(summary.find("**PVQ13-0013**"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("PVQ13-0014: "), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir_ / "fleet-summary.csv"));
+  // Bad input: exit 2, nothing written.
+  EXPECT_EQ(Run("batch " + (dir_ / "nothing").string() + " --out " + results), 2);
+  EXPECT_EQ(
+      Run("batch " + testing::Source("datasets/fleet") + " --out " + results + " --shard 3/2"), 2);
+  EXPECT_NE(Stderr().find("--shard"), std::string::npos);
+  EXPECT_EQ(
+      Run("batch " + testing::Source("datasets/fleet") + " --out " + results + " --shard auto"), 2);
+  EXPECT_NE(Stderr().find("SLURM_ARRAY_TASK_ID"), std::string::npos) << Stderr();
+}
+
+// SIGKILL mid-run, then --resume: units finished before the kill are not
+// redone, every result directory is whole, and the results equal an
+// uninterrupted run's but for the provenance date.
+TEST_F(BatchCliTest, AKilledRunResumesToTheSameResults) {
+  const fs::path fleet = dir_ / "fleet";
+  fs::create_directories(fleet);
+  for (const char* unit : {"PVQ13-0001", "PVQ13-0002", "PVQ13-0003"})
+    fs::copy(testing::Source(std::string("datasets/fleet/") + unit), fleet / unit,
+             fs::copy_options::recursive);
+  const std::string killed = (dir_ / "killed").string(), whole = (dir_ / "whole").string();
+  const std::string batch = "batch " + fleet.string() + " --refine -j 1 --out ";
+  // Each unit refines for about a second, in name order: the kill lands as
+  // soon as the first unit's result is in place.
+  const std::string command = std::string(PNEUMAID_CLI) + " " + batch + killed +
+                              " > /dev/null 2>&1 & pid=$!; for i in $(seq 400); do "
+                              "[ -d " +
+                              killed +
+                              "/PVQ13-0001 ] && break; sleep 0.02; done; "
+                              "kill -9 $pid; wait $pid";
+  std::system(("bash -c '" + command + "'").c_str());
+  int complete = 0;
+  for (const char* unit : {"PVQ13-0001", "PVQ13-0002", "PVQ13-0003"}) {
+    const fs::path result = fs::path(killed) / unit;
+    if (!fs::exists(result)) continue;
+    for (const char* file : {"params.yaml", "report.txt", "report.json", "stamp.txt"})
+      EXPECT_TRUE(fs::exists(result / file)) << unit << " is half-written: " << file;
+    ++complete;
+  }
+  ASSERT_GE(complete, 1) << "the kill came before any unit was done; lengthen the sleep";
+  ASSERT_LT(complete, 3) << "the kill came after the end; shorten the sleep";
+  EXPECT_EQ(Run(batch + killed + " --resume"), 0) << Stderr();
+  const std::string resumed_report = Stdout();
+  int up_to_date = 0;
+  for (std::size_t at = resumed_report.find("up to date ("); at != std::string::npos;
+       at = resumed_report.find("up to date (", at + 1))
+    ++up_to_date;
+  EXPECT_EQ(up_to_date, complete) << resumed_report;
+  EXPECT_EQ(Run(batch + whole), 0) << Stderr();
+  for (const char* unit : {"PVQ13-0001", "PVQ13-0002", "PVQ13-0003"}) {
+    EXPECT_EQ(WithoutDates(Read(fs::path(killed) / unit / "params.yaml")),
+              WithoutDates(Read(fs::path(whole) / unit / "params.yaml")))
+        << unit;
+  }
+}
+
+// Two processes, one shard each, one results directory: disjoint, and
+// together the fleet (what `--shard {}/2 ::: 0 1` under GNU parallel runs).
+TEST_F(BatchCliTest, TwoShardProcessesCoverTheFleet) {
+  const std::string results = (dir_ / "results").string();
+  const std::string fleet = testing::Source("datasets/fleet");
+  const std::string command = std::string(PNEUMAID_CLI) + " batch " + fleet + " --out " + results +
+                              " --shard 0/2 > /dev/null 2>&1 & " + PNEUMAID_CLI + " batch " +
+                              fleet + " --out " + results + " --shard 1/2 > /dev/null 2>&1; wait";
+  std::system(("bash -c '" + command + "'").c_str());
+  EXPECT_TRUE(fs::exists(fs::path(results) / "failures.0-of-2.csv"));
+  EXPECT_TRUE(fs::exists(fs::path(results) / "failures.1-of-2.csv"));
+  EXPECT_EQ(Run("merge " + results), 0) << Stderr();
+  EXPECT_NE(Stdout().find("13 units with a parameter set, 1 failed"), std::string::npos)
+      << Stdout();
+  // Slurm's variables, as `sbatch --array=0-1` sets them.
+  EXPECT_EQ(Run("batch " + fleet + " --out " + (dir_ / "slurm").string() + " --shard auto"), 2);
+  const std::string slurm =
+      "SLURM_ARRAY_TASK_ID=1 SLURM_ARRAY_TASK_MIN=0 "
+      "SLURM_ARRAY_TASK_STEP=1 SLURM_ARRAY_TASK_COUNT=2 ";
+  std::system(("bash -c '" + slurm + PNEUMAID_CLI + " batch " + fleet + " --out " +
+               (dir_ / "slurm").string() + " --shard auto > /dev/null 2>&1'")
+                  .c_str());
+  EXPECT_TRUE(fs::exists(dir_ / "slurm" / "failures.1-of-2.csv"));
+}
+
+TEST_F(BatchCliTest, ExportsEveryFormatAndRefusesAnUnknownOne) {
+  const std::string params = testing::Source("datasets/paper-rig/truth.yaml");
+  for (const char* format : {"ros2", "c-header", "matlab", "json"}) {
+    const std::string out = (dir_ / (std::string("params.") + format)).string();
+    EXPECT_EQ(Run("export --params " + params + " --format " + format + " --out " + out), 0)
+        << Stderr();
+    EXPECT_NE(Read(out).find("paper-rig"), std::string::npos) << format;  // the unit id
+  }
+  const auto before = Listing(dir_);
+  EXPECT_EQ(
+      Run("export --params " + params + " --format fortran --out " + (dir_ / "x.f90").string()), 2);
+  EXPECT_NE(Stderr().find("expected ros2, c-header, matlab or json"), std::string::npos);
+  EXPECT_EQ(Listing(dir_), before);
+}
+
+}  // namespace
+}  // namespace pneumaid

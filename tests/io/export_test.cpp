@@ -1,0 +1,149 @@
+// Exports for controller teams, read back: the ROS 2 file by yaml-cpp, the C
+// header compiled as C99 and as C++17 and its constants printed, the MATLAB
+// script line by line, the JSON's values; every value equal to the set's.
+#include "pneumaid/io/export.h"
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/model/parameter_table.h"
+
+namespace pneumaid {
+namespace {
+
+namespace fs = std::filesystem;
+
+Parameters Identified() {
+  Parameters p = LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig/truth.yaml");
+  p.unit = "PVQ13-0007";
+  p.friction.positive.static_force_N = 10.123456789012345;  // all 17 digits matter
+  p.effects["valve_lag"] = {{"tau", 0.0315}};
+  p.uncertainty["friction.positive.Fs"] = 0.0123;
+  p.provenance_yaml = "{tool: pneumaid test, note: \"a 'quoted' */ comment\"}";
+  return p;
+}
+
+std::string Export(const Parameters& p, ExportFormat format) {
+  ExportOptions options;
+  options.format = format;
+  options.ros2_node = "actuator_controller";
+  return ExportParameters(p, options);
+}
+
+TEST(ExportTest, Ros2ParsesAndHoldsEveryParameter) {
+  const Parameters p = Identified();
+  const YAML::Node root = YAML::Load(Export(p, ExportFormat::kRos2));
+  const YAML::Node node = root["actuator_controller"]["ros__parameters"];
+  ASSERT_TRUE(node.IsMap());
+  EXPECT_EQ(node["unit"].as<std::string>(), "PVQ13-0007");
+  for (const ScalarParameterInfo& info : ScalarParameterTable()) {
+    YAML::Node at = node;
+    std::stringstream path(info.path);
+    for (std::string part; std::getline(path, part, '.');) at.reset(at[part]);
+    ASSERT_TRUE(at.IsScalar()) << info.path;
+    EXPECT_EQ(at.as<double>(), info.get(p)) << info.path;
+  }
+  EXPECT_EQ(node["effects"]["valve_lag"]["tau"].as<double>(), 0.0315);
+}
+
+// The header compiled by the system's C and C++ compilers; a program prints
+// each constant with 17 digits, which must read back as the set's value.
+TEST(ExportTest, CHeaderCompilesAsC99AndCxx17WithTheExactValues) {
+  const Parameters p = Identified();
+  const fs::path dir = fs::path(::testing::TempDir()) / "export_c";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "params.h") << Export(p, ExportFormat::kCHeader);
+  std::ostringstream program;
+  program << "#include <stdio.h>\n#include \"params.h\"\nint main(void) {\n"
+          << "  printf(\"%s\\n\", PNEUMAID_UNIT_ID);\n";
+  for (const ScalarParameterInfo& info : ScalarParameterTable()) {
+    std::string id = "PNEUMAID_";
+    for (char c : std::string(info.path))
+      id += std::isalnum(static_cast<unsigned char>(c)) ? std::toupper(c) : '_';
+    program << "  printf(\"%.17g\\n\", " << id << ");\n";
+  }
+  program << "  printf(\"%.17g\\n\", PNEUMAID_EFFECTS_VALVE_LAG_TAU);\n  return 0;\n}\n";
+  std::ofstream(dir / "main.c") << program.str();
+  fs::copy_file(dir / "main.c", dir / "main.cpp");
+  for (const std::string& compile :
+       {"cc -std=c99 -Wall -Werror -pedantic -o " + (dir / "c").string() + " " +
+            (dir / "main.c").string(),
+        "c++ -std=c++17 -Wall -Werror -pedantic -o " + (dir / "cxx").string() + " " +
+            (dir / "main.cpp").string()}) {
+    ASSERT_EQ(std::system(compile.c_str()), 0) << compile;
+  }
+  for (const char* binary : {"c", "cxx"}) {
+    const std::string out = (dir / (std::string(binary) + ".txt")).string();
+    ASSERT_EQ(std::system(((dir / binary).string() + " > " + out).c_str()), 0);
+    std::ifstream in(out);
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line, "PVQ13-0007");
+    for (const ScalarParameterInfo& info : ScalarParameterTable()) {
+      std::getline(in, line);
+      EXPECT_EQ(std::strtod(line.c_str(), nullptr), info.get(p)) << binary << " " << info.path;
+    }
+    std::getline(in, line);
+    EXPECT_EQ(std::strtod(line.c_str(), nullptr), 0.0315);
+  }
+}
+
+// No MATLAB or Octave here: every line of the script is a comment, an
+// assignment of a number or a string to a field of pneumaid_params, or the
+// struct's creation (a syntax check).
+TEST(ExportTest, MatlabScriptIsAssignmentsOfEveryParameter) {
+  const Parameters p = Identified();
+  const std::string script = Export(p, ExportFormat::kMatlab);
+  const std::regex comment("^%.*$");
+  const std::regex create("^pneumaid_params = struct\\(\\);$");
+  const std::regex number(
+      "^pneumaid_params\\.([A-Za-z][A-Za-z0-9_]*(?:\\.[A-Za-z][A-Za-z0-9_]*)*) = "
+      "(-?[0-9][0-9.eE+-]*|-?inf|nan);  % .*$");
+  const std::regex text("^pneumaid_params\\.[a-z]+ = '([^']|'')*';$");
+  std::map<std::string, double> values;
+  std::stringstream lines(script);
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, number)) {
+      values[m[1]] = std::strtod(m[2].str().c_str(), nullptr);
+      continue;
+    }
+    EXPECT_TRUE(std::regex_match(line, comment) || std::regex_match(line, create) ||
+                std::regex_match(line, text))
+        << "not MATLAB this check knows: " << line;
+  }
+  for (const ScalarParameterInfo& info : ScalarParameterTable())
+    EXPECT_EQ(values[info.path], info.get(p)) << info.path;
+  EXPECT_EQ(values["effects.valve_lag.tau"], 0.0315);
+  EXPECT_NE(script.find("PVQ13-0007"), std::string::npos);
+}
+
+TEST(ExportTest, JsonAndEveryFormatStateTheUnitAndProvenance) {
+  const Parameters p = Identified();
+  for (ExportFormat format :
+       {ExportFormat::kRos2, ExportFormat::kCHeader, ExportFormat::kMatlab, ExportFormat::kJson}) {
+    const std::string text = Export(p, format);
+    EXPECT_NE(text.find("PVQ13-0007"), std::string::npos);
+    EXPECT_NE(text.find("tool: pneumaid test"), std::string::npos);
+  }
+  const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson));  // JSON is YAML
+  EXPECT_EQ(json["parameters"]["friction.positive.Fs"]["value"].as<double>(),
+            p.friction.positive.static_force_N);
+  EXPECT_EQ(json["parameters"]["friction.positive.Fs"]["standard_error"].as<double>(), 0.0123);
+  EXPECT_EQ(json["parameters"]["friction.positive.Fs"]["unit"].as<std::string>(), "N");
+  ExportFormat format;
+  EXPECT_TRUE(ParseExportFormat("c-header", &format));
+  EXPECT_EQ(format, ExportFormat::kCHeader);
+  EXPECT_FALSE(ParseExportFormat("fortran", &format));
+}
+
+}  // namespace
+}  // namespace pneumaid
