@@ -4,11 +4,14 @@
 # only what changed.
 #   BUILD_DIR=...      build directory (default: build)
 #   CMAKE_ARGS="..."   extra configure arguments
+#   EXTRA_PACKAGES="..." Debian packages the caller needs too (test.sh: openmpi-bin)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PACKAGES=(build-essential cmake libeigen3-dev libceres-dev libsundials-dev libyaml-cpp-dev
           googletest libgtest-dev libcli11-dev libbenchmark-dev curl xz-utils)
+# shellcheck disable=SC2206
+PACKAGES+=(${EXTRA_PACKAGES:-})
 missing=()
 for package in "${PACKAGES[@]}"; do
   dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" ||

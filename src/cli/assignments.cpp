@@ -1,5 +1,6 @@
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
 
 #include "commands.h"
 #include "pneumaid/io/input_error.h"
@@ -31,6 +32,17 @@ std::string UtcNow() {
   char text[32];
   std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%SZ", &utc);
   return text;
+}
+
+std::string DefaultConfig(const std::string& name) {
+  std::error_code error;
+  const std::filesystem::path binary = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    const std::filesystem::path installed =
+        binary.parent_path().parent_path() / PNEUMAID_INSTALLED_CONFIGS / name;
+    if (std::filesystem::exists(installed, error)) return installed.string();
+  }
+  return std::string(PNEUMAID_SOURCE_CONFIGS) + "/" + name;
 }
 
 }  // namespace pneumaid::cli

@@ -20,8 +20,8 @@ struct BatchArgs {
   std::string shard;  // "i/N" or "auto"
   bool resume = false, refine = false, validate = false, diagnose = false;
   double timeout_s = 0;
-  std::string prior_path = PNEUMAID_DEFAULT_PRIOR;
-  std::string spec_path = PNEUMAID_DEFAULT_FIT_SPEC;
+  std::string prior_path = DefaultConfig("paper.yaml");
+  std::string spec_path = DefaultConfig("fit-default.yaml");
 };
 
 Shard ParseShard(const std::string& text) {

@@ -33,6 +33,10 @@ std::map<std::string, double> ParseAssignments(
 // says whether it converged (refine, identify --refine).
 int ReportAndSave(const RefineResult& result, const std::string& out_path);
 
+// A shipped config (paper.yaml, fit-default.yaml): an installation's, beside
+// the binary (<prefix>/share/pneumaid/configs), else this source tree's.
+std::string DefaultConfig(const std::string& name);
+
 // The current time, UTC, ISO 8601 (for provenance).
 std::string UtcNow();
 

@@ -15,12 +15,12 @@ namespace {
 struct IdentifyArgs {
   std::string unit_dir;
   std::string only;  // "valve,pipeline"
-  std::string prior_path = PNEUMAID_DEFAULT_PRIOR;
+  std::string prior_path = DefaultConfig("paper.yaml");
   std::string out_path;
   bool refine = false;
   bool fit_u_sat = false;  // accepted: fitting u_sat is the default
   bool fix_u_sat = false;
-  std::string spec_path = PNEUMAID_DEFAULT_FIT_SPEC;
+  std::string spec_path = DefaultConfig("fit-default.yaml");
   int threads = 1;
 };
 

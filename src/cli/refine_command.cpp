@@ -12,7 +12,7 @@ namespace {
 struct RefineArgs {
   std::string params_path;
   std::string unit_dir;
-  std::string spec_path = PNEUMAID_DEFAULT_FIT_SPEC;
+  std::string spec_path = DefaultConfig("fit-default.yaml");
   std::string out_path;
   int threads = 1;
   bool verbose = false;

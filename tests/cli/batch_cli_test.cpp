@@ -107,6 +107,26 @@ TEST_F(BatchCliTest, TwoShardProcessesCoverTheFleet) {
   EXPECT_TRUE(fs::exists(dir_ / "slurm" / "failures.1-of-2.csv"));
 }
 
+// `mpirun -n 2 pneumaid batch --shard auto`: two ranks, two disjoint shards
+// from Open MPI's variables, no MPI linked (as root Open MPI wants its two
+// ALLOW variables; no ssh here, so the local launcher only).
+TEST_F(BatchCliTest, MpirunLaunchesOneShardPerRank) {
+  if (std::system("command -v mpirun > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "mpirun not installed (scripts/test.sh installs openmpi-bin)";
+  const std::string results = (dir_ / "results").string();
+  const std::string command =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_plm_rsh_agent=false "
+      "mpirun -n 2 --oversubscribe " +
+      std::string(PNEUMAID_CLI) + " batch " + testing::Source("datasets/fleet") + " --out " +
+      results + " --shard auto > " + (dir_ / "mpirun.log").string() + " 2>&1";
+  std::system(command.c_str());
+  EXPECT_TRUE(fs::exists(fs::path(results) / "summary.0-of-2.csv")) << Read(dir_ / "mpirun.log");
+  EXPECT_TRUE(fs::exists(fs::path(results) / "summary.1-of-2.csv"));
+  EXPECT_EQ(Run("merge " + results), 0) << Stderr();
+  EXPECT_NE(Stdout().find("13 units with a parameter set, 1 failed"), std::string::npos)
+      << Stdout();
+}
+
 TEST_F(BatchCliTest, ExportsEveryFormatAndRefusesAnUnknownOne) {
   const std::string params = testing::Source("datasets/paper-rig/truth.yaml");
   for (const char* format : {"ros2", "c-header", "matlab", "json"}) {
