@@ -30,7 +30,7 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   # in the Release pass.
   SLOW+='|ClosesMostOfItsGap/(ValveLag|FlowSensorLag|PipelineLag|HeatTransfer|SupplyDroop|FrictionPressure|ValveDeadzone)'
   SLOW+='|NamesNothingOnCleanUnits|SlightlyOffBaseCoefficients|NamesTwoHiddenEffects'
-  SLOW+='|TellsAValveLagFromAFlowMeterLag'
+  SLOW+='|TellsAValveLagFromAFlowMeterLag|ValidatesAndDiagnosesEachUnitWhenAsked'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
 fi

@@ -190,6 +190,28 @@ TEST(BatchTest, ThreadsGiveWhatOneThreadGives) {
   }
 }
 
+// --validate and --diagnose per unit: a fleet of one validation-only unit
+// whose rig has a valve lag (datasets/hidden/valve-lag).
+TEST(BatchTest, ValidatesAndDiagnosesEachUnitWhenAsked) {
+  const fs::path fleet = Fresh("diagnose_fleet");
+  fs::create_directories(fleet);
+  fs::copy(std::string(PNEUMAID_SOURCE_DIR) + "/datasets/hidden/valve-lag", fleet / "VL-0001",
+           fs::copy_options::recursive);
+  BatchOptions options = Options(1);
+  options.validate = true;
+  options.diagnose = true;
+  const fs::path results = Fresh("diagnose_results");
+  const BatchSummary summary = RunBatch(fleet.string(), results.string(), options);
+  ASSERT_EQ(summary.units.size(), 1u);
+  ASSERT_EQ(summary.units[0].status, UnitOutcome::Status::kDone) << summary.units[0].reason;
+  EXPECT_NE(summary.units[0].verdict.find("validation"), std::string::npos);
+  EXPECT_NE(summary.units[0].verdict.find("diagnose: valve_lag"), std::string::npos)
+      << summary.units[0].verdict;
+  const std::string json = Read(results / "VL-0001" / "report.json");
+  EXPECT_NE(json.find("\"named_effects\": [\"valve_lag\"]"), std::string::npos);
+  EXPECT_NE(json.find("\"validation\": {\"format\": \"pneumaid-report/1\""), std::string::npos);
+}
+
 TEST(BatchTest, BadFleetsAndOptionsAreInputErrors) {
   EXPECT_THROW(RunBatch("/nonexistent/fleet", Fresh("bad").string(), Options()), InputError);
   const fs::path empty = Fresh("empty_fleet");
