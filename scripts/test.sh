@@ -5,8 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# openmpi-bin: the batch test launches `mpirun -n 2 pneumaid batch --shard auto`.
-EXTRA_PACKAGES="openmpi-bin" scripts/setup.sh
+# openmpi-bin: the batch test launches `mpirun -n 2 pneumaid batch --shard auto`;
+# chromium: the report's own check in a headless browser (Release pass only).
+EXTRA_PACKAGES="openmpi-bin chromium" scripts/setup.sh
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 # Issue 12's robustness sweep, 6 seeded units with model mismatch and drawn
 # protocols (Release only, about 1 min on 2 cores): gates on K_vp and delta
@@ -15,6 +16,7 @@ ctest --test-dir build --output-on-failure -j"$(nproc)"
 # Installation: cmake --install, the installed binary with its own defaults, a
 # consumer program built against the installed package.
 tests/install/run.sh build
+scripts/report-check.sh build
 build/tests/bench/robustness_sweep 6 --seed 2026 --jobs "$(nproc)" --min-units-valve-tube 5
 
 if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then

@@ -50,5 +50,6 @@ CommandRunner AddDiagnoseCommand(CLI::App* app);
 CommandRunner AddBatchCommand(CLI::App* app);
 CommandRunner AddMergeCommand(CLI::App* app);
 CommandRunner AddExportCommand(CLI::App* app);
+CommandRunner AddReportCommand(CLI::App* app);
 
 }  // namespace pneumaid::cli

@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
       {"batch", "identify every unit of a fleet directory", AddBatchCommand},
       {"merge", "combine batch results into the fleet summary", AddMergeCommand},
       {"export", "write a parameter set for controller teams", AddExportCommand},
+      {"report", "write a unit's report: one self-contained HTML file", AddReportCommand},
       {"synth", "write a synthetic unit directory from a truth set", AddSynthCommand},
   };
   std::map<CLI::App*, CommandRunner> runners;
