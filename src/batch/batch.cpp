@@ -109,6 +109,7 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
   if (options.diagnose) {
     DiagnoseOptions d;
     d.max_effects = 1;
+    d.stop = stop;
     const DiagnoseResult diagnosis = Diagnose(params, unit, d);
     report << diagnosis.BriefReport();
     verdict += diagnosis.named_effects.empty() ? "; diagnose: none named"

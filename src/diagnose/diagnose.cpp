@@ -36,16 +36,19 @@ struct Outcome {
 };
 
 ValidationReport Evaluate(const Parameters& params, const Unit& unit,
-                          const std::vector<std::string>& runs) {
+                          const std::vector<std::string>& runs, const std::atomic<bool>* stop) {
   ValidationOptions v;
+  v.simulation.stop = stop;
   v.experiment_ids = runs;
   return ValidateUnit(params, unit, v);
 }
 
 Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                       const std::vector<std::string>& runs) {
+                       const std::vector<std::string>& runs, const std::atomic<bool>* stop) {
   Outcome out;
   RefineOptions options;
+  options.simulation.stop = stop;
+  options.validation.stop = stop;
   options.rescue_starts = 0;
   options.start_prior = false;
   const RefineResult r = Refine(start, unit, spec, options);
@@ -59,7 +62,7 @@ Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec&
   for (const FittedCoefficient& c : r.coefficients) {
     if (c.determined()) out.params.uncertainty[c.path] = c.standard_error;
   }
-  out.runs = RunSums(Evaluate(out.params, unit, runs));
+  out.runs = RunSums(Evaluate(out.params, unit, runs, stop));
   out.ok = true;
   return out;
 }
@@ -88,7 +91,7 @@ Outcome FitCandidate(const Outcome& reference, const std::string& effect, const 
     const Parameters start = WithEffect(reference.params, effect, fraction);
     Outcome o = FitAndEvaluate(
         start, unit, MakeSpec(CandidateParameters(start, effect), train, scale, options, effect),
-        runs);
+        runs, options.stop);
     if (!o.ok) {
       if (!best.ok) best = std::move(o);
       continue;
@@ -277,7 +280,7 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
   std::vector<std::string> tried_effects = options.effects;
   for (int iteration = 0; iteration <= options.max_effects; ++iteration) {
     DiagnoseIteration it;
-    const ValidationReport base = Evaluate(result.params, unit, runs);
+    const ValidationReport base = Evaluate(result.params, unit, runs, options.stop);
     if (iteration == 0) result.before = base;
     result.after = base;
     it.where = MapDiscrepancy(base, unit, half_stroke_m, options);
@@ -319,8 +322,9 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
         // Twice: a candidate starts where the reference stopped and gets a
         // whole fit more; the reference gets the same, so that a gain is the
         // effect's, not the extra iterations'.
-        const Outcome first = FitAndEvaluate(result.params, unit, spec, runs);
-        reference[f] = first.ok ? FitAndEvaluate(first.params, unit, spec, runs) : first;
+        const Outcome first = FitAndEvaluate(result.params, unit, spec, runs, options.stop);
+        reference[f] =
+            first.ok ? FitAndEvaluate(first.params, unit, spec, runs, options.stop) : first;
       });
     }
     RunAll(&tasks, options.threads);
@@ -375,14 +379,15 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
     }
     // Named: the base refitted on every run alone, and with the effect (the
     // static friction freed too, to close as much of the gap as it can).
-    const Outcome base_all = FitAndEvaluate(
-        result.params, unit,
-        MakeSpec(BaseParameters(result.params, true), runs, scale, options, "base"), runs);
+    const Outcome base_all =
+        FitAndEvaluate(result.params, unit,
+                       MakeSpec(BaseParameters(result.params, true), runs, scale, options, "base"),
+                       runs, options.stop);
     const Parameters start = WithEffect(base_all.ok ? base_all.params : result.params, best.effect);
     FitSpec final_spec =
         MakeSpec(CandidateParameters(start, best.effect, true), runs, scale, options, best.effect);
     final_spec.max_iterations = 2 * options.max_iterations;  // once per iteration: fit it well
-    const Outcome named = FitAndEvaluate(start, unit, final_spec, runs);
+    const Outcome named = FitAndEvaluate(start, unit, final_spec, runs, options.stop);
     if (!named.ok) {
       best.significant = false;
       best.verdict += "; but its fit on every run failed: " + named.why;
@@ -395,7 +400,7 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
     it.named = best.effect;
     result.params = named.params;
     result.named_effects.push_back(best.effect);
-    const ValidationReport after = Evaluate(result.params, unit, runs);
+    const ValidationReport after = Evaluate(result.params, unit, runs, options.stop);
     it.rmse_after = MapDiscrepancy(after, unit, half_stroke_m, options).rmse;
     result.after = after;
     log("  named " + best.effect + " (" + best.verdict + ")");

@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "pneumaid/eval/metrics.h"
 #include "pneumaid/ident/valve_fit.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
@@ -252,7 +253,7 @@ std::string UnitReportHtml(const Parameters& params, const Unit& unit,
     p.id = "plot" + std::to_string(plots.size());
     p.title = "valve gain K_vp: plateaus and fitted branches";
     p.x_label = "u [V]";
-    p.y_label = "K_vp [kg/s]";
+    p.y_label = "K_vp [g/s]";
     std::set<double> xs;
     for (int k = 0; k <= 100; ++k) xs.insert(k / 100.0);
     for (const ValvePlateau& plateau : plateaus) xs.insert(plateau.u_V);
@@ -264,12 +265,12 @@ std::string UnitReportHtml(const Parameters& params, const Unit& unit,
         down_points{"plateaus (closing)", "#d62728", {}, 1, true};
     for (double u : p.x) {
       const bool grid = std::fabs(u * 100 - std::round(u * 100)) < 1e-9;
-      up.values.push_back(grid ? Kvp(u, inc) : NAN);
-      down.values.push_back(grid ? Kvp(u, dec) : NAN);
+      up.values.push_back(grid ? 1e3 * Kvp(u, inc) : NAN);
+      down.values.push_back(grid ? 1e3 * Kvp(u, dec) : NAN);
       double a = NAN, b = NAN;
       for (const ValvePlateau& plateau : plateaus) {
         if (plateau.u_V != u) continue;
-        (plateau.decreasing ? b : a) = plateau.kvp_kg_per_s;
+        (plateau.decreasing ? b : a) = 1e3 * plateau.kvp_kg_per_s;
       }
       up_points.values.push_back(a);
       down_points.values.push_back(b);
@@ -278,6 +279,45 @@ std::string UnitReportHtml(const Parameters& params, const Unit& unit,
     body << "<h2>Valve gain</h2>\n<div class=plots><div id=\"" << p.id << "\"></div></div>\n";
     plots.push_back(std::move(p));
   }
+  // The tube's step responses (seed paper Figs. 6 and 7): the meters'
+  // readings and q_out predicted from q_in through the fitted lag at that
+  // length (both meters' own lags are the same filter, so they commute).
+  bool tube_heading = false;
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind != ExperimentKind::kPipeline) continue;
+    const double length = e.entry.tube_length_m.value_or(params.pipeline.tube_length_m);
+    double delta = params.pipeline.delta_per_s;
+    for (const DeltaAtLength& at : params.pipeline.delta_by_length) {
+      if (std::fabs(at.tube_length_m - length) < 1e-9) delta = at.delta_per_s;
+    }
+    Plot p;
+    p.id = "plot" + std::to_string(plots.size());
+    char title[160];
+    std::snprintf(title, sizeof(title), "%s: tube %.2f m, delta %.3g 1/s", e.entry.id.c_str(),
+                  length, delta);
+    p.title = title;
+    p.x_label = "t [s]";
+    p.y_label = "mass flow [g/s]";
+    p.x = e.column("t");
+    const auto& in = e.column("q_in");
+    const auto& out = e.column("q_out");
+    if (p.x.empty() || in.size() != p.x.size() || out.size() != p.x.size()) continue;
+    const std::vector<double> predicted = FirstOrderLag(p.x, in, 1.0 / delta);
+    Series a{"q_in measured", "#1f77b4", {}}, b{"q_out measured", "#2ca02c", {}},
+        c{"q_out through the fitted lag", "#d62728", {}};
+    for (std::size_t i = 0; i < p.x.size(); ++i) {
+      a.values.push_back(in[i] * 1e3);
+      b.values.push_back(out[i] * 1e3);
+      c.values.push_back(predicted[i] * 1e3);
+    }
+    p.series = {a, b, c};
+    Decimate(options.max_columns, &p);
+    if (!tube_heading) body << "<h2>Tube step responses</h2>\n<div class=plots>";
+    tube_heading = true;
+    body << "<div id=\"" << p.id << "\"></div>";
+    plots.push_back(std::move(p));
+  }
+  if (tube_heading) body << "</div>\n";
   std::ostringstream data;
   data << "var PNEUMAID_DATA = {\"plots\":[";
   for (std::size_t k = 0; k < plots.size(); ++k) {

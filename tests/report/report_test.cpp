@@ -27,12 +27,12 @@ TEST(ReportTest, AUnitsReportIsOneSmallSelfContainedPage) {
   EXPECT_FALSE(std::regex_search(html, std::regex("(src|href)\\s*=\\s*[\"']?\\s*https?://")));
   EXPECT_EQ(html.find("<link"), std::string::npos);
   EXPECT_EQ(html.find("<script src"), std::string::npos);
-  // Two validation runs x five channels, and the valve gain.
+  // Two validation runs x five channels, the valve gain, four tube lengths.
   std::size_t plots = 0;
   for (std::size_t at = html.find("<div id=\"plot"); at != std::string::npos;
        at = html.find("<div id=\"plot", at + 1))
     ++plots;
-  EXPECT_EQ(plots, 11u);
+  EXPECT_EQ(plots, 15u);
   EXPECT_NE(html.find("friction.positive.Fs"), std::string::npos);  // the parameter table
   EXPECT_NE(html.find("stroke-100"), std::string::npos);            // every run's metrics
 }

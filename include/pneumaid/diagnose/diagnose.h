@@ -4,6 +4,7 @@
 // the decision rule.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <map>
 #include <string>
@@ -44,6 +45,8 @@ struct DiagnoseOptions {
   int worst_windows = 5;
   // The first stretch after a command change counts as its own regime.
   double after_change_s = 0.1;
+  // Cooperative stop (a batch unit's time limit): every simulation checks it.
+  const std::atomic<bool>* stop = nullptr;
   // Optional progress lines (no printing from the library).
   std::function<void(const std::string&)> log;
 
@@ -77,8 +80,8 @@ struct DiscrepancyMap {
 // One candidate effect, fitted and scored.
 struct CandidateScore {
   std::string effect;
-  FitResult fit;              // on all runs: the effect's parameters and the base's it frees
-  double train_gain = 0;      // relative cost drop on the fitted runs, pooled over folds
+  FitResult fit;                // on all runs: the effect's parameters and the base's it frees
+  double train_gain = 0;        // relative cost drop on the fitted runs, pooled over folds
   double held_back_gain = 0;    // relative cost drop on the held-back runs, pooled (ranks)
   double own_channel_gain = 0;  // the same in the channels it can change (the rule's)
   double worst_fold_gain = 0;
