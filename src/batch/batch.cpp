@@ -330,11 +330,9 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
   for (const UnitOutcome& u : summary.units) {
     if (u.status == UnitOutcome::Status::kFailed)
       failures << CsvField(u.unit) << "," << CsvField(u.reason) << "\n";
-    char seconds[32];
-    std::snprintf(seconds, sizeof(seconds), "%.3f", u.seconds);
     table << CsvField(u.unit) << "," << StatusName(u.status) << ","
           << CsvField(u.status == UnitOutcome::Status::kFailed ? u.reason : u.verdict) << ","
-          << seconds << "\n";
+          << FormatSignificant(u.seconds, 4) << "\n";
   }
   const std::string suffix = options.shard.Suffix();
   WriteFileAtomically((fs::path(results_dir) / ("failures" + suffix + ".csv")).string(),

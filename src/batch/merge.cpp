@@ -7,6 +7,7 @@
 #include "pneumaid/batch/batch.h"
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/json.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -64,11 +65,7 @@ std::vector<std::vector<std::string>> ReadRows(const fs::path& file) {
   return rows;
 }
 
-std::string Format(double value) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.6g", value);
-  return text;
-}
+std::string Format(double value) { return FormatSignificant(value, 6); }
 
 }  // namespace
 

@@ -125,8 +125,10 @@ void Score(const std::vector<Outcome>& reference, const std::vector<Outcome>& ca
            const std::vector<std::vector<std::string>>& folds, const std::vector<std::string>& runs,
            const std::map<std::string, double>& scale, const DiagnoseOptions& options,
            bool gap_above_noise, CandidateScore* score) {
-  // The gain is measured where the effect can act: a measurement effect's
-  // instrument, every channel for an effect in the plant.
+  // The rule's gain is over every channel (a measurement effect that cannot
+  // touch x, p1, p2 gains nothing there: the rule is conservative for it);
+  // the gain where the effect can act (its instrument's channels) is
+  // reported beside it, and the share of the gain there is a criterion.
   const std::vector<std::string> signature = SignatureChannels(score->effect);
   std::map<std::string, double> where;
   for (const auto& [channel, variance] : scale) {
@@ -211,7 +213,7 @@ void Score(const std::vector<Outcome>& reference, const std::vector<Outcome>& ca
     std::snprintf(why, sizeof(why),
                   "held-back gain %.1f %% (%.0f %% of the held-back channels improve), %.0f %% of "
                   "it in the channels it can change",
-                  100 * score->own_channel_gain, 100 * score->improved_share,
+                  100 * score->held_back_gain, 100 * score->improved_share,
                   100 * score->signature_share);
     score->verdict = why;
   }

@@ -6,14 +6,17 @@
 
 namespace pneumaid {
 
-std::string JsonNumber(double value) {
-  if (!std::isfinite(value)) return "null";
-  char buffer[32];
+std::string FormatSignificant(double value, int digits) {
+  char buffer[48];
   // to_chars: never the locale's decimal comma (snprintf would take a host
-  // program's setlocale); 9 significant digits as before.
+  // program's setlocale).
   const auto result =
-      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 9);
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, digits);
   return std::string(buffer, result.ptr);
+}
+
+std::string JsonNumber(double value) {
+  return std::isfinite(value) ? FormatSignificant(value, 9) : "null";
 }
 
 std::string JsonString(const std::string& text) {

@@ -8,6 +8,7 @@
 
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/json.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/units.h"
 
@@ -86,12 +87,10 @@ std::string RigLogToCsv(const RigLog& log) {
   for (std::size_t i = 0; i < log.header.size(); ++i) out << (i ? "," : "") << log.header[i];
   out << "\n";
   const std::size_t rows = log.columns.empty() ? 0 : log.columns.front().size();
-  char buffer[32];
   for (std::size_t row = 0; row < rows; ++row) {
     for (std::size_t i = 0; i < log.columns.size(); ++i) {
       // 7 significant digits: what a rig's logger writes, and 10x below any noise level.
-      std::snprintf(buffer, sizeof(buffer), "%.7g", log.columns[i][row]);
-      out << (i ? "," : "") << buffer;
+      out << (i ? "," : "") << FormatSignificant(log.columns[i][row], 7);
     }
     out << "\n";
   }

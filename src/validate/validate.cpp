@@ -208,12 +208,9 @@ std::string ComparisonToCsv(const ExperimentValidation& e) {
     columns.push_back(&(e.simulated.*member));
   }
   out << "\n";
-  char value[32];
   for (std::size_t row = 0; row < e.measured.size(); ++row) {
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-      std::snprintf(value, sizeof(value), "%.9g", (*columns[c])[row]);
-      out << (c ? "," : "") << value;
-    }
+    for (std::size_t c = 0; c < columns.size(); ++c)
+      out << (c ? "," : "") << FormatSignificant((*columns[c])[row], 9);
     out << "\n";
   }
   return out.str();

@@ -28,8 +28,9 @@ struct DiagnoseOptions {
   int max_iterations = 25;
   // The decision rule (docs/diagnose.md). A candidate is named only when,
   // on the runs held back from its fit, its cost (each channel's mean square
-  // in units of the base model's own mean square, summed) is below the
-  // refitted base model's by at least this fraction, pooled over the folds ...
+  // in units of the current model's own mean square, summed over every
+  // channel) is below the refitted base model's by at least this fraction,
+  // pooled over the folds ...
   double min_held_back_gain = 0.10;
   // ... and at least this share of the held-back (fold, channel) mean
   // squares are smaller than the refitted base model's ...
@@ -82,8 +83,8 @@ struct CandidateScore {
   std::string effect;
   FitResult fit;                // on all runs: the effect's parameters and the base's it frees
   double train_gain = 0;        // relative cost drop on the fitted runs, pooled over folds
-  double held_back_gain = 0;    // relative cost drop on the held-back runs, pooled (ranks)
-  double own_channel_gain = 0;  // the same in the channels it can change (the rule's)
+  double held_back_gain = 0;    // relative cost drop on the held-back runs, pooled (the rule's)
+  double own_channel_gain = 0;  // the same in the channels it can change (reported)
   double worst_fold_gain = 0;
   std::vector<double> fold_gains;  // held-back gain of each fold (its runs held back)
   double improved_share = 0;       // of the held-back (fold, channel) mean squares, improved

@@ -10,6 +10,10 @@ namespace pneumaid {
 // for NaN and infinities.
 std::string JsonNumber(double value);
 
+// `digits` significant digits, %g-like, never a locale's decimal comma: the
+// one way numbers are written into data files (CSV, JSON).
+std::string FormatSignificant(double value, int digits);
+
 // A quoted, escaped JSON string.
 std::string JsonString(const std::string& text);
 
