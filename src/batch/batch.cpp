@@ -34,8 +34,13 @@ std::string OptionsFingerprint(const BatchOptions& o) {
   text << "tool " << o.identify.tool_version << "\nprior " << Sha256Hex(ParamsToYaml(o.prior))
        << "\ncomponents";
   for (Component c : o.identify.components) text << " " << ToString(c);
+  // The spec's contents, not its path: an edited spec is another result.
+  std::string spec_text = o.spec.source;
+  std::error_code error;
+  if (o.refine && fs::is_regular_file(o.spec.source, error))
+    spec_text = Sha256Hex(ReadTextFile(o.spec.source, "the fit spec"));
   text << "\nfit_u_sat " << o.identify.valve.fit_u_sat << "\nrefine " << o.refine << " "
-       << o.spec.source << "\nvalidate " << o.validate << "\ndiagnose " << o.diagnose << "\n";
+       << spec_text << "\nvalidate " << o.validate << "\ndiagnose " << o.diagnose << "\n";
   return text.str();
 }
 
@@ -111,6 +116,9 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
     d.max_effects = 1;
     d.stop = stop;
     const DiagnoseResult diagnosis = Diagnose(params, unit, d);
+    if (diagnosis.before.numerical_failure() || (stop != nullptr && stop->load())) {
+      throw FitError("diagnose of unit " + name, "a simulation failed or the time limit passed");
+    }
     report << diagnosis.BriefReport();
     verdict += diagnosis.named_effects.empty() ? "; diagnose: none named"
                                                : "; diagnose: " + diagnosis.named_effects.front();
@@ -125,16 +133,6 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
   outcome.status = UnitOutcome::Status::kDone;
   outcome.verdict = verdict;
   return outcome;
-}
-
-std::string CsvField(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"') out += '"';
-    out += c == '\n' ? ' ' : c;
-  }
-  return out + "\"";
 }
 
 const char* StatusName(UnitOutcome::Status status) {
@@ -259,11 +257,16 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
   const std::string fingerprint = OptionsFingerprint(options);
   BatchSummary summary;
   summary.units.resize(units.size());
-  // One stop flag and deadline per worker; a monitor raises the flags.
+  // One stop flag per unit (a late store by the monitor can only hit the unit
+  // it was meant for), one deadline and current unit per worker.
   const int workers = std::max(1, std::min<int>(options.jobs, static_cast<int>(units.size())));
-  std::vector<std::atomic<bool>> stop(static_cast<std::size_t>(workers));
+  std::vector<std::atomic<bool>> stop(units.size());
+  for (auto& flag : stop) flag = false;
   std::vector<std::atomic<long long>> deadline(static_cast<std::size_t>(workers));
+  std::vector<std::atomic<std::size_t>> current(static_cast<std::size_t>(workers));
   for (auto& d : deadline) d = 0;
+  // Beyond a year is no limit (and no overflow of the clock's count).
+  const bool limited = options.timeout_per_unit_s > 0 && options.timeout_per_unit_s < 3.2e7;
   std::atomic<bool> finished{false};
   std::atomic<std::size_t> next{0}, done{0};
   std::mutex progress_mutex;
@@ -272,8 +275,8 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
     for (std::size_t i = next++; i < units.size(); i = next++) {
       UnitOutcome& outcome = summary.units[i];
       const auto unit_start = Clock::now();
-      stop[w] = false;
-      if (options.timeout_per_unit_s > 0) {
+      current[w] = i;
+      if (limited) {
         deadline[w] = (unit_start + std::chrono::duration_cast<Clock::duration>(
                                         std::chrono::duration<double>(options.timeout_per_unit_s)))
                           .time_since_epoch()
@@ -281,14 +284,15 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
       }
       try {
         outcome = ProcessUnit(units[i], fs::path(fleet_dir) / units[i], results_dir, options,
-                              fingerprint, &stop[w]);
+                              fingerprint, &stop[i]);
       } catch (const std::exception& failure) {
         outcome = UnitOutcome{};
         outcome.unit = units[i];
         outcome.status = UnitOutcome::Status::kFailed;
-        outcome.reason = stop[w] ? "time limit of " + std::to_string(options.timeout_per_unit_s) +
-                                       " s reached (" + failure.what() + ")"
-                                 : failure.what();
+        outcome.reason = stop[i]
+                             ? "time limit of " + FormatSignificant(options.timeout_per_unit_s, 6) +
+                                   " s reached (" + failure.what() + ")"
+                             : failure.what();
       }
       deadline[w] = 0;
       outcome.seconds = std::chrono::duration<double>(Clock::now() - unit_start).count();
@@ -312,7 +316,7 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
       const long long now = Clock::now().time_since_epoch().count();
       for (int w = 0; w < workers; ++w) {
         const long long d = deadline[w];
-        if (d != 0 && now > d) stop[w] = true;
+        if (d != 0 && now > d) stop[current[w]] = true;
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }

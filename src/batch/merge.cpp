@@ -71,9 +71,10 @@ std::string Format(double value) { return FormatSignificant(value, 6); }
 
 FleetSummary MergeResults(const std::vector<std::string>& results_dirs, double outlier_z) {
   FleetSummary summary;
+  summary.outlier_z = outlier_z;
   for (const std::string& dir : results_dirs) {
     bool any = false;
-    std::map<std::string, std::string> verdicts;
+    std::map<std::string, std::string> verdicts, statuses;
     std::error_code error;
     if (!fs::is_directory(dir, error)) {
       throw InputError(dir, 0, 0, "not a results directory (pneumaid batch --out)");
@@ -90,14 +91,21 @@ FleetSummary MergeResults(const std::vector<std::string>& results_dirs, double o
                  entry.path().extension() == ".csv") {
         any = true;
         for (const auto& row : ReadRows(entry.path())) {
-          if (row.size() >= 3) verdicts[row[0]] = row[2];
+          if (row.size() >= 3) verdicts[row[0]] = row[2], statuses[row[0]] = row[1];
         }
       }
     }
     for (const auto& entry : fs::directory_iterator(dir)) {
       const fs::path params = entry.path() / "params.yaml";
-      if (!entry.is_directory() || !fs::exists(params)) continue;
+      const std::string name = entry.path().filename().string();
+      // A unit's result is complete with its stamp; a killed run's temporary
+      // or replaced directories (".tmp.") are not units.
+      if (!entry.is_directory() || name.find(".tmp.") != std::string::npos || !fs::exists(params) ||
+          !fs::exists(entry.path() / "stamp.txt"))
+        continue;
       any = true;
+      // An older result whose unit failed in the latest run is not current.
+      if (statuses.count(name) && statuses[name] == "failed") continue;
       FleetUnit unit;
       unit.unit = entry.path().filename().string();
       unit.results_dir = dir;
@@ -167,7 +175,7 @@ std::string FleetSummary::Csv() const {
   for (const FleetUnit& u : units) {
     std::string outlying;
     for (const auto& [path, z] : u.outlying) outlying += (outlying.empty() ? "" : " ") + path;
-    out << u.unit << "," << u.results_dir << ",\"" << u.verdict << "\","
+    out << CsvField(u.unit) << "," << CsvField(u.results_dir) << "," << CsvField(u.verdict) << ","
         << (u.outlying.empty() ? "no" : "yes") << "," << outlying;
     for (const FleetParameter& p : parameters) {
       const auto found = u.values.find(p.path);
@@ -181,7 +189,8 @@ std::string FleetSummary::Csv() const {
   for (const FleetParameter& p : parameters) out << "," << Format(p.mad);
   out << "\n";
   for (const FleetFailure& f : failures) {
-    out << f.unit << "," << f.file << ",\"FAILED: " << f.reason << "\",,";
+    out << CsvField(f.unit) << "," << CsvField(f.file) << "," << CsvField("FAILED: " + f.reason)
+        << ",,";
     for (std::size_t k = 0; k < parameters.size(); ++k) out << ",";
     out << "\n";
   }
@@ -192,7 +201,7 @@ std::string FleetSummary::Markdown() const {
   std::ostringstream out;
   out << "# Fleet summary\n\n"
       << units.size() << " units with a parameter set, " << failures.size()
-      << " failed.\n\n## Outliers (robust z-score > 3.5)\n\n";
+      << " failed.\n\n## Outliers (robust z-score > " << Format(outlier_z) << ")\n\n";
   bool any = false;
   for (const FleetUnit& u : units) {
     if (u.outlying.empty()) continue;

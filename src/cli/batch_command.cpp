@@ -1,5 +1,6 @@
 #include <unistd.h>
 
+#include <charconv>
 #include <cstdlib>
 #include <iostream>
 #include <string>
@@ -33,12 +34,15 @@ Shard ParseShard(const std::string& text) {
       throw InputError("--shard auto", 0, 0, why);
     return shard;
   }
+  // i/N, both whole numbers and nothing else (std::from_chars: no locale).
   const std::size_t slash = text.find('/');
-  char* end = nullptr;
-  const long index = std::strtol(text.c_str(), &end, 10);
-  const long count =
-      slash == std::string::npos ? 0 : std::strtol(text.c_str() + slash + 1, &end, 10);
-  if (slash == std::string::npos || *end != '\0' || count < 1 || index < 0 || index >= count) {
+  long index = -1, count = 0;
+  const char* begin = text.c_str();
+  const bool parsed =
+      slash != std::string::npos &&
+      std::from_chars(begin, begin + slash, index).ptr == begin + slash &&
+      std::from_chars(begin + slash + 1, begin + text.size(), count).ptr == begin + text.size();
+  if (!parsed || count < 1 || index < 0 || index >= count) {
     throw InputError("--shard", 0, 0, "expected i/N with 0 <= i < N (or auto), got '" + text + "'");
   }
   shard.index = static_cast<int>(index);

@@ -1,5 +1,6 @@
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -35,7 +36,23 @@ std::vector<std::string> SplitList(const std::string& text) {
   return items;
 }
 
+// The output directory is replaced as a whole: it must be new, empty, or an
+// earlier diagnose's output (never a directory of other files).
+void CheckOutDirectory(const std::string& out) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  if (!fs::exists(out, error)) return;
+  const bool earlier = fs::exists(fs::path(out) / "report.md") &&
+                       fs::exists(fs::path(out) / "report.json") &&
+                       fs::exists(fs::path(out) / "params.yaml");
+  if (!fs::is_directory(out, error) || !(fs::is_empty(out, error) || earlier)) {
+    throw InputError("--out", 0, 0,
+                     out + " exists and is not an earlier diagnose output; not replacing it");
+  }
+}
+
 int RunDiagnose(const DiagnoseArgs& args) {
+  CheckOutDirectory(args.out_dir);
   const Parameters params = LoadParams(args.params_path);
   const Unit unit = ReadUnit(args.unit_dir);
   DiagnoseOptions options;
@@ -54,24 +71,27 @@ int RunDiagnose(const DiagnoseArgs& args) {
     throw InputError("--effects", 0, 0, error.message().substr(object.size()));
   }
   std::cout << result.BriefReport();
-  // Everything is computed before anything is written; each file is atomic.
-  const std::filesystem::path out(args.out_dir);
-  std::filesystem::create_directories(out / "before");
-  std::filesystem::create_directories(out / "after");
+  // Everything is computed before anything is written, and the whole output
+  // directory is replaced at once: no mix of this run's files and an older one's.
+  std::map<std::string, std::string> files;
   for (const auto& [report, folder] :
        {std::make_pair(&result.before, "before"), std::make_pair(&result.after, "after")}) {
     for (const auto& e : report->experiments) {
-      if (!e.simulation.ok()) continue;
-      WriteFileAtomically((out / folder / (e.id + ".csv")).string(), ComparisonToCsv(e));
+      if (e.simulation.ok()) files[std::string(folder) + "/" + e.id + ".csv"] = ComparisonToCsv(e);
     }
   }
-  SaveParams(result.params, (out / "params.yaml").string());
-  WriteFileAtomically((out / "report.md").string(), result.MarkdownReport());
+  files["params.yaml"] = ParamsToYaml(result.params);
+  files["report.md"] = result.MarkdownReport();
   const std::string json = DiagnoseToJson(result);
-  WriteFileAtomically((out / "report.json").string(), json);
+  files["report.json"] = json;
+  ReplaceDirectoryAtomically(args.out_dir, files);
   if (!args.json_path.empty()) WriteFileAtomically(args.json_path, json);
-  std::cout << "wrote " << (out / "report.md").string() << ", params.yaml, report.json, "
+  std::cout << "wrote " << args.out_dir << "/report.md, params.yaml, report.json, "
             << "before/ and after/ CSVs\n";
+  if (result.before.numerical_failure() || result.after.numerical_failure()) {
+    std::cerr << "error: a simulation of the diagnosed runs failed; see report.md\n";
+    return kNumericalFailure;
+  }
   return kSuccess;  // named or not: a base model that does not explain the logs is normal input
 }
 

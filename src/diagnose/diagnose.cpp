@@ -4,12 +4,14 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <mutex>
 #include <set>
 #include <thread>
 
 #include "candidates.h"
 #include "discrepancy_map.h"
+#include "pneumaid/ident/fit_result.h"
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/effects.h"
@@ -106,17 +108,28 @@ Outcome FitCandidate(const Outcome& reference, const std::string& effect, const 
   return best;
 }
 
-// Runs `tasks` on up to `threads` threads.
+// Runs `tasks` on up to `threads` threads; the first exception a task threw
+// is rethrown here, after every thread has joined (none escapes a thread).
 void RunAll(std::vector<std::function<void()>>* tasks, int threads) {
   std::atomic<std::size_t> next{0};
+  std::mutex failure_mutex;
+  std::exception_ptr failure;
   const auto worker = [&] {
-    for (std::size_t i = next++; i < tasks->size(); i = next++) (*tasks)[i]();
+    for (std::size_t i = next++; i < tasks->size(); i = next++) {
+      try {
+        (*tasks)[i]();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+      }
+    }
   };
   std::vector<std::thread> pool;
   const int extra = std::min<int>(threads, static_cast<int>(tasks->size())) - 1;
   for (int t = 0; t < extra; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
 }
 
 // The decision rule's numbers for one candidate from its folds
@@ -272,8 +285,11 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
                         const DiagnoseOptions& options) {
   std::vector<std::string> runs;
   CheckInputs(params, unit, options, &runs);
-  const auto log = [&options](const std::string& line) {
-    if (options.log) options.log(line);
+  std::mutex log_mutex;  // candidate fits log from several threads
+  const auto log = [&options, &log_mutex](const std::string& line) {
+    if (!options.log) return;
+    std::lock_guard<std::mutex> lock(log_mutex);
+    options.log(line);
   };
   DiagnoseResult result;
   result.params = params;
@@ -281,6 +297,8 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
   const std::vector<std::vector<std::string>> folds = Folds(runs);
   std::vector<std::string> tried_effects = options.effects;
   for (int iteration = 0; iteration <= options.max_effects; ++iteration) {
+    // A stopped run's simulations all fail: that is no diagnosis.
+    if (options.stop != nullptr && options.stop->load()) throw FitError("diagnose", "stopped");
     DiagnoseIteration it;
     const ValidationReport base = Evaluate(result.params, unit, runs, options.stop);
     if (iteration == 0) result.before = base;

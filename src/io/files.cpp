@@ -56,23 +56,28 @@ void ReplaceDirectoryAtomically(const std::string& directory,
   if (!fs::create_directories(temporary, error) && error) {
     throw InputError(directory, 0, 0, "cannot create a directory beside it: " + error.message());
   }
+  fs::path old;
   try {
-    for (const auto& [name, contents] : files)
-      WriteFileAtomically((temporary / name).string(), contents);
-    fs::path old;
+    for (const auto& [name, contents] : files) {
+      const fs::path file = temporary / name;  // a name may hold a subdirectory
+      fs::create_directories(file.parent_path());
+      WriteFileAtomically(file.string(), contents);
+    }
     if (fs::exists(target)) {
       old = UniqueTemporaryName(directory + ".old");
       fs::rename(target, old);
     }
     fs::rename(temporary, target);
-    if (!old.empty()) fs::remove_all(old, error);
   } catch (const fs::filesystem_error& failure) {
+    if (!old.empty() && !fs::exists(target, error)) fs::rename(old, target, error);  // put it back
     fs::remove_all(temporary, error);
     throw InputError(directory, 0, 0, std::string("cannot move into place: ") + failure.what());
   } catch (...) {
+    if (!old.empty() && !fs::exists(target, error)) fs::rename(old, target, error);
     fs::remove_all(temporary, error);
     throw;
   }
+  if (!old.empty()) fs::remove_all(old, error);
 }
 
 std::string ReadTextFile(const std::string& path, const std::string& what) {

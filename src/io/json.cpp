@@ -22,6 +22,10 @@ std::string JsonNumber(double value) {
 std::string JsonString(const std::string& text) {
   std::string out = "\"";
   for (char c : text) {
+    if (c == '<') {
+      out += "\\u003c";
+      continue;
+    }
     if (c == '"' || c == '\\') out += '\\';
     if (static_cast<unsigned char>(c) < 0x20) {
       char escaped[8];
@@ -30,6 +34,16 @@ std::string JsonString(const std::string& text) {
       continue;
     }
     out += c;
+  }
+  return out + "\"";
+}
+
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"') out += '"';
+    out += (c == '\n' || c == '\r') ? ' ' : c;
   }
   return out + "\"";
 }

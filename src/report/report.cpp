@@ -196,12 +196,11 @@ std::string UnitReportHtml(const Parameters& params, const Unit& unit,
         const auto m = e.channels.find(view.name);
         if (m == e.channels.end()) continue;
         char line[200];
-        std::snprintf(line, sizeof(line), "<td>%.4g %s</td><td>%.4g %s</td><td>%s</td>",
-                      m->second.rmse * view.scale, view.unit, m->second.max_abs * view.scale,
-                      view.unit,
-                      m->second.nrmse_fit_percent
-                          ? (std::to_string(*m->second.nrmse_fit_percent).substr(0, 5)).c_str()
-                          : "-");
+        std::snprintf(
+            line, sizeof(line), "<td>%.4g %s</td><td>%.4g %s</td><td>%s</td>",
+            m->second.rmse * view.scale, view.unit, m->second.max_abs * view.scale, view.unit,
+            m->second.nrmse_fit_percent ? FormatSignificant(*m->second.nrmse_fit_percent, 4).c_str()
+                                        : "-");
         body << "<tr><td class=l>" << Html(e.id) << "</td><td class=l>" << view.name << "</td>"
              << line << "</tr>\n";
       }

@@ -53,6 +53,13 @@ TEST_F(DiagnoseCliTest, BadInputExitsTwoAndWritesNothing) {
           testing::Source("datasets/hidden/valve-lag") + " --out " + out + " --max-effects 9"),
       2);
   EXPECT_EQ(Listing(dir_), before);
+  // An --out that holds other files is never replaced.
+  const std::string notes = Write("notes.txt", "mine");
+  EXPECT_EQ(Run("diagnose --params " + testing::Source("configs/paper.yaml") + " " +
+                testing::Source("datasets/hidden/valve-lag") + " --out " + dir_.string()),
+            2);
+  EXPECT_NE(Stderr().find("not an earlier diagnose output"), std::string::npos) << Stderr();
+  EXPECT_EQ(Read(notes), "mine");
 }
 
 }  // namespace

@@ -57,6 +57,13 @@ TEST(SupplyDroopTest, TheSupplyPressureSolvesItsEquation) {
                 1e-9 * c.supply_pressure_Pa)
         << p1;
   }
+  // A chamber above the supply (gas pushed back into the line): the root
+  // lies above p_supply, and is found there too.
+  const double above = 1.4 * c.supply_pressure_Pa;
+  const double back = DroopedSupplyPressure(c, Gains(c, 0.7), above, 1.6e5);
+  EXPECT_GT(back, c.supply_pressure_Pa);
+  EXPECT_NEAR(back, c.supply_pressure_Pa - r * Drawn(c, Gains(c, 0.7), back, above, 1.6e5),
+              1e-9 * c.supply_pressure_Pa);
   // Valves shut: nothing drawn, no droop.
   EXPECT_DOUBLE_EQ(DroopedSupplyPressure(c, Gains(c, 0.0), 1.5e5, 4e5), c.supply_pressure_Pa);
 }

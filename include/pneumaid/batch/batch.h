@@ -94,6 +94,7 @@ struct FleetFailure {
   std::string unit, reason, file;
 };
 struct FleetSummary {
+  double outlier_z = 3.5;  // the limit the units were flagged with
   std::vector<FleetParameter> parameters;
   std::vector<FleetUnit> units;
   std::vector<FleetFailure> failures;

@@ -1,5 +1,5 @@
-// Writing JSON by hand, for the machine-readable reports: numbers in the C
-// locale (null for non-finite values), strings escaped.
+// Writing JSON and CSV by hand, for the machine-readable reports: numbers
+// without the locale (null for non-finite values), strings escaped.
 #pragma once
 
 #include <string>
@@ -14,7 +14,12 @@ std::string JsonNumber(double value);
 // one way numbers are written into data files (CSV, JSON).
 std::string FormatSignificant(double value, int digits);
 
-// A quoted, escaped JSON string.
+// A CSV field: as is, or quoted with inner quotes doubled when it holds a
+// comma, a quote or a line break (a line break becomes a space).
+std::string CsvField(const std::string& text);
+
+// A quoted, escaped JSON string ('<' as \u003c, so it is safe inside a
+// <script> element too).
 std::string JsonString(const std::string& text);
 
 }  // namespace pneumaid

@@ -8,6 +8,7 @@
 // exact Jacobians (and, later, parameter sensitivities).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
@@ -233,7 +234,7 @@ T ValveFlow(const ActuatorCoefficients<T>& c, const std::array<T, kValveCount>& 
 // supply_droop: the supply pressure p_s at the valves solves
 // p_s = p_supply - r q_s(p_s), q_s the mass flow drawn through both supply
 // valves. f(p_s) = p_s - p_supply + r q_s(p_s) rises with p_s (q_s does), so
-// the root is unique; it is bracketed in [p_atm / 2, p_supply] and found in
+// the root is unique; it is bracketed in [p_atm / 2, max(p_supply, p1, p2)] and found in
 // doubles by safeguarded Newton steps, then one Newton step in T from that
 // root gives the implicit derivatives -f_theta / f' exactly (f = 0 there).
 template <typename T>
@@ -261,7 +262,10 @@ T DroopedSupplyPressure(const ActuatorCoefficients<T>& c, const std::array<T, kV
   for (int i = 0; i < kValveCount; ++i) g[i] = value(gain[i]);
   const double q1 = value(p1), q2 = value(p2);
   const auto f = [&](double supply) { return residual(supply, g, q1, q2, plain); };
-  double low = 0.5 * plain.atmospheric_pressure_Pa, high = plain.supply_pressure_Pa;
+  // f >= 0 at the highest of p_supply and the chambers' pressures (no flow
+  // can be drawn there): a chamber above the supply pushes the root above it.
+  double low = 0.5 * plain.atmospheric_pressure_Pa;
+  double high = std::max({plain.supply_pressure_Pa, q1, q2});
   double root = high, slope = 1.0;
   const double tolerance = 1e-13 * plain.supply_pressure_Pa;
   for (int iteration = 0; iteration < 100; ++iteration) {
