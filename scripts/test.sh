@@ -33,6 +33,9 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   SLOW+='|ClosesMostOfItsGap/(ValveLag|FlowSensorLag|PipelineLag|HeatTransfer|SupplyDroop|FrictionPressure|ValveDeadzone)'
   SLOW+='|NamesNothingOnCleanUnits|SlightlyOffBaseCoefficients|NamesTwoHiddenEffects'
   SLOW+='|TellsAValveLagFromAFlowMeterLag|ValidatesAndDiagnosesEachUnitWhenAsked'
+  # Whole batch processes with refinement, killed and resumed: process-level
+  # behaviour the Release pass checks; the resume path's code runs in BatchTest.
+  SLOW+='|AKilledRunResumesToTheSameResults'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
 fi

@@ -48,10 +48,11 @@ TEST_F(BatchCliTest, AKilledRunResumesToTheSameResults) {
              fs::copy_options::recursive);
   const std::string killed = (dir_ / "killed").string(), whole = (dir_ / "whole").string();
   const std::string batch = "batch " + fleet.string() + " --refine -j 1 --out ";
-  // Each unit refines for about a second, in name order: the kill lands as
-  // soon as the first unit's result is in place.
+  // Each unit refines for about a second (more under a sanitizer), in name
+  // order: the kill lands as soon as the first unit's result is in place
+  // (polled every 20 ms for up to two minutes).
   const std::string command = std::string(PNEUMAID_CLI) + " " + batch + killed +
-                              " > /dev/null 2>&1 & pid=$!; for i in $(seq 400); do "
+                              " > /dev/null 2>&1 & pid=$!; for i in $(seq 6000); do "
                               "[ -d " +
                               killed +
                               "/PVQ13-0001 ] && break; sleep 0.02; done; "
