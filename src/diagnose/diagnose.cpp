@@ -249,8 +249,7 @@ void CheckInputs(const Parameters& params, const Unit& unit, const DiagnoseOptio
     }
   }
   for (const Experiment& e : unit.experiments) {
-    if (e.entry.kind == ExperimentKind::kValidation || e.entry.kind == ExperimentKind::kStroke)
-      runs->push_back(e.entry.id);
+    if (IsSimulable(e.entry.kind)) runs->push_back(e.entry.id);
   }
   if (runs->empty()) {
     throw InputError(unit.manifest_path(), 0, 0,

@@ -25,10 +25,6 @@ const Channel kChannelTable[5] = {
     {"q1", &Trajectory::q1_kg_per_s, &TrajectorySensitivities::q1, 0, 0},
     {"q2", &Trajectory::q2_kg_per_s, &TrajectorySensitivities::q2, 0, 0}};
 
-bool IsSimulable(const Experiment& e) {
-  return e.entry.kind == ExperimentKind::kStroke || e.entry.kind == ExperimentKind::kValidation;
-}
-
 // Experiments named by id or kind; InputError for a name that matches none.
 std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
                                       const FitSpec& spec, bool must_match) {
@@ -39,7 +35,7 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
       const bool by_kind = name == ToString(e.entry.kind);
       if (!by_kind && e.entry.id != name) continue;
       matched = true;
-      if (!IsSimulable(e)) {
+      if (!IsSimulable(e.entry.kind)) {
         if (by_kind) continue;
         throw InputError(spec.source, 0, 0,
                          "experiment '" + name + "' is a " + ToString(e.entry.kind) +

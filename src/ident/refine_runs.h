@@ -62,9 +62,6 @@ InitialState StartOf(const FitExperiment& e, const double* offsets);
 // The rows of the residual table: x, p1, p2, q1, q2.
 extern const Channel kChannelTable[5];
 
-// Stroke and validation runs can be simulated; valve and tube logs cannot.
-bool IsSimulable(const Experiment& e);
-
 // Experiments named by id or kind; InputError for a name that matches none.
 std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
                                       const FitSpec& spec, bool must_match);

@@ -446,6 +446,10 @@ void PlacePositions(const CsvTable& table, const CsvColumn& column, const Manife
 
 }  // namespace
 
+bool IsSimulable(ExperimentKind kind) {
+  return kind == ExperimentKind::kStroke || kind == ExperimentKind::kValidation;
+}
+
 const char* ToString(ExperimentKind kind) {
   switch (kind) {
     case ExperimentKind::kValve:

@@ -184,8 +184,7 @@ std::string UnitReportHtml(const Parameters& params, const Unit& unit,
   // Every simulable run: the metrics table; the validation runs: plots.
   ValidationOptions v;
   for (const Experiment& e : unit.experiments) {
-    if (e.entry.kind == ExperimentKind::kValidation || e.entry.kind == ExperimentKind::kStroke)
-      v.experiment_ids.push_back(e.entry.id);
+    if (IsSimulable(e.entry.kind)) v.experiment_ids.push_back(e.entry.id);
   }
   if (!v.experiment_ids.empty()) {
     const ValidationReport report = ValidateUnit(params, unit, v);

@@ -146,7 +146,7 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
             ? e.entry.kind == ExperimentKind::kValidation
             : std::count(options.experiment_ids.begin(), options.experiment_ids.end(), e.entry.id);
     if (!chosen) continue;
-    if (e.entry.kind != ExperimentKind::kValidation && e.entry.kind != ExperimentKind::kStroke) {
+    if (!IsSimulable(e.entry.kind)) {
       throw InputError(unit.manifest_path(), e.entry.manifest_line, 0,
                        "experiment '" + e.entry.id + "' is a " + ToString(e.entry.kind) +
                            " log; only stroke and validation runs can be simulated");

@@ -21,6 +21,10 @@ enum class ExperimentKind { kValve, kPipeline, kStroke, kValidation };
 enum class PositionOrigin { kMid, kRetracted };
 
 const char* ToString(ExperimentKind kind);
+
+// Stroke and validation runs can be simulated (the whole actuator from a
+// logged start); valve and tube logs cannot. The one home of that rule.
+bool IsSimulable(ExperimentKind kind);
 const char* ToString(PositionOrigin origin);
 
 // Rig constants of the manifest, SI. Defaults are the seed paper's values.
