@@ -10,6 +10,7 @@
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
+#include "pneumaid/report/report.h"
 
 namespace pneumaid::cli {
 namespace {
@@ -23,6 +24,7 @@ struct BatchArgs {
   double timeout_s = 0;
   std::string prior_path = DefaultConfig("paper.yaml");
   std::string spec_path = DefaultConfig("fit-default.yaml");
+  std::string html_path;
 };
 
 Shard ParseShard(const std::string& text) {
@@ -71,6 +73,12 @@ int RunBatchCommand(const BatchArgs& args) {
   const BatchSummary summary = RunBatch(args.fleet_dir, args.out_dir, options);
   if (terminal) std::cerr << "\n";
   std::cout << summary.BriefReport();
+  if (!args.html_path.empty()) {
+    // The page of what the results directory holds now (every shard's units).
+    ReportOptions page;
+    page.text_report = summary.BriefReport();
+    WriteHtml(args.html_path, FleetReportHtml(MergeResults({args.out_dir}), page));
+  }
   return summary.failed() > 0 ? kNumericalFailure : kSuccess;
 }
 
@@ -96,16 +104,20 @@ CommandRunner AddBatchCommand(CLI::App* app) {
       ->check(CLI::NonNegativeNumber);
   app->add_option("--prior", args->prior_path, "identify's prior")->capture_default_str();
   app->add_option("--spec", args->spec_path, "fit spec for --refine")->capture_default_str();
+  AddHtmlOption(app, &args->html_path);
   return [args]() { return RunBatchCommand(*args); };
 }
 
 CommandRunner AddMergeCommand(CLI::App* app) {
   auto dirs = std::make_shared<std::vector<std::string>>();
   auto out = std::make_shared<std::string>();
+  auto html = std::make_shared<std::string>();
   app->add_option("results", *dirs, "results directories (of batch runs or shards)")->required();
   app->add_option("--out", *out, "write fleet-summary.csv and fleet-summary.md here");
-  return [dirs, out]() {
+  AddHtmlOption(app, html.get());
+  return [dirs, out, html]() {
     const FleetSummary summary = MergeResults(*dirs);
+    const std::string page = html->empty() ? "" : FleetReportHtml(summary, ReportOptions{});
     if (out->empty()) {
       std::cout << summary.Markdown();
     } else {
@@ -114,6 +126,7 @@ CommandRunner AddMergeCommand(CLI::App* app) {
       std::cout << summary.Markdown().substr(0, summary.Markdown().find("## Units")) << "wrote "
                 << *out << "/fleet-summary.csv and fleet-summary.md\n";
     }
+    WriteHtml(*html, page);
     return kSuccess;
   };
 }

@@ -29,9 +29,16 @@ std::map<std::string, double> ParseAssignments(
     const std::vector<std::string>& items, const std::string& option, const std::string& expected,
     const std::function<bool(const std::string&)>& key_allowed = {});
 
-// Prints a refinement's report and writes its parameter set; the exit status
-// says whether it converged (refine, identify --refine).
-int ReportAndSave(const RefineResult& result, const std::string& out_path);
+// Prints a refinement's report and writes its parameter set (and, with
+// `html_path`, the unit's report of it, `text_before` heading its text); the
+// exit status says whether it converged (refine, identify --refine).
+int ReportAndSave(const RefineResult& result, const Unit& unit, const std::string& out_path,
+                  const std::string& html_path, const std::string& text_before = "");
+
+// --html FILE on a command: one self-contained HTML report (report.h).
+void AddHtmlOption(CLI::App* app, std::string* path);
+// Writes the page atomically and says so; nothing for an empty path.
+void WriteHtml(const std::string& path, const std::string& html);
 
 // A shipped config (paper.yaml, fit-default.yaml): an installation's, beside
 // the binary (<prefix>/share/pneumaid/configs), else this source tree's.

@@ -11,6 +11,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
+#include "pneumaid/report/report.h"
 
 namespace pneumaid::cli {
 namespace {
@@ -24,6 +25,7 @@ struct DiagnoseArgs {
   std::string effects;  // "a,b,..."
   int threads = 1;
   bool verbose = false;
+  std::string html_path;
 };
 
 std::vector<std::string> SplitList(const std::string& text) {
@@ -84,10 +86,17 @@ int RunDiagnose(const DiagnoseArgs& args) {
   files["report.md"] = result.MarkdownReport();
   const std::string json = DiagnoseToJson(result);
   files["report.json"] = json;
+  std::string html;
+  if (!args.html_path.empty()) {
+    html = DiagnoseReportHtml({files["report.md"], result.named_effects, params, result.params,
+                               result.before, result.after},
+                              unit, ReportOptions{});
+  }
   ReplaceDirectoryAtomically(args.out_dir, files);
   if (!args.json_path.empty()) WriteFileAtomically(args.json_path, json);
   std::cout << "wrote " << args.out_dir << "/report.md, params.yaml, report.json, "
             << "before/ and after/ CSVs\n";
+  WriteHtml(args.html_path, html);
   if (result.before.numerical_failure() || result.after.numerical_failure()) {
     std::cerr << "error: a simulation of the diagnosed runs failed; see report.md\n";
     return kNumericalFailure;
@@ -115,6 +124,7 @@ CommandRunner AddDiagnoseCommand(CLI::App* app) {
   app->add_option("--threads", args->threads, "candidate fits run in parallel")
       ->check(CLI::Range(1, 256));
   app->add_flag("--verbose", args->verbose, "progress on stderr");
+  AddHtmlOption(app, &args->html_path);
   return [args]() { return RunDiagnose(*args); };
 }
 

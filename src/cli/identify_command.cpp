@@ -8,6 +8,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
+#include "pneumaid/report/report.h"
 
 namespace pneumaid::cli {
 namespace {
@@ -22,6 +23,7 @@ struct IdentifyArgs {
   bool fix_u_sat = false;
   std::string spec_path = DefaultConfig("fit-default.yaml");
   int threads = 1;
+  std::string html_path;
 };
 
 std::set<Component> ParseComponents(const std::string& list) {
@@ -67,11 +69,15 @@ int RunIdentify(const IdentifyArgs& args) {
   if (args.refine) {
     RefineOptions refine;
     refine.threads = args.threads;
-    return ReportAndSave(Refine(identified, unit, LoadFitSpec(args.spec_path), refine),
-                         args.out_path);
+    return ReportAndSave(Refine(identified, unit, LoadFitSpec(args.spec_path), refine), unit,
+                         args.out_path, args.html_path, report.BriefReport());
   }
+  ReportOptions page;
+  page.text_report = report.BriefReport();
+  const std::string html = args.html_path.empty() ? "" : UnitReportHtml(identified, unit, page);
   SaveParams(identified, args.out_path);
   std::cout << "wrote " << args.out_path << "\n";
+  WriteHtml(args.html_path, html);
   return kSuccess;
 }
 
@@ -94,6 +100,7 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
   app->add_option("--spec", args->spec_path, "fit spec for --refine")->capture_default_str();
   app->add_option("--threads", args->threads, "--refine: experiments simulated in parallel")
       ->check(CLI::Range(1, 256));
+  AddHtmlOption(app, &args->html_path);
   return [args]() { return RunIdentify(*args); };
 }
 

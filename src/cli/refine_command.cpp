@@ -5,6 +5,7 @@
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
+#include "pneumaid/report/report.h"
 
 namespace pneumaid::cli {
 namespace {
@@ -16,6 +17,7 @@ struct RefineArgs {
   std::string out_path;
   int threads = 1;
   bool verbose = false;
+  std::string html_path;
 };
 
 int RunRefine(const RefineArgs& args) {
@@ -26,19 +28,24 @@ int RunRefine(const RefineArgs& args) {
   options.threads = args.threads;
   if (args.verbose) options.log = [](const std::string& line) { std::cout << line << "\n"; };
   const RefineResult result = Refine(start, unit, spec, options);
-  return ReportAndSave(result, args.out_path);
+  return ReportAndSave(result, unit, args.out_path, args.html_path);
 }
 
 }  // namespace
 
-int ReportAndSave(const RefineResult& result, const std::string& out_path) {
+int ReportAndSave(const RefineResult& result, const Unit& unit, const std::string& out_path,
+                  const std::string& html_path, const std::string& text_before) {
   std::cout << result.BriefReport();
   if (!result.has_values()) {
     std::cerr << "error: refinement failed: " << result.reason << " (nothing written)\n";
     return kNumericalFailure;
   }
+  ReportOptions page;
+  page.text_report = text_before + result.BriefReport();
+  const std::string html = html_path.empty() ? "" : UnitReportHtml(result.params, unit, page);
   SaveParams(result.params, out_path);
   std::cout << "wrote " << out_path << "\n";
+  WriteHtml(html_path, html);
   if (result.status == FitStatus::kNotExplained) {
     std::cerr << "error: " << result.reason
               << "\n  the best set found is written, with that verdict in its provenance\n";
@@ -61,6 +68,7 @@ CommandRunner AddRefineCommand(CLI::App* app) {
   app->add_option("--threads", args->threads, "experiments simulated in parallel")
       ->check(CLI::Range(1, 256));
   app->add_flag("--verbose", args->verbose, "print the solver's progress");
+  AddHtmlOption(app, &args->html_path);
   return [args]() { return RunRefine(*args); };
 }
 

@@ -9,6 +9,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
+#include "pneumaid/report/report.h"
 #include "pneumaid/validate/validate.h"
 
 namespace pneumaid::cli {
@@ -22,6 +23,7 @@ struct ValidateArgs {
   std::vector<std::string> min_fit;   // "x=95"
   std::vector<std::string> max_rmse;  // "p1=1e4"
   std::vector<std::string> experiments;
+  std::string html_path;
 };
 
 // "x=95" items: a channel of the comparison and a number.
@@ -45,6 +47,9 @@ int RunValidate(const ValidateArgs& args) {
   options.experiment_ids = args.experiments;
   const ValidationReport report = ValidateUnit(params, unit, options);
   std::cout << report.BriefReport();
+  ReportOptions page;
+  page.text_report = report.BriefReport();
+  const std::string html = args.html_path.empty() ? "" : UnitReportHtml(params, unit, page);
   // Everything is computed before anything is written; each file is atomic.
   if (!args.json_path.empty()) WriteFileAtomically(args.json_path, ReportToJson(report));
   if (!args.csv_dir.empty()) {
@@ -54,6 +59,7 @@ int RunValidate(const ValidateArgs& args) {
       WriteFileAtomically(args.csv_dir + "/" + e.id + "-validation.csv", ComparisonToCsv(e));
     }
   }
+  WriteHtml(args.html_path, html);
   if (report.numerical_failure()) return kNumericalFailure;
   return report.thresholds_met() ? kSuccess : kQualityMissed;
 }
@@ -74,6 +80,7 @@ CommandRunner AddValidateCommand(CLI::App* app) {
       "CHANNEL=VALUE: highest RMSE accepted, SI (default p1=1e4 p2=1e4 Pa; repeatable)");
   app->add_option("--experiment", args->experiments,
                   "validate these experiment ids (default: every validation run; repeatable)");
+  AddHtmlOption(app, &args->html_path);
   return [args]() { return RunValidate(*args); };
 }
 

@@ -4,7 +4,9 @@
 #include <cstdio>
 #include <sstream>
 
+#include "../io/yaml_reader.h"
 #include "pneumaid/diagnose/diagnose.h"
+#include "pneumaid/io/files.h"
 #include "pneumaid/io/json.h"
 
 namespace pneumaid {
@@ -174,6 +176,37 @@ std::string DiagnoseToJson(const DiagnoseResult& result) {
   }
   out << "]}\n";
   return out.str();
+}
+
+namespace {
+
+// JSON is YAML's flow style: the report is read back with the YAML readers'
+// checks (syntax errors at their line and column).
+class NamedEffectsReader : internal::YamlReader {
+ public:
+  explicit NamedEffectsReader(const std::string& path) : YamlReader(path) {}
+
+  std::vector<std::string> Read(const std::string& text) const {
+    return Guarded([&]() {
+      const YAML::Node root = LoadMapping(text, "expected a pneumaid-report/1 JSON object");
+      const YAML::Node format = root["format"];
+      if (!format || Text(format) != "pneumaid-report/1")
+        Fail(format ? format : root, "format: expected pneumaid-report/1");
+      const YAML::Node named = root["named_effects"];
+      if (!named || !named.IsSequence())
+        Fail(named ? named : root, "named_effects: expected a list (a diagnose report)");
+      std::vector<std::string> effects;
+      for (const auto& effect : named) effects.push_back(Text(effect));
+      return effects;
+    });
+  }
+};
+
+}  // namespace
+
+std::vector<std::string> ReadNamedEffects(const std::string& report_json_path) {
+  return NamedEffectsReader(report_json_path)
+      .Read(ReadTextFile(report_json_path, "a diagnose report (pneumaid-report/1 JSON)"));
 }
 
 }  // namespace pneumaid

@@ -243,7 +243,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   result.positive.params = prior.positive;
   result.negative.params = prior.negative;
   const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
-  const double band = options.stuck_band_m + 6.0 * sigma_m;
+  const double band = StuckBand(options, sigma_m);
   const StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
   const Block prior_blocks[2] = {Pack(prior.positive), Pack(prior.negative)};
   result.excluded_segments = data.excluded;

@@ -248,7 +248,7 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
 }
 
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m) {
+                          double sigma_x_m, bool slides_under_segments) {
   const RigConstants& rig = unit.manifest.rig;
   const double force_sigma_N = std::hypot(unit.manifest.DeclaredSigma("p1", 0.0) * rig.area_1_m2(),
                                           unit.manifest.DeclaredSigma("p2", 0.0) * rig.area_2_m2());
@@ -292,7 +292,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     std::vector<bool> covered(x.size(), false);
     for (const auto& [begin, end] : runs)
       std::fill(covered.begin() + begin, covered.begin() + end, true);
-    for (std::size_t k = first_segment; k < data.segments.size(); ++k) {
+    for (std::size_t k = first_segment; k < data.segments.size() && !slides_under_segments; ++k) {
       const Segment& segment = data.segments[k];
       std::fill(covered.begin() + segment.begin, covered.begin() + segment.end, true);
     }
@@ -386,3 +386,23 @@ void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
 }
 
 }  // namespace pneumaid::friction_internal
+
+namespace pneumaid {
+
+std::vector<FrictionMapSample> FrictionVelocityMap(const Unit& unit,
+                                                   const FrictionFitOptions& options) {
+  using namespace friction_internal;
+  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
+  FrictionFitOptions with_slides = options;
+  with_slides.force_balance = true;
+  const StrokeData data =
+      PrepareStrokes(unit, with_slides, StuckBand(options, sigma_m), sigma_m, true);
+  std::vector<FrictionMapSample> map;
+  for (const internal::SlideCluster& c : data.clusters) {
+    for (std::size_t i = 0; i < c.speed_m_per_s.size(); ++i)
+      map.push_back({c.direction, c.speed_m_per_s[i], c.friction_N[i]});
+  }
+  return map;
+}
+
+}  // namespace pneumaid

@@ -81,6 +81,11 @@ struct StrokeData {
   std::string skipped;  // logs that could not be used, why
 };
 
+// The stuck band of FrictionFitOptions widened by the declared position noise.
+inline double StuckBand(const FrictionFitOptions& options, double sigma_x_m) {
+  return options.stuck_band_m + 6.0 * sigma_x_m;
+}
+
 // The rod counts as stuck over these runs [begin, end) of a log.
 Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, double max_speed,
                double max_accel, double sigma);
@@ -89,9 +94,10 @@ Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, doubl
 double Median(std::vector<double> values);
 
 // Per stroke log its driving force and position, the replay segments cut
-// from them and the force-balance slides no segment covers.
+// from them and the force-balance slides no segment covers (every smooth
+// slide with `slides_under_segments`: the friction-velocity map).
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m);
+                          double sigma_x_m, bool slides_under_segments = false);
 
 // A starting point for Fs: the median force at breakaway of the slides of
 // `direction` (the stroke ends' breakaways with fewer than three).

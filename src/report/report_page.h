@@ -15,6 +15,10 @@ th { background: #f0f0f0; } td.l, th.l { text-align: left; }
 .prior { color: #888; } .note { color: #555; font-size: 0.9em; }
 .plots { display: flex; flex-wrap: wrap; gap: 8px; }
 #pneumaid-status { font-family: monospace; padding: 4px; }
+tr.outlier td { background: #ffe2b0; } tr.failed td { background: #fdd; }
+.named { font-size: 1.1em; padding: 6px; margin: 0.6em 0; background: #eef4ff; border-left: 4px solid #1f77b4; }
+pre { background: #f6f6f6; padding: 6px; font-size: 0.85em; overflow-x: auto; }
+a { color: #1f5fa0; }
 #pneumaid-status.ok { background: #dfd; } #pneumaid-status.fail { background: #fdd; }
 )PNEUMAID_PAGE";
 

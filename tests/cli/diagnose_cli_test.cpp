@@ -21,9 +21,14 @@ TEST_F(DiagnoseCliTest, TellsAValveLagFromAFlowMeterLag) {
     const std::filesystem::path out = dir_ / unit;
     ASSERT_EQ(Run("diagnose --params " + testing::Source("configs/paper.yaml") + " " +
                   testing::Source(std::string("datasets/hidden/") + unit) + " --out " +
-                  out.string() + " --effects valve_lag,flow_sensor_lag --max-effects 1"),
+                  out.string() + " --effects valve_lag,flow_sensor_lag --max-effects 1" +
+                  " --html " + out.string() + ".html"),
               0)
         << Stderr() << Stdout();
+    // The page names the effect too, with the residuals before and after.
+    const std::string page = Read(out.string() + ".html");
+    EXPECT_NE(page.find(std::string("Named effect: <b>") + expected + "</b>"), std::string::npos);
+    EXPECT_NE(page.find("\"label\":\"after\""), std::string::npos);
     const std::string report = Read(out / "report.md");
     EXPECT_NE(report.find(std::string("### Named: ") + expected), std::string::npos) << report;
     EXPECT_NE(report.find("Held-back gain per channel:"), std::string::npos);

@@ -55,12 +55,17 @@ TEST_F(RefineCliTest, VerboseShowsTheSolversProgressThroughTheLogSink) {
 TEST_F(RefineCliTest, IdentifyRefineRunsTheComponentFitsThenTheRefinement) {
   const std::string spec = Write("small.yaml", kSmallSpec);
   const std::string out = (dir_ / "identified.yaml").string();
+  const std::string html = (dir_ / "identified.html").string();
   ASSERT_EQ(Run("identify " + testing::Source("datasets/paper-rig") + " --refine --spec " + spec +
-                " --out " + out),
+                " --out " + out + " --html " + html),
             0)
       << Stdout() << Stderr();
   EXPECT_NE(Stdout().find("From the prior"), std::string::npos) << Stdout();  // identify's report
   EXPECT_NE(Stdout().find("Refinement: converged"), std::string::npos) << Stdout();
+  // The page of the refined set carries both reports.
+  const std::string page = Read(html);
+  EXPECT_NE(page.find("From the prior"), std::string::npos);
+  EXPECT_NE(page.find("Refinement: converged"), std::string::npos);
   const std::string written = Read(out);
   EXPECT_NE(written.find("friction:"), std::string::npos) << written;  // identify's provenance
   EXPECT_NE(written.find("refine:"), std::string::npos) << written;

@@ -118,4 +118,16 @@ struct FrictionFitResult : FitResult {
 FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
                               const FrictionFitOptions& options);
 
+// The friction-velocity map of the seed paper's Figs. 8 and 9 read off the
+// stroke logs: the force balance dir (F - M a) of every smoothly sliding
+// sample (friction_slides.h), stick-slip slides included, per direction. What
+// a plot of the fitted Stribeck curves is judged against.
+struct FrictionMapSample {
+  int direction = 0;  // +1 extending, -1 retracting
+  double speed_m_per_s = 0;
+  double friction_N = 0;
+};
+std::vector<FrictionMapSample> FrictionVelocityMap(const Unit& unit,
+                                                   const FrictionFitOptions& options);
+
 }  // namespace pneumaid

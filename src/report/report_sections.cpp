@@ -1,0 +1,97 @@
+#include "report_sections.h"
+
+#include "pneumaid/io/input_error.h"
+#include "pneumaid/io/json.h"
+#include "pneumaid/model/effects.h"
+#include "pneumaid/model/parameter_table.h"
+
+namespace pneumaid {
+
+bool ReportOptions::IsValid(std::string* error) const {
+  if (max_columns < 10) {
+    if (error != nullptr) *error = "max_columns must be >= 10";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace pneumaid
+
+namespace pneumaid::report_internal {
+
+void CheckOptions(const ReportOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("report options", 0, 0, error);
+}
+
+std::string ParameterTable(const Parameters& params) {
+  std::ostringstream out;
+  out << "<table><tr><th class=l>parameter</th><th>value</th><th class=l>unit</th>"
+         "<th>standard error</th><th class=l>source</th></tr>\n";
+  const auto row = [&](const std::string& path, double value, const std::string& unit) {
+    const auto error = params.uncertainty.find(path);
+    const bool fitted = error != params.uncertainty.end();
+    out << "<tr" << (fitted ? "" : " class=prior") << "><td class=l>" << Html(path) << "</td><td>"
+        << Printf("%.6g", value) << "</td><td class=l>" << Html(unit) << "</td><td>"
+        << (fitted ? Printf("%.3g", error->second) : "") << "</td><td class=l>"
+        << (fitted ? "fitted" : "prior / given") << "</td></tr>\n";
+  };
+  for (const ScalarParameterInfo& info : ScalarParameterTable())
+    row(info.path, info.get(params), info.unit);
+  for (const auto& [effect, values] : params.effects) {
+    for (const auto& [name, value] : values) {
+      std::string unit;
+      for (const EffectParameterInfo& p : FindEffect(effect)->parameters)
+        if (name == p.name) unit = p.unit;
+      row("effects." + effect + "." + name, value, unit);
+    }
+  }
+  out << "</table>\n";
+  return out.str();
+}
+
+std::string MetricsTable(const ValidationReport& report) {
+  std::ostringstream out;
+  out << "<table><tr><th class=l>run</th><th class=l>channel</th><th>RMSE</th>"
+         "<th>max |error|</th><th>fit %</th></tr>\n";
+  for (const ExperimentValidation& e : report.experiments) {
+    if (!e.simulation.ok()) {
+      out << "<tr><td class=l>" << Html(e.id)
+          << "</td><td class=l colspan=4>simulation failed: " << Html(e.simulation.message)
+          << "</td></tr>\n";
+      continue;
+    }
+    for (const ChannelView& view : kChannelViews) {
+      const auto m = e.channels.find(view.name);
+      if (m == e.channels.end()) continue;
+      const auto& fit = m->second.nrmse_fit_percent;
+      out << "<tr><td class=l>" << Html(e.id) << "</td><td class=l>" << view.name << "</td>"
+          << Printf("<td>%.4g %s</td><td>%.4g %s</td>", m->second.rmse * view.scale, view.unit,
+                    m->second.max_abs * view.scale, view.unit)
+          << "<td>" << (fit ? FormatSignificant(*fit, 4) : "-") << "</td></tr>\n";
+    }
+  }
+  out << "</table>\n";
+  return out.str();
+}
+
+std::string TextReport(const std::string& text) {
+  return text.empty() ? ""
+                      : "<details><summary>The command's report</summary><pre>" + Html(text) +
+                            "</pre></details>\n";
+}
+
+std::vector<const ExperimentValidation*> RunsToPlot(const ValidationReport& report,
+                                                    const Unit& unit) {
+  std::vector<const ExperimentValidation*> validation, all;
+  for (const ExperimentValidation& e : report.experiments) {
+    all.push_back(&e);
+    for (const Experiment& x : unit.experiments) {
+      if (x.entry.id == e.id && x.entry.kind == ExperimentKind::kValidation)
+        validation.push_back(&e);
+    }
+  }
+  return validation.empty() ? all : validation;
+}
+
+}  // namespace pneumaid::report_internal
