@@ -50,10 +50,14 @@ void AddRunPlots(const ValidationReport& report, const Unit& unit, HtmlPage* pag
   }
 }
 
-// The valve gain (seed paper Fig. 3): plateaus and both fitted branches.
+// The valve gain (seed paper Fig. 3): the set's branches against the
+// measured plateaus, and the band (2 standard errors) of each branch as the
+// unit's staircase alone determines it (the valve fit on these logs): a set
+// from identify lies on its middle, a refined or a prior set shows where it
+// leaves what the staircase says.
 void AddValveGain(const Parameters& params, const Unit& unit, HtmlPage* page) {
-  const std::vector<ValvePlateau> plateaus =
-      ExtractValvePlateaus(unit, params.valve.normalization, ValveFitOptions{});
+  const ValveFitResult fit = FitValve(unit, params.valve, ValveFitOptions{});
+  const std::vector<ValvePlateau>& plateaus = fit.plateaus;
   if (plateaus.empty()) return;
   Plot p;
   p.title = "valve gain K_vp: plateaus and fitted branches";
@@ -80,8 +84,31 @@ void AddValveGain(const Parameters& params, const Unit& unit, HtmlPage* page) {
     up_points.values.push_back(a);
     down_points.values.push_back(b);
   }
+  // The bands on the same grid (the fit's grid: every hundredth of a volt).
+  std::vector<Series> bands;
+  for (const BranchFit* branch : {&fit.increasing, &fit.decreasing}) {
+    if (branch->band.u_V.empty()) continue;
+    const std::string name = branch == &fit.increasing ? "opening" : "closing";
+    Series lower{"staircase fit, " + name + " - 2 SE", "#9ab", {}},
+        upper{"staircase fit, " + name + " + 2 SE", "#9ab", {}};
+    for (double u : p.x) {
+      double a = NAN, b = NAN;
+      for (std::size_t k = 0; k < branch->band.u_V.size(); ++k) {
+        if (std::fabs(branch->band.u_V[k] - u) > 1e-9) continue;
+        a = 1e3 * branch->band.lower[k];
+        b = 1e3 * branch->band.upper[k];
+      }
+      lower.values.push_back(a);
+      upper.values.push_back(b);
+    }
+    bands.push_back(lower);
+    bands.push_back(upper);
+  }
   p.series = {up, down, up_points, down_points};
-  page->body() << "<h2>Valve gain</h2>\n<div class=plots>";
+  p.series.insert(p.series.end(), bands.begin(), bands.end());
+  page->body() << "<h2>Valve gain</h2>\n<p class=note>Lines: the set's two branches. Points: "
+                  "the plateaus of the staircase. Thin lines: the band (2 standard errors) of "
+                  "each branch fitted to this staircase alone.</p>\n<div class=plots>";
   page->AddPlot(std::move(p));
   page->body() << "</div>\n";
 }
