@@ -45,8 +45,9 @@ std::string OptionsFingerprint(const BatchOptions& o) {
 }
 
 // The stamp of a unit's result: the options' fingerprint and the SHA-256 of
-// every file of the unit directory, by name.
-std::string Stamp(const fs::path& unit_dir, const std::string& fingerprint) {
+// every file of the unit directory, by name (kept in `sha256` for the read).
+std::string Stamp(const fs::path& unit_dir, const std::string& fingerprint,
+                  std::map<std::string, std::string>* sha256) {
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(unit_dir)) {
     if (entry.is_regular_file()) files.push_back(entry.path());
@@ -54,8 +55,10 @@ std::string Stamp(const fs::path& unit_dir, const std::string& fingerprint) {
   std::sort(files.begin(), files.end());
   std::string stamp = fingerprint;
   for (const fs::path& file : files) {
-    stamp += file.filename().string() + " " +
-             Sha256Hex(ReadTextFile(file.string(), "a unit file")) + "\n";
+    const std::string name = file.filename().string();
+    const std::string hash = Sha256Hex(ReadTextFile(file.string(), "a unit file"));
+    (*sha256)[name] = hash;
+    stamp += name + " " + hash + "\n";
   }
   return stamp;
 }
@@ -72,13 +75,17 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
                         const std::string& fingerprint, const std::atomic<bool>* stop) {
   UnitOutcome outcome;
   outcome.unit = name;
-  const std::string stamp = Stamp(unit_dir, fingerprint);
+  // The logs are hashed once, for the stamp; the read takes those hashes and
+  // starts no thread of its own (a worker is one busy thread).
+  ReadOptions read;
+  read.hash_on_second_thread = false;
+  const std::string stamp = Stamp(unit_dir, fingerprint, &read.known_sha256);
   if (options.resume && UpToDate(results_dir / name, stamp)) {
     outcome.status = UnitOutcome::Status::kUpToDate;
     outcome.verdict = "up to date";
     return outcome;
   }
-  const Unit unit = ReadUnit(unit_dir.string());
+  const Unit unit = ReadUnit(unit_dir.string(), read);
   std::ostringstream report;
   std::ostringstream json;
   IdentifyReport identified;

@@ -506,9 +506,15 @@ Manifest ParseManifest(const std::string& text, const std::string& source) {
 }
 
 Experiment ParseExperiment(const std::string& text, const std::string& path,
-                           const ExperimentEntry& entry, const Manifest& manifest) {
-  // Hash on the other core while this one parses: reading stays I/O-bound.
-  std::future<std::string> sha256 = std::async(std::launch::async, Sha256Hex, std::cref(text));
+                           const ExperimentEntry& entry, const Manifest& manifest,
+                           const ReadOptions& options) {
+  // A known hash is taken; otherwise hashed on the other core while this one
+  // parses (reading stays I/O-bound), or here after parsing.
+  const auto known = options.known_sha256.find(entry.file);
+  const bool given = known != options.known_sha256.end();
+  std::future<std::string> sha256;
+  if (!given && options.hash_on_second_thread)
+    sha256 = std::async(std::launch::async, Sha256Hex, std::cref(text));
   CsvTable table = ParseCsv(text, path);
   const KindColumns kind_columns = ColumnsOf(entry.kind);
   for (const auto& name : kind_columns.required) {
@@ -536,11 +542,11 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
     out.units_as_written[column.name] = column.unit;
     out.columns[column.name] = std::move(values);
   }
-  out.sha256 = sha256.get();
+  out.sha256 = given ? known->second : sha256.valid() ? sha256.get() : Sha256Hex(text);
   return out;
 }
 
-Unit ReadUnit(const std::string& directory) {
+Unit ReadUnit(const std::string& directory, const ReadOptions& options) {
   const fs::path dir(directory);
   const std::string manifest_path = (dir / "unit.yaml").string();
   if (!fs::is_directory(dir)) throw InputError(directory, 0, 0, "not a unit directory");
@@ -562,7 +568,7 @@ Unit ReadUnit(const std::string& directory) {
                        "experiment '" + entry.id + "': file '" + entry.file + "' not found");
     }
     unit.experiments.push_back(ParseExperiment(ReadTextFile(file.string(), "CSV file"),
-                                               file.string(), entry, unit.manifest));
+                                               file.string(), entry, unit.manifest, options));
   }
   return unit;
 }

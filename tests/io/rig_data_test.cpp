@@ -8,7 +8,9 @@
 #include <fstream>
 #include <map>
 
+#include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/sha256.h"
 
 namespace pneumaid {
 namespace {
@@ -107,6 +109,26 @@ TEST_F(RigDataTest, ReadsAValidUnitIntoSI) {
   EXPECT_EQ(run.size(), 3u);
   EXPECT_TRUE(run.v_m_per_s.empty());
   EXPECT_DOUBLE_EQ(run.q2_kg_per_s[2], -2e-6);
+}
+
+// Each log's SHA-256 is its bytes' whether hashed on a second thread or on
+// the reading one; a hash the caller knows (a batch's stamp) is taken as is.
+TEST_F(RigDataTest, HashesEachLogOnceWhereverItIsHashed) {
+  WriteAll();
+  const Unit threaded = ReadUnit(UnitDir());
+  ReadOptions here;
+  here.hash_on_second_thread = false;
+  const Unit inline_hashed = ReadUnit(UnitDir(), here);
+  ASSERT_EQ(threaded.experiments.size(), inline_hashed.experiments.size());
+  for (std::size_t i = 0; i < threaded.experiments.size(); ++i) {
+    const Experiment& e = threaded.experiments[i];
+    EXPECT_EQ(e.sha256, Sha256Hex(ReadTextFile(e.path, "log")));
+    EXPECT_EQ(inline_hashed.experiments[i].sha256, e.sha256);
+  }
+  here.known_sha256[threaded.experiments[1].entry.file] = "known";
+  const Unit given = ReadUnit(UnitDir(), here);
+  EXPECT_EQ(given.experiments[1].sha256, "known");
+  EXPECT_EQ(given.experiments[0].sha256, threaded.experiments[0].sha256);
 }
 
 TEST_F(RigDataTest, AcceptsBomCrlfCommentsAndBlankLines) {

@@ -101,14 +101,27 @@ struct Unit {
 // Parses a manifest's text; `source` names it in messages.
 Manifest ParseManifest(const std::string& text, const std::string& source);
 
+// How logs are read.
+struct ReadOptions {
+  // Each log's SHA-256 (Experiment::sha256, for provenance) is computed on a
+  // second thread while this one parses the log (a lone read is then bound by
+  // the parsing alone); false: on this thread (a batch worker, whose threads
+  // are all the busy threads it may have).
+  bool hash_on_second_thread = true;
+  // SHA-256 already known, by the file as the manifest names it (a batch's
+  // resume stamp has them): taken as they are, not computed again.
+  std::map<std::string, std::string> known_sha256;
+};
+
 // Reads unit.yaml and every experiment file of a unit directory.
-Unit ReadUnit(const std::string& directory);
+Unit ReadUnit(const std::string& directory, const ReadOptions& options = {});
 
 // Converts the columns of one experiment file of `entry` (already parsed as CSV
 // text) to SI; `manifest` supplies atmospheric pressure, air density, stroke
 // and position origin.
 Experiment ParseExperiment(const std::string& text, const std::string& path,
-                           const ExperimentEntry& entry, const Manifest& manifest);
+                           const ExperimentEntry& entry, const Manifest& manifest,
+                           const ReadOptions& options = {});
 
 // When `csv_path` is one of the logs listed in the unit.yaml beside it, that
 // log read as its unit's manifest says (origin, units, gauge pressures);
