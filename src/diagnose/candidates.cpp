@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -62,6 +63,28 @@ Parameters WithEffect(const Parameters& params, const std::string& effect, doubl
     values[p.name] = std::max(fraction * p.typical, p.plausible_min);
   }
   return out;
+}
+
+std::vector<Parameters> DataStarts(const Parameters& reference, const std::string& effect,
+                                   const Unit& unit, const std::vector<std::string>& runs,
+                                   bool static_friction) {
+  // Only the friction's own effect gains from it: every other candidate
+  // starts where the base model's fit (which had it) stopped.
+  if (!effect.empty() && effect != "friction_pressure") return {};
+  SlideFrictionOptions slides;
+  slides.pressure_gain = effect == "friction_pressure";
+  slides.static_friction = static_friction;
+  const SlideFrictionStart read =
+      FrictionFromSlides(unit, runs, reference.friction, FrictionFitOptions{}, slides);
+  if (!read.ok) return {};
+  Parameters start = effect.empty() ? reference : WithEffect(reference, effect);
+  start.friction = read.friction;
+  if (slides.pressure_gain) {
+    const EffectParameterInfo& kp = FindEffect(effect)->parameters.front();
+    start.effects[effect][kp.name] =
+        std::clamp(read.kp_per_Pa, std::max(kp.plausible_min, 0.01 * kp.typical), kp.plausible_max);
+  }
+  return {start};
 }
 
 std::vector<FreeParameter> CandidateParameters(const Parameters& with_effect,

@@ -33,6 +33,19 @@ std::vector<FreeParameter> BaseParameters(const Parameters& params, bool static_
 // its plausible minimum).
 Parameters WithEffect(const Parameters& params, const std::string& effect, double fraction = 1.0);
 
+// Starts the logs give a fit beyond the given set (and a candidate's typical
+// size), read off runs `runs` only (a fold's training runs), changing only
+// what the fit frees (BaseParameters, CandidateParameters; `static_friction`
+// alike): the sliding friction (and Fs) from the force balance of the slides
+// (FrictionFromSlides; output error through the simulator has narrow basins
+// in them under stick-slip), with friction_pressure's kp for that candidate.
+// `effect` empty: the base model's own fit, which gets the same starts as
+// the candidates, so that a candidate's gain is never a better start's.
+// Empty when the runs do not give one.
+std::vector<Parameters> DataStarts(const Parameters& reference, const std::string& effect,
+                                   const Unit& unit, const std::vector<std::string>& runs,
+                                   bool static_friction = false);
+
 // The free parameters of a candidate: the effect's, within its plausible
 // range, then the base's.
 std::vector<FreeParameter> CandidateParameters(const Parameters& with_effect,

@@ -78,19 +78,22 @@ std::vector<std::string> Complement(const std::vector<std::string>& all,
   return out;
 }
 
-// One candidate on one fold: fitted from its typical size and from a tenth of
-// it (near the base model, which it contains), the better on its training
-// runs kept. A fit that still ends above the refitted base model on its own
-// training runs did not find its way back to the base model it contains: it
-// is scored as that base model (no gain), never as a loss.
+// One candidate on one fold: fitted from its typical size, from a tenth of
+// it (near the base model, which it contains) and from what the training runs
+// give it (DataStarts), the best on its training runs kept. A fit that still ends above the
+// refitted base model on its own training runs did not find its way back to the base model it
+// contains: it is scored as that base model (no gain), never as a loss.
 Outcome FitCandidate(const Outcome& reference, const std::string& effect, const Unit& unit,
                      const std::vector<std::string>& runs, const std::vector<std::string>& held,
                      const std::map<std::string, double>& scale, const DiagnoseOptions& options) {
   const std::vector<std::string> train = Complement(runs, held);
+  std::vector<Parameters> starts = {WithEffect(reference.params, effect, 1.0),
+                                    WithEffect(reference.params, effect, 0.1)};
+  for (Parameters& start : DataStarts(reference.params, effect, unit, train))
+    starts.push_back(std::move(start));
   Outcome best;
   double best_cost = INFINITY;
-  for (double fraction : {1.0, 0.1}) {
-    const Parameters start = WithEffect(reference.params, effect, fraction);
+  for (const Parameters& start : starts) {
     Outcome o = FitAndEvaluate(
         start, unit, MakeSpec(CandidateParameters(start, effect), train, scale, options, effect),
         runs, options.stop);
@@ -337,13 +340,29 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
     for (std::size_t f = 0; f < folds.size(); ++f) {
       tasks.push_back([&, f] {
         const auto train = Complement(runs, folds[f]);
-        const FitSpec spec = MakeSpec(BaseParameters(result.params), train, scale, options, "base");
-        // Twice: a candidate starts where the reference stopped and gets a
-        // whole fit more; the reference gets the same, so that a gain is the
-        // effect's, not the extra iterations'.
-        const Outcome first = FitAndEvaluate(result.params, unit, spec, runs, options.stop);
-        reference[f] =
-            first.ok ? FitAndEvaluate(first.params, unit, spec, runs, options.stop) : first;
+        // From the set and from what the training runs give it (the same
+        // data starts as friction_pressure's), the better on them kept ...
+        Outcome first;
+        double first_cost = INFINITY;
+        std::vector<Parameters> starts = {result.params};
+        for (Parameters& start : DataStarts(result.params, "", unit, train))
+          starts.push_back(std::move(start));
+        for (const Parameters& start : starts) {
+          Outcome o = FitAndEvaluate(start, unit,
+                                     MakeSpec(BaseParameters(start), train, scale, options, "base"),
+                                     runs, options.stop);
+          const double cost = o.ok ? NormalisedCost(Pool(o.runs, train), scale) : INFINITY;
+          if (cost < first_cost || (!first.ok && first.why.empty()))
+            first_cost = cost, first = std::move(o);
+        }
+        // ... and fitted twice: a candidate starts where the reference
+        // stopped and gets a whole fit more; the reference gets the same, so
+        // that a gain is the effect's, not the extra iterations'.
+        reference[f] = first.ok ? FitAndEvaluate(first.params, unit,
+                                                 MakeSpec(BaseParameters(first.params), train,
+                                                          scale, options, "base"),
+                                                 runs, options.stop)
+                                : first;
       });
     }
     RunAll(&tasks, options.threads);
@@ -397,16 +416,27 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
       break;
     }
     // Named: the base refitted on every run alone, and with the effect (the
-    // static friction freed too, to close as much of the gap as it can).
+    // static friction freed too, to close as much of the gap as it can),
+    // from its typical size and from what every run gives it, the best kept.
     const Outcome base_all =
         FitAndEvaluate(result.params, unit,
                        MakeSpec(BaseParameters(result.params, true), runs, scale, options, "base"),
                        runs, options.stop);
-    const Parameters start = WithEffect(base_all.ok ? base_all.params : result.params, best.effect);
-    FitSpec final_spec =
-        MakeSpec(CandidateParameters(start, best.effect, true), runs, scale, options, best.effect);
-    final_spec.max_iterations = 2 * options.max_iterations;  // once per iteration: fit it well
-    const Outcome named = FitAndEvaluate(start, unit, final_spec, runs, options.stop);
+    const Parameters& refitted = base_all.ok ? base_all.params : result.params;
+    std::vector<Parameters> starts = {WithEffect(refitted, best.effect)};
+    for (Parameters& start : DataStarts(refitted, best.effect, unit, runs, true))
+      starts.push_back(std::move(start));
+    Outcome named;
+    double named_cost = INFINITY;
+    for (const Parameters& start : starts) {
+      FitSpec final_spec = MakeSpec(CandidateParameters(start, best.effect, true), runs, scale,
+                                    options, best.effect);
+      final_spec.max_iterations = 2 * options.max_iterations;  // once per iteration: fit it well
+      Outcome o = FitAndEvaluate(start, unit, final_spec, runs, options.stop);
+      const double cost = o.ok ? NormalisedCost(Pool(o.runs, runs), scale) : INFINITY;
+      if (cost < named_cost || (!named.ok && named.why.empty()))
+        named_cost = cost, named = std::move(o);
+    }
     if (!named.ok) {
       best.significant = false;
       best.verdict += "; but its fit on every run failed: " + named.why;

@@ -136,7 +136,10 @@ class FitSpecReader : internal::YamlReader {
     }
     for (const auto& item : node) {
       FitStage stage;
-      YAML::Node parameters = item;
+      // reset(), not =: assigning one yaml-cpp node to another writes through
+      // to the node it refers to (here: the stage itself).
+      YAML::Node parameters;
+      parameters.reset(item);
       if (item.IsMap()) {
         Keys(item, "stages.", {"parameters", "windows", "friction_replay"});
         if (item["windows"]) stage.windows = Flag(item["windows"]);
@@ -148,8 +151,10 @@ class FitSpecReader : internal::YamlReader {
           spec->stages.push_back(stage);
           continue;
         }
-        parameters = item["parameters"];
-        if (!parameters) Fail(item, "stages: expected parameters: [paths] or parameters: all");
+        if (!item["parameters"]) {
+          Fail(item, "stages: expected parameters: [paths] or parameters: all");
+        }
+        parameters.reset(item["parameters"]);
       }
       if (parameters.IsScalar()) {
         if (parameters.Scalar() != "all") {

@@ -248,22 +248,26 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
 }
 
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m, bool slides_under_segments) {
+                          double sigma_x_m, const StrokeSelection& selection) {
   const RigConstants& rig = unit.manifest.rig;
   const double force_sigma_N = std::hypot(unit.manifest.DeclaredSigma("p1", 0.0) * rig.area_1_m2(),
                                           unit.manifest.DeclaredSigma("p2", 0.0) * rig.area_2_m2());
   const double weight_N =
       rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
+  const auto selected = [&selection](const Experiment& e) {
+    if (selection.runs.empty()) return e.entry.kind == ExperimentKind::kStroke;
+    return std::find(selection.runs.begin(), selection.runs.end(), e.entry.id) !=
+               selection.runs.end() &&
+           !e.column("x").empty() && !e.column("p1").empty() && !e.column("p2").empty();
+  };
   StrokeData data;
   std::size_t count = 0;
-  for (const Experiment& e : unit.experiments) {
-    if (e.entry.kind == ExperimentKind::kStroke) ++count;
-  }
+  for (const Experiment& e : unit.experiments) count += selected(e);
   // Segments point into these vectors: reserve so that they never move.
   data.force_N.reserve(count);
   data.position_m.reserve(count);
   for (const Experiment& e : unit.experiments) {
-    if (e.entry.kind != ExperimentKind::kStroke) continue;
+    if (!selected(e)) continue;
     const double period = UniformPeriod(e.column("t"));
     if (period <= 0) {
       data.skipped += e.entry.id + " (not uniformly sampled) ";
@@ -284,6 +288,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     SmoothStuckForce(runs, options.stuck_force_samples, &force);
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
+    data.experiments.push_back(&e);
     const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
     const std::size_t first_segment = data.segments.size();
     CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m,
@@ -292,7 +297,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     std::vector<bool> covered(x.size(), false);
     for (const auto& [begin, end] : runs)
       std::fill(covered.begin() + begin, covered.begin() + end, true);
-    for (std::size_t k = first_segment; k < data.segments.size() && !slides_under_segments; ++k) {
+    for (std::size_t k = first_segment;
+         k < data.segments.size() && !selection.slides_under_segments; ++k) {
       const Segment& segment = data.segments[k];
       std::fill(covered.begin() + segment.begin, covered.begin() + segment.end, true);
     }
@@ -306,6 +312,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     sampling.window_s = options.smoothing_window_s;
     for (auto& cluster :
          internal::SlidingSamples(data.position_m.back(), data.force_N.back(), covered, sampling)) {
+      cluster.log = static_cast<int>(data.experiments.size()) - 1;
       data.clusters.push_back(std::move(cluster));
     }
   }
@@ -395,8 +402,10 @@ std::vector<FrictionMapSample> FrictionVelocityMap(const Unit& unit,
   const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
   FrictionFitOptions with_slides = options;
   with_slides.force_balance = true;
+  StrokeSelection every_slide;
+  every_slide.slides_under_segments = true;
   const StrokeData data =
-      PrepareStrokes(unit, with_slides, StuckBand(options, sigma_m), sigma_m, true);
+      PrepareStrokes(unit, with_slides, StuckBand(options, sigma_m), sigma_m, every_slide);
   std::vector<FrictionMapSample> map;
   for (const internal::SlideCluster& c : data.clusters) {
     for (std::size_t i = 0; i < c.speed_m_per_s.size(); ++i)

@@ -72,6 +72,7 @@ using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
 // position, and the segments cut from them.
 struct StrokeData {
   std::vector<std::vector<double>> force_N, position_m;
+  std::vector<const Experiment*> experiments;  // the log of each
   std::vector<Segment> segments;
   std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers
   // Breakaway forces (magnitudes) of stuck phases at the stroke ends, which
@@ -93,11 +94,20 @@ Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, doubl
 // The median of `values`.
 double Median(std::vector<double> values);
 
-// Per stroke log its driving force and position, the replay segments cut
-// from them and the force-balance slides no segment covers (every smooth
-// slide with `slides_under_segments`: the friction-velocity map).
+// Which logs PrepareStrokes reads, and what its force balance leaves out.
+struct StrokeSelection {
+  // Experiment ids (any kind that logs x, p1 and p2); empty: the stroke logs.
+  std::vector<std::string> runs;
+  // Every smooth slide enters the force balance, also where a replay segment
+  // covers it (the friction-velocity map; no fit replays those segments).
+  bool slides_under_segments = false;
+};
+
+// Per log its driving force and position, the replay segments cut from them
+// and the force-balance slides no segment covers (`SlideCluster::log` indexes
+// `experiments`).
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m, bool slides_under_segments = false);
+                          double sigma_x_m, const StrokeSelection& selection = {});
 
 // A starting point for Fs: the median force at breakaway of the slides of
 // `direction` (the stroke ends' breakaways with fewer than three).

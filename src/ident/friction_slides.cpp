@@ -33,6 +33,7 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
     current.speed_m_per_s.resize(keep);
     current.friction_N.resize(keep);
     current.weight.resize(keep);
+    current.sample.resize(keep);
     if (static_cast<int>(keep) >= sampling.min_cluster_samples) clusters.push_back(current);
     current = SlideCluster{};
   };
@@ -69,6 +70,7 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
     current.speed_m_per_s.push_back(std::fabs(v));
     current.friction_N.push_back(direction * (force_N[i] - sampling.mass_kg * a));
     current.weight.push_back(1.0 / sigma_N);
+    current.sample.push_back(i);
   }
   close();
   return clusters;

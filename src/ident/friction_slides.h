@@ -26,6 +26,8 @@ struct SlideCluster {
   std::vector<double> speed_m_per_s;  // |v| > 0
   std::vector<double> friction_N;     // dir (F - M a): the friction magnitude
   std::vector<double> weight;         // 1 / its standard error [1/N]
+  std::vector<std::size_t> sample;    // each one's index in its log
+  int log = -1;                       // which log (the caller's numbering)
 };
 
 struct SlideSampling {

@@ -119,6 +119,10 @@ INSTANTIATE_TEST_SUITE_P(
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "stages:\n  - {friction_replay: true}\n",
                 4, "last stage"},
+        BadSpec{"a stage mapping without parameters",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "stages:\n  - {windows: true}\n  - all\n",
+                4, "expected parameters: [paths] or parameters: all"},
         BadSpec{"friction replay with parameters",
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "stages:\n  - {friction_replay: true, parameters: all}\n  - all\n",

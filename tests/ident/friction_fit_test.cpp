@@ -13,6 +13,7 @@
 #include "../synth/synth_test_util.h"
 #include "friction_test_util.h"
 #include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/protocol.h"
 #include "pneumaid/synth/synthetic_rig.h"
 
 namespace pneumaid {
@@ -264,6 +265,44 @@ TEST(FrictionFitTest, InvalidOptionsAreNamed) {
   std::string error;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("substeps"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pneumaid
+
+namespace pneumaid {
+namespace {
+
+// friction_pressure read off the force balance of validation runs alone (the
+// paper's step and the rich profile, smooth stick in the rig, noise): kp and
+// the sliding friction of both directions near the truth, as a start for the
+// simulation fits whose basins in them are narrow under stick-slip. Paper
+// prior as the start, other seeds than the bundled unit's.
+TEST(FrictionPressureStartTest, ReadsKpAndTheSlidingFrictionOffValidationRuns) {
+  const std::string configs = std::string(PNEUMAID_SOURCE_DIR) + "/configs/";
+  const Parameters paper = LoadParams(configs + "paper.yaml");
+  for (const double kp : {1e-6, 2e-6, 3e-6}) {
+    Parameters truth = paper;
+    truth.effects["friction_pressure"] = {{"kp", kp}};
+    const Unit unit = testing::WriteAndReadUnit(
+        Synthesize(truth, LoadProtocol(configs + "protocol-validation.yaml"), 31, "FP"),
+        "friction_pressure_start");
+    SlideFrictionOptions with_fs;
+    with_fs.static_friction = true;
+    const SlideFrictionStart start = FrictionFromSlides(
+        unit, {"step-1", "profile-1"}, paper.friction, FrictionFitOptions{}, with_fs);
+    ASSERT_TRUE(start.ok) << start.why;
+    std::cout << "kp " << kp << ": read " << start.kp_per_Pa << " from " << start.samples
+              << " samples; Fd+ " << start.friction.positive.dynamic_force_N << " Fd- "
+              << start.friction.negative.dynamic_force_N << "\n";
+    EXPECT_NEAR(start.kp_per_Pa, kp, 0.15 * kp);
+  }
+  // No slides, no start: a unit of valve and tube logs only.
+  const Unit valve_only = ReadUnit(std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig");
+  const SlideFrictionStart none =
+      FrictionFromSlides(valve_only, {"valve-staircase"}, paper.friction, FrictionFitOptions{}, {});
+  EXPECT_FALSE(none.ok);
+  EXPECT_NE(none.why.find("too few smooth slide samples"), std::string::npos) << none.why;
 }
 
 }  // namespace

@@ -130,4 +130,34 @@ struct FrictionMapSample {
 std::vector<FrictionMapSample> FrictionVelocityMap(const Unit& unit,
                                                    const FrictionFitOptions& options);
 
+// Starts for fits through the simulator that free the friction (with the
+// friction_pressure effect, effects.h, or without): Fd (and on request Fs)
+// of both directions, and kp when asked, read off the force balance of the
+// smooth slides of the runs `runs` (any kind that logs x, p1 and p2),
+// friction = (1 + kp ((p1 + p2)/2 - p_atm)) S(|v|), the other coefficients
+// held at `prior`'s (what the fits it starts do not free), by least squares
+// with the friction fit's weak prior toward `prior`. Output error through
+// the simulator has narrow basins in these coefficients where the rod sticks
+// and slips (a start a factor 2 off in kp ends in another minimum); the force
+// balance needs neither a simulation nor a start near the optimum.
+struct SlideFrictionOptions {
+  bool pressure_gain = true;     // fit kp; false: kp = 0 (the base model)
+  bool static_friction = false;  // fit Fs too
+  // A direction with fewer slide samples keeps the prior's coefficients.
+  int min_samples = 50;
+};
+// Not ok, with why, when neither direction has min_samples or (fitting kp)
+// the slides' mean chamber pressure does not vary.
+struct SlideFrictionStart {
+  bool ok = false;
+  std::string why;
+  FrictionParams friction;
+  double kp_per_Pa = 0;
+  int samples = 0;
+};
+SlideFrictionStart FrictionFromSlides(const Unit& unit, const std::vector<std::string>& runs,
+                                      const FrictionParams& prior,
+                                      const FrictionFitOptions& options,
+                                      const SlideFrictionOptions& slide_options);
+
 }  // namespace pneumaid
