@@ -2,7 +2,7 @@
 # The discrepancy workflow's studies (docs/diagnose.md), on synthetic units
 # with the rig's model mismatch, validation runs only (configs/protocol-validation.yaml):
 #   scripts/diagnose-study.sh false-positives [SEEDS]   # clean units, both orientations
-#   scripts/diagnose-study.sh detection [SEED]          # each effect at four sizes
+#   scripts/diagnose-study.sh detection [SEED [EFFECT]] # each effect (or one) at four sizes
 # Prints one line per unit: what was hidden, what diagnose named.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,7 +35,9 @@ case "${1:-false-positives}" in
     ;;
   detection)
     seed=${2:-401}
+    only=${3:-}
     while read -r effect parameter sizes; do
+      [ -z "$only" ] || [ "$only" = "$effect" ] || continue
       for size in $sizes; do
         if [ "$effect" = pipeline_lag ]; then
           sed "s/^  delta: 8.0/  delta: $size/" configs/paper.yaml > "$work/paper-delta.yaml"
@@ -57,5 +59,5 @@ friction_pressure kp 2.5e-7 5e-7 1e-6 2e-6
 valve_deadzone u0 0.01 0.02 0.04 0.08
 EOT
     ;;
-  *) echo "usage: $0 false-positives [SEEDS] | detection [SEED]" >&2; exit 2 ;;
+  *) echo "usage: $0 false-positives [SEEDS] | detection [SEED [EFFECT]]" >&2; exit 2 ;;
 esac
