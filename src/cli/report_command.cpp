@@ -77,7 +77,15 @@ CommandRunner AddReportCommand(CLI::App* app) {
 }
 
 void AddHtmlOption(CLI::App* app, std::string* path) {
-  app->add_option("--html", *path, "also write a self-contained HTML report here");
+  // Checked before the command runs: a page that cannot be written must not
+  // leave the command's other outputs behind.
+  app->add_option("--html", *path, "also write a self-contained HTML report here")
+      ->check([](const std::string& page) -> std::string {
+        const std::filesystem::path parent = std::filesystem::path(page).parent_path();
+        std::error_code error;
+        if (parent.empty() || std::filesystem::is_directory(parent, error)) return "";
+        return "the directory " + parent.string() + " does not exist";
+      });
 }
 
 void WriteHtml(const std::string& path, const std::string& html) {

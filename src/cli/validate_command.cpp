@@ -49,7 +49,8 @@ int RunValidate(const ValidateArgs& args) {
   std::cout << report.BriefReport();
   ReportOptions page;
   page.text_report = report.BriefReport();
-  const std::string html = args.html_path.empty() ? "" : UnitReportHtml(params, unit, page);
+  const std::string html =
+      args.html_path.empty() ? "" : UnitReportHtml(params, unit, page, &report);
   // Everything is computed before anything is written; each file is atomic.
   if (!args.json_path.empty()) WriteFileAtomically(args.json_path, ReportToJson(report));
   if (!args.csv_dir.empty()) {

@@ -74,6 +74,9 @@ std::vector<Parameters> DataStarts(const Parameters& reference, const std::strin
   SlideFrictionOptions slides;
   slides.pressure_gain = effect == "friction_pressure";
   slides.static_friction = static_friction;
+  // The base model's fit holds a kp the set already has (a named effect).
+  double kp = 0;
+  if (GetParameter(reference, "effects.friction_pressure.kp", &kp)) slides.kp_per_Pa = kp;
   const SlideFrictionStart read =
       FrictionFromSlides(unit, runs, reference.friction, FrictionFitOptions{}, slides);
   if (!read.ok) return {};

@@ -478,7 +478,7 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
     bool base_fitted = false;
     const double current_cost = NormalisedCost(Pool(RunSums(base), runs), scale);
     for (CandidateScore& candidate : it.ranking) {
-      if (!candidate.significant) break;
+      if (!candidate.significant) continue;
       if (!base_fitted) {
         base_all = FitAndEvaluate(
             result.params, unit,

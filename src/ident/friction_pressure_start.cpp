@@ -9,6 +9,7 @@
 #include "friction_cost.h"
 #include "friction_segments.h"
 #include "pneumaid/ident/friction_fit.h"
+#include "pneumaid/model/effects.h"
 
 namespace pneumaid {
 namespace {
@@ -85,7 +86,7 @@ SlideFrictionStart FrictionFromSlides(const Unit& unit, const std::vector<std::s
     return out;
   }
   Block blocks[2] = {Pack(prior.positive), Pack(prior.negative)};
-  double kp = 0;
+  double kp = slide_options.kp_per_Pa;
   ceres::Problem problem;
   for (const PressureSlideResidual& slide : slides) {
     const int rows = static_cast<int>(slide.gauge_pressure_Pa.size());
@@ -116,10 +117,10 @@ SlideFrictionStart FrictionFromSlides(const Unit& unit, const std::vector<std::s
       problem.SetManifold(block.data(), new ceres::SubsetManifold(kDirectionParameters, held));
     }
   }
-  // The effect's physical range (effects.h): kp >= 0; 1e-5 1/Pa doubles the
-  // friction at a bar.
-  problem.SetParameterLowerBound(&kp, 0, 0.0);
-  problem.SetParameterUpperBound(&kp, 0, 1e-5);
+  // The effect's plausible range (effects.h).
+  const EffectParameterInfo& range = FindEffect("friction_pressure")->parameters.front();
+  problem.SetParameterLowerBound(&kp, 0, range.plausible_min);
+  problem.SetParameterUpperBound(&kp, 0, range.plausible_max);
   if (!slide_options.pressure_gain) problem.SetParameterBlockConstant(&kp);
   ceres::Solver::Options solver;
   solver.max_num_iterations = options.max_iterations;

@@ -26,7 +26,12 @@ void AddResidualPlots(const DiagnoseReportInput& input, const Unit& unit, HtmlPa
   for (const ExperimentValidation* before : RunsToPlot(input.before, unit)) {
     const ExperimentValidation* after = FindRun(input.after, before->id);
     if (after == nullptr || !before->simulation.ok() || !after->simulation.ok()) {
-      page->body() << "<p>" << Html(before->id) << ": a simulation failed</p>\n";
+      const std::string why =
+          after == nullptr ? "not simulated with the augmented set"
+          : !before->simulation.ok()
+              ? "the simulation with the set diagnosed failed: " + before->simulation.message
+              : "the simulation with the augmented set failed: " + after->simulation.message;
+      page->body() << "<p>" << Html(before->id) << ": " << Html(why) << "</p>\n";
       continue;
     }
     page->body() << "<h3>" << Html(before->id) << "</h3>\n<div class=plots>";

@@ -12,10 +12,16 @@ namespace {
 
 using namespace report_internal;
 
+// An id for a unit's section: its name's letters and digits, '_' for the
+// rest, and a hex code of what was replaced (so "a-b" and "a_b" differ).
 std::string Anchor(const std::string& unit) {
-  std::string id = "unit-";
-  for (char c : unit) id += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
-  return id;
+  std::string id = "unit-", codes;
+  for (char c : unit) {
+    const bool plain = std::isalnum(static_cast<unsigned char>(c));
+    id += plain ? c : '_';
+    if (!plain) codes += Printf("%02x", static_cast<unsigned char>(c));
+  }
+  return codes.empty() ? id : id + "-" + codes;
 }
 
 const FleetParameter* FindParameter(const FleetSummary& fleet, const std::string& path) {

@@ -83,10 +83,11 @@ std::string MarkdownToHtml(const std::string& markdown) {
       close();
     } else if (line[0] == '#') {
       close();
-      const std::size_t level = line.find_first_not_of('#');
+      // A bare "#" or "## " is an empty heading.
+      const std::size_t level = std::min(line.find_first_not_of('#'), line.size());
       const std::size_t h = std::min<std::size_t>(level + 1, 6);
-      out << "<h" << h << ">" << Inline(line.substr(line.find_first_not_of(' ', level))) << "</h"
-          << h << ">\n";
+      const std::size_t text = std::min(line.find_first_not_of(' ', level), line.size());
+      out << "<h" << h << ">" << Inline(line.substr(text)) << "</h" << h << ">\n";
     } else if (line[0] == '|') {
       if (IsSeparatorRow(line)) continue;
       if (block != Block::kTable) {

@@ -209,8 +209,8 @@ void AddTubeResponses(const Parameters& params, const Unit& unit, HtmlPage* page
 
 }  // namespace
 
-std::string UnitReportHtml(const Parameters& params, const Unit& unit,
-                           const ReportOptions& options) {
+std::string UnitReportHtml(const Parameters& params, const Unit& unit, const ReportOptions& options,
+                           const ValidationReport* simulated) {
   report_internal::CheckOptions(options);
   HtmlPage page(options.title.empty() ? "pneumaid report: " + unit.manifest.unit : options.title,
                 options.max_columns);
@@ -225,8 +225,9 @@ std::string UnitReportHtml(const Parameters& params, const Unit& unit,
   for (const Experiment& e : unit.experiments) {
     if (IsSimulable(e.entry.kind)) v.experiment_ids.push_back(e.entry.id);
   }
-  if (!v.experiment_ids.empty()) {
-    const ValidationReport report = ValidateUnit(params, unit, v);
+  if (simulated != nullptr || !v.experiment_ids.empty()) {
+    const ValidationReport report =
+        simulated != nullptr ? *simulated : ValidateUnit(params, unit, v);
     page.body() << "<h2>Runs: measured against simulated</h2>\n" << MetricsTable(report);
     AddRunPlots(report, unit, &page);
   }

@@ -28,10 +28,14 @@ TEST_F(ReportCliTest, IdentifyAndValidateWriteTheUnitsPage) {
   EXPECT_TRUE(IsPage(identified));
   EXPECT_NE(identified.find("Friction fit: converged"), std::string::npos);  // identify's report
   EXPECT_NE(Stdout().find("wrote " + (dir_ / "i.html").string()), std::string::npos);
-  const int status =
-      Run("validate --params " + params + " " + unit + " --html " + (dir_ / "v.html").string());
+  // validate's page shows the runs it validated.
+  const int status = Run("validate --params " + params + " " + unit + " --experiment step-1" +
+                         " --html " + (dir_ / "v.html").string());
   EXPECT_TRUE(status == 0 || status == 4) << Stderr();
-  EXPECT_TRUE(IsPage(Read(dir_ / "v.html")));
+  const std::string validated = Read(dir_ / "v.html");
+  EXPECT_TRUE(IsPage(validated));
+  EXPECT_NE(validated.find("\"title\":\"step-1: x\""), std::string::npos);
+  EXPECT_EQ(validated.find("\"title\":\"profile-1: x\""), std::string::npos);
   ASSERT_EQ(Run("report --params " + params + " " + unit + " --out " + (dir_ / "r.html").string()),
             0);
   EXPECT_TRUE(IsPage(Read(dir_ / "r.html")));
@@ -71,7 +75,7 @@ TEST_F(ReportCliTest, BatchMergeAndReportWriteTheFleetsPage) {
   const std::string batch = Read(dir_ / "b.html");
   EXPECT_TRUE(IsPage(batch));
   EXPECT_NE(batch.find("<tr class=failed><td class=l>PVQ13-0014</td>"), std::string::npos);
-  EXPECT_NE(batch.find("<a href=\"#unit-PVQ13_0013\">"), std::string::npos);
+  EXPECT_NE(batch.find("<a href=\"#unit-PVQ13_0013-2d\">"), std::string::npos);
   ASSERT_EQ(Run("merge " + results + " --html " + (dir_ / "m.html").string()), 0) << Stderr();
   ASSERT_EQ(Run("report --results " + results + " --out " + (dir_ / "r.html").string()), 0);
   EXPECT_EQ(Read(dir_ / "m.html"), Read(dir_ / "r.html"));
@@ -102,6 +106,13 @@ TEST_F(ReportCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_EQ(Run("report --results " + (dir_ / "empty").string() + " " + unit + " --out " + out), 2);
   EXPECT_EQ(Run("report " + unit + " --out " + out), 2);
   EXPECT_NE(Stderr().find("--params"), std::string::npos) << Stderr();
+  // A page that cannot be written stops the command before it writes anything.
+  const std::string set = (dir_ / "set.yaml").string();
+  EXPECT_EQ(Run("identify " + testing::Source("datasets/paper-rig") + " --only valve --out " + set +
+                " --html " + (dir_ / "no-such-dir" / "page.html").string()),
+            2);
+  EXPECT_NE(Stderr().find("does not exist"), std::string::npos) << Stderr();
+  EXPECT_FALSE(std::filesystem::exists(set));
   EXPECT_FALSE(std::filesystem::exists(out));
   EXPECT_EQ(Listing(dir_), listing);
 }

@@ -97,7 +97,7 @@ TEST(ReportTest, ADiagnosePageShowsTheNamedEffectTheRankingAndTheResiduals) {
       "# Diagnose: x\n\nNamed, in order: valve_lag.\n\n### Candidates (best first)\n\n"
       "| effect | held-back gain | named |\n|---|---|---|\n| valve_lag | 74 % | **yes** |\n"
       "| cross_leakage | -14 % | no |\n\nWorst windows:\n\n- step-1 p1 1.2-1.4 s <here>\n\n"
-      "```\neffects.valve_lag.tau 0.01 -> 0.025\n```\n";
+      "```\neffects.valve_lag.tau 0.01 -> 0.025\n```\n#\n## \n";
   input.named_effects = {"valve_lag"};
   input.before_params = LoadParams(kRoot + "/configs/paper.yaml");
   input.after_params = LoadParams(kRoot + "/datasets/hidden/valve-lag/truth.yaml");
@@ -112,6 +112,7 @@ TEST(ReportTest, ADiagnosePageShowsTheNamedEffectTheRankingAndTheResiduals) {
   EXPECT_NE(html.find("<td class=l><b>yes</b></td>"), std::string::npos);
   EXPECT_NE(html.find("<li>step-1 p1 1.2-1.4 s &lt;here&gt;</li>"), std::string::npos);
   EXPECT_NE(html.find("<pre>effects.valve_lag.tau 0.01 -&gt; 0.025\n</pre>"), std::string::npos);
+  EXPECT_NE(html.find("<h2></h2>\n<h3></h3>"), std::string::npos);   // bare headings
   EXPECT_NE(html.find("effects.valve_lag.tau"), std::string::npos);  // the augmented table
   EXPECT_EQ(Count(html, "<div id=\"plot"), 10);                      // two runs x five channels
   EXPECT_EQ(Count(html, "\"label\":\"before\""), 10);
@@ -133,10 +134,10 @@ TEST(ReportTest, TheFleetPageHighlightsTheOutlierAndListsTheFailedUnit) {
   ExpectSelfContained(html);
   EXPECT_NE(html.find("13 units with a parameter set, 1 failed, 1 flagged"), std::string::npos);
   // The outlier: its rows highlighted, a plot per parameter that makes it one.
-  const std::regex outlier_row("<tr class=outlier><td class=l><a href=\"#unit-PVQ13_0013\">");
+  const std::regex outlier_row("<tr class=outlier><td class=l><a href=\"#unit-PVQ13_0013-2d\">");
   EXPECT_TRUE(std::regex_search(html, outlier_row));
   EXPECT_EQ(Count(html, "<tr class=outlier><td class=l><a href=\"#unit-PVQ13_00"),
-            Count(html, "<tr class=outlier><td class=l><a href=\"#unit-PVQ13_0013\""));
+            Count(html, "<tr class=outlier><td class=l><a href=\"#unit-PVQ13_0013-2d\""));
   EXPECT_GE(Count(html, "across the fleet\""), 1);
   EXPECT_EQ(Count(html, "<div id=\"plot"), Count(html, "across the fleet\""));
   // The failed unit with its reason; a section per unit.

@@ -141,7 +141,8 @@ std::vector<FrictionMapSample> FrictionVelocityMap(const Unit& unit,
 // and slips (a start a factor 2 off in kp ends in another minimum); the force
 // balance needs neither a simulation nor a start near the optimum.
 struct SlideFrictionOptions {
-  bool pressure_gain = true;     // fit kp; false: kp = 0 (the base model)
+  bool pressure_gain = true;     // fit kp (from kp_per_Pa); false: kp held at kp_per_Pa
+  double kp_per_Pa = 0;          // the start, or the value held (0: the base model)
   bool static_friction = false;  // fit Fs too
   // A direction with fewer slide samples keeps the prior's coefficients.
   int min_samples = 50;

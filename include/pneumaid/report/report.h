@@ -38,9 +38,11 @@ struct ReportOptions {
 // plateaus (seed paper Fig. 3), the friction-velocity map of the stroke logs
 // with the fitted Stribeck curve per direction (Figs. 8-9), and the tube's
 // step responses with the fitted lag (Figs. 6-7), each where the unit has the
-// logs. Throws InputError for bad options.
-std::string UnitReportHtml(const Parameters& params, const Unit& unit,
-                           const ReportOptions& options);
+// logs. `simulated`: the runs already simulated with `params` (validate's
+// report, its selection of runs), shown instead of every stroke and
+// validation run. Throws InputError for bad options.
+std::string UnitReportHtml(const Parameters& params, const Unit& unit, const ReportOptions& options,
+                           const ValidationReport* simulated = nullptr);
 
 // What a diagnose report shows: the Markdown report of the run
 // (DiagnoseResult::MarkdownReport: the conclusion, the residuals per regime,
