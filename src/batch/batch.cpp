@@ -45,9 +45,15 @@ std::string OptionsFingerprint(const BatchOptions& o) {
 }
 
 // The stamp of a unit's result: the options' fingerprint and the SHA-256 of
-// every file of the unit directory, by name (kept in `sha256` for the read).
-std::string Stamp(const fs::path& unit_dir, const std::string& fingerprint,
-                  std::map<std::string, std::string>* sha256) {
+// every file of the unit directory, by name. A log the read parsed gives the
+// hash of the very bytes it parsed (its Experiment::sha256, the provenance's),
+// so the stamp, the provenance and the fit agree even if a file changes
+// while the batch runs, and no log is hashed twice.
+std::string Stamp(const fs::path& unit_dir, const std::string& fingerprint, const Unit& unit) {
+  std::map<std::string, std::string> parsed;
+  for (const Experiment& e : unit.experiments) {
+    if (fs::path(e.entry.file).parent_path().empty()) parsed[e.entry.file] = e.sha256;
+  }
   std::vector<fs::path> files;
   for (const auto& entry : fs::directory_iterator(unit_dir)) {
     if (entry.is_regular_file()) files.push_back(entry.path());
@@ -56,9 +62,11 @@ std::string Stamp(const fs::path& unit_dir, const std::string& fingerprint,
   std::string stamp = fingerprint;
   for (const fs::path& file : files) {
     const std::string name = file.filename().string();
-    const std::string hash = Sha256Hex(ReadTextFile(file.string(), "a unit file"));
-    (*sha256)[name] = hash;
-    stamp += name + " " + hash + "\n";
+    const auto known = parsed.find(name);
+    stamp += name + " " +
+             (known != parsed.end() ? known->second
+                                    : Sha256Hex(ReadTextFile(file.string(), "a unit file"))) +
+             "\n";
   }
   return stamp;
 }
@@ -75,17 +83,17 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
                         const std::string& fingerprint, const std::atomic<bool>* stop) {
   UnitOutcome outcome;
   outcome.unit = name;
-  // The logs are hashed once, for the stamp; the read takes those hashes and
-  // starts no thread of its own (a worker is one busy thread).
+  // A worker is one busy thread: the read hashes each log on it (no second
+  // thread), and the stamp takes those hashes.
   ReadOptions read;
   read.hash_on_second_thread = false;
-  const std::string stamp = Stamp(unit_dir, fingerprint, &read.known_sha256);
+  const Unit unit = ReadUnit(unit_dir.string(), read);
+  const std::string stamp = Stamp(unit_dir, fingerprint, unit);
   if (options.resume && UpToDate(results_dir / name, stamp)) {
     outcome.status = UnitOutcome::Status::kUpToDate;
     outcome.verdict = "up to date";
     return outcome;
   }
-  const Unit unit = ReadUnit(unit_dir.string(), read);
   std::ostringstream report;
   std::ostringstream json;
   IdentifyReport identified;

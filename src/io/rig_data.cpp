@@ -508,12 +508,10 @@ Manifest ParseManifest(const std::string& text, const std::string& source) {
 Experiment ParseExperiment(const std::string& text, const std::string& path,
                            const ExperimentEntry& entry, const Manifest& manifest,
                            const ReadOptions& options) {
-  // A known hash is taken; otherwise hashed on the other core while this one
-  // parses (reading stays I/O-bound), or here after parsing.
-  const auto known = options.known_sha256.find(entry.file);
-  const bool given = known != options.known_sha256.end();
+  // Hashed on the other core while this one parses (reading stays
+  // I/O-bound), or here after parsing.
   std::future<std::string> sha256;
-  if (!given && options.hash_on_second_thread)
+  if (options.hash_on_second_thread)
     sha256 = std::async(std::launch::async, Sha256Hex, std::cref(text));
   CsvTable table = ParseCsv(text, path);
   const KindColumns kind_columns = ColumnsOf(entry.kind);
@@ -542,7 +540,7 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
     out.units_as_written[column.name] = column.unit;
     out.columns[column.name] = std::move(values);
   }
-  out.sha256 = given ? known->second : sha256.valid() ? sha256.get() : Sha256Hex(text);
+  out.sha256 = sha256.valid() ? sha256.get() : Sha256Hex(text);
   return out;
 }
 

@@ -108,9 +108,6 @@ struct ReadOptions {
   // the parsing alone); false: on this thread (a batch worker, whose threads
   // are all the busy threads it may have).
   bool hash_on_second_thread = true;
-  // SHA-256 already known, by the file as the manifest names it (a batch's
-  // resume stamp has them): taken as they are, not computed again.
-  std::map<std::string, std::string> known_sha256;
 };
 
 // Reads unit.yaml and every experiment file of a unit directory.
