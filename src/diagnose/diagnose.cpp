@@ -441,20 +441,18 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
         for (std::size_t f = 0; f < folds.size(); ++f) base[f].runs = fits[c][f].base_runs;
         Score(base, fits[c], folds, runs, scale, options, gap_above_noise, &score);
         score.fit = fits[c][0].fit;
-        const auto own_base = std::count_if(fits[c].begin(), fits[c].end(),
-                                            [](const Outcome& o) { return o.own_base; });
-        if (own_base > 0) {
-          score.verdict += "; on " + std::to_string(own_base) +
-                           " fold(s) its own base coefficients without it fitted the training "
-                           "runs better than the refitted base model and are its reference";
-        }
-        const auto fell_back = std::count_if(fits[c].begin(), fits[c].end(),
-                                             [](const Outcome& o) { return o.fell_back; });
-        if (fell_back > 0) {
-          score.verdict += "; on " + std::to_string(fell_back) +
-                           " fold(s) its fit ended above the base model on its own runs and "
-                           "counts as the base model";
-        }
+        // The folds on which it was scored other than against the reference.
+        const auto on_folds = [&](bool Outcome::*flag, const char* what) {
+          const auto n = std::count_if(fits[c].begin(), fits[c].end(),
+                                       [flag](const Outcome& o) { return o.*flag; });
+          if (n > 0) score.verdict += "; on " + std::to_string(n) + " fold(s) " + what;
+        };
+        on_folds(&Outcome::own_base,
+                 "its own base coefficients without it fitted the training runs better than the "
+                 "refitted base model and are its reference");
+        on_folds(&Outcome::fell_back,
+                 "its fit ended above the base model on its own runs and counts as the base "
+                 "model");
       }
       it.ranking.push_back(score);
     }
