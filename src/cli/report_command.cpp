@@ -34,9 +34,7 @@ DiagnoseReportInput ReadDiagnoseOutput(const std::string& dir, const Parameters&
   input.after_params = LoadParams(dir + "/params.yaml");
   input.named_effects = ReadNamedEffects(dir + "/report.json");
   ValidationOptions runs;
-  for (const Experiment& e : unit.experiments) {
-    if (IsSimulable(e.entry.kind)) runs.experiment_ids.push_back(e.entry.id);
-  }
+  runs.experiment_ids = SimulableRuns(unit);
   input.before = ValidateUnit(input.before_params, unit, runs);
   input.after = ValidateUnit(input.after_params, unit, runs);
   return input;
@@ -58,8 +56,7 @@ int RunReport(const ReportArgs& args) {
                : DiagnoseReportHtml(ReadDiagnoseOutput(args.diagnose_dir, params, unit), unit,
                                     ReportOptions{});
   }
-  WriteFileAtomically(args.out_path, html);
-  std::cout << "wrote " << args.out_path << " (" << html.size() / 1024 << " KiB)\n";
+  WriteHtml(args.out_path, html);
   return kSuccess;
 }
 

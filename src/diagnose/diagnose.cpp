@@ -296,9 +296,7 @@ void CheckInputs(const Parameters& params, const Unit& unit, const DiagnoseOptio
                            (effect == "pipeline_lag" ? " (or its base model has a tube lag)" : ""));
     }
   }
-  for (const Experiment& e : unit.experiments) {
-    if (IsSimulable(e.entry.kind)) runs->push_back(e.entry.id);
-  }
+  *runs = SimulableRuns(unit);
   if (runs->empty()) {
     throw InputError(unit.manifest_path(), 0, 0,
                      "no stroke or validation run to simulate: diagnose compares simulated and "

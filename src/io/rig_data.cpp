@@ -446,6 +446,14 @@ void PlacePositions(const CsvTable& table, const CsvColumn& column, const Manife
 
 }  // namespace
 
+std::vector<std::string> SimulableRuns(const Unit& unit) {
+  std::vector<std::string> ids;
+  for (const Experiment& e : unit.experiments) {
+    if (IsSimulable(e.entry.kind)) ids.push_back(e.entry.id);
+  }
+  return ids;
+}
+
 bool IsSimulable(ExperimentKind kind) {
   return kind == ExperimentKind::kStroke || kind == ExperimentKind::kValidation;
 }

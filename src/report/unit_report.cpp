@@ -222,9 +222,7 @@ std::string UnitReportHtml(const Parameters& params, const Unit& unit, const Rep
                  "come from the prior or the rig, not from a fit.</p>\n"
               << ParameterTable(params);
   ValidationOptions v;
-  for (const Experiment& e : unit.experiments) {
-    if (IsSimulable(e.entry.kind)) v.experiment_ids.push_back(e.entry.id);
-  }
+  v.experiment_ids = SimulableRuns(unit);
   if (simulated != nullptr || !v.experiment_ids.empty()) {
     const ValidationReport report =
         simulated != nullptr ? *simulated : ValidateUnit(params, unit, v);

@@ -98,6 +98,9 @@ struct Unit {
   std::string manifest_path() const { return directory + "/unit.yaml"; }
 };
 
+// The ids of a unit's simulable runs (IsSimulable), in the manifest's order.
+std::vector<std::string> SimulableRuns(const Unit& unit);
+
 // Parses a manifest's text; `source` names it in messages.
 Manifest ParseManifest(const std::string& text, const std::string& source);
 
