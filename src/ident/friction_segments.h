@@ -121,9 +121,18 @@ int ClustersOf(const StrokeData& data, int direction);
 // The replay of a segment.
 RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps);
 
+// Force-balance samples a direction needs before its slides say anything.
+constexpr std::size_t kMinSlideSamples = 20;
+
+// (Fd, b) of one direction from its force-balance samples with Fs and vs
+// given (Fd in [0, Fs], b >= 0); the weighted squared misfit, HUGE_VAL (and
+// fd, b untouched) with fewer than kMinSlideSamples samples.
+double FitSliding(const std::vector<internal::SlideCluster>& clusters, int direction, double fs,
+                  double vs, double* fd, double* b);
+
 // Fd, b, vs of one direction from its force-balance samples, Fs given (the
 // breakaways): the best point of a vs grid, (Fd, b) solved exactly at each.
-// Leaves `block` as it is with fewer than 20 samples.
+// Leaves `block` as it is with fewer than kMinSlideSamples samples.
 void ForceBalanceStart(const StrokeData& data, int direction, Block* block);
 
 }  // namespace pneumaid::friction_internal

@@ -9,6 +9,7 @@
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/parameter_table.h"
+#include "refine_friction_screen.h"
 #include "refine_residual.h"
 #include "refine_solve.h"
 #include "refine_verdict.h"
@@ -117,11 +118,18 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   RefineResult r;
   Parameters current = start;
+  std::string screen_report;
+  if (options.screen_friction_starts) {
+    FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options);
+    current = std::move(screen.start);
+    screen_report = screen.report;
+  }
+  const Parameters fit_start = current;  // what the fit starts from
   int iterations = 0;
   std::vector<ExperimentCost> before;
   double cost_before = 0;
   bool first_fit = true;
-  Parameters before_last = start;  // what the last stage started from
+  Parameters before_last = fit_start;  // what the last stage started from
   for (size_t k = 0; k < stages.size(); ++k) {
     if (stages[k].friction_replay) {
       ReplayFriction(unit, &current, &r.replay_report);
@@ -155,7 +163,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     // what it started from, earlier stages included) from starts in a trust
     // box around the start's values (not the whole bounds), those alone.
     const FitSpec last = StageSpec(spec, stages.back());
-    const Parameters conditioned = WithRigConditions(start, unit);
+    const Parameters conditioned = WithRigConditions(fit_start, unit);
     const ParameterMap map = MakeParameterMap(conditioned, last);
     RefineResult rescue = RefineStage(
         before_last, unit, last, stages.back().windows, true, options,
@@ -174,9 +182,22 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     r.rescue_starts = tried;
     r.iterations = iterations;
   }
+  if (r.status == FitStatus::kNotExplained && !screen_report.empty()) {
+    // The screened start's basin does not explain the runs either: the fit
+    // from the caller's start may end lower (a unit the model cannot explain
+    // has no basin that the screen's median tells).
+    RefineOptions unscreened = options;
+    unscreened.screen_friction_starts = false;
+    RefineResult plain = Refine(start, unit, spec, unscreened);
+    if (plain.has_values() && plain.reduced_chi_square < r.reduced_chi_square) {
+      plain.screen_report = screen_report + "; not kept: the fit from the given start ends lower";
+      plain.iterations += iterations;
+      return plain;
+    }
+  }
   // A windowed stage's costs are windows': report whole runs, as validated
-  // (and at the true start when friction was replayed first).
-  if (stages.front().windows || stages.front().friction_replay) {
+  // (and at the caller's start when friction was replayed or screened first).
+  if (stages.front().windows || stages.front().friction_replay || !screen_report.empty()) {
     before = WholeRunCosts(start, unit, spec, options);
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;
@@ -187,6 +208,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     for (const ExperimentCost& e : r.fitted) r.final_cost += e.after;
   }
   r.initial_cost = cost_before;
+  r.screen_report = screen_report;
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
     r.fitted[k].before = before[k].before;
   }
@@ -234,6 +256,7 @@ std::string RefineResult::BriefReport() const {
             : "");
     out << line;
   }
+  if (!screen_report.empty()) out << "  " << screen_report << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (estimated_starts > 0) {
     std::snprintf(line, sizeof(line),

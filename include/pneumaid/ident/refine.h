@@ -68,6 +68,12 @@ struct RefineOptions {
   // none: a coefficient the component fits did not determine).
   int rescue_starts = 6;
   double rescue_box = 0.3;
+  // Before the fit, a start whose verdict fails has its free friction (per
+  // direction with Fs and vs free) screened against friction read off the
+  // logs: a grid in Fs and vs, Fd and b from the slides' force balance, each
+  // candidate simulated once; the fit starts from the best
+  // (docs/refinement.md).
+  bool screen_friction_starts = true;
   // A weak prior ties each free parameter to its start (a MAP fit): sigma
   // is the larger of start_prior_errors of its standard errors from the
   // start's uncertainty and start_prior_fraction of its value, or, without
@@ -136,6 +142,9 @@ struct RefineResult : FitResult {
   double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
   // What a friction_replay stage found (empty without one).
   std::string replay_report;
+  // What the friction screen (RefineOptions::screen_friction_starts) found
+  // (empty when it kept the start).
+  std::string screen_report;
   // Held-out experiments, validated with the start and the refined set.
   ValidationReport held_out_before, held_out_after;
 

@@ -1,0 +1,33 @@
+// Refinement (refine.h), its friction starts from the data: whole-run output
+// error has narrow basins in the friction when the rod sticks and slips (a
+// start a factor 2 off in Fs or vs stalls two orders of magnitude above the
+// noise), and the component fit misses Fs and vs where the slides are short
+// or the load heavy. Before the fit, a start that does not explain the runs
+// is screened against friction read off the logs: per direction, a grid in
+// Fs and vs, each point's Fd and b solved from the force balance of the
+// smooth slides (friction_segments.h), then a pattern search in Fs and vs;
+// every candidate is simulated once and judged by the verdict's measure. No
+// Jacobian, no fit: 60 to 100 whole-run simulations.
+#pragma once
+
+#include <string>
+
+#include "pneumaid/ident/refine.h"
+
+namespace pneumaid::refine_internal {
+
+struct FrictionScreen {
+  Parameters start;  // the best candidate (`start` itself when none is better)
+  double chi_square_before = 0, chi_square_after = 0;  // the verdict's measure
+  int candidates = 0;                                  // simulated
+  std::string report;                                  // one line, empty when nothing moved
+};
+
+// The screened start for the free friction coefficients of `spec`
+// (directions whose Fs and vs are both free); a coefficient it moves loses
+// its standard error in `start.uncertainty` (the component fit's no longer
+// applies: the start prior treats it as undetermined).
+FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                                    const RefineOptions& options);
+
+}  // namespace pneumaid::refine_internal
