@@ -165,10 +165,7 @@ class FitSpecReader : internal::YamlReader {
       }
       stage.parameters = Names(parameters, "stages");
       for (size_t i = 0; i < stage.parameters.size(); ++i) {
-        bool free = false;
-        for (const FreeParameter& p : spec->parameters)
-          free = free || p.path == stage.parameters[i];
-        if (!free) {
+        if (spec->FindParameter(stage.parameters[i]) == nullptr) {
           Fail(parameters[i], "stages: '" + stage.parameters[i] + "' is not under parameters");
         }
       }
@@ -235,9 +232,9 @@ bool FitSpec::IsValid(std::string* error) const {
       return fail("stages: friction_replay stands alone (no parameters, no windows)");
     }
     for (const std::string& path : stage.parameters) {
-      const bool free = std::any_of(parameters.begin(), parameters.end(),
-                                    [&](const FreeParameter& p) { return p.path == path; });
-      if (!free) return fail("stages: '" + path + "' is not under parameters");
+      if (FindParameter(path) == nullptr) {
+        return fail("stages: '" + path + "' is not under parameters");
+      }
     }
   }
   if (!stages.empty() && stages.back().friction_replay) {
@@ -246,6 +243,13 @@ bool FitSpec::IsValid(std::string* error) const {
   if (multistart < 0 || multistart > 1000) return fail("multistart: expected 0 to 1000");
   if (max_iterations < 1) return fail("max_iterations: expected >= 1");
   return true;
+}
+
+const FreeParameter* FitSpec::FindParameter(const std::string& path) const {
+  for (const FreeParameter& p : parameters) {
+    if (p.path == path) return &p;
+  }
+  return nullptr;
 }
 
 FitSpec LoadFitSpec(const std::string& path) {

@@ -192,6 +192,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     if (plain.has_values() && plain.reduced_chi_square < r.reduced_chi_square) {
       plain.screen_report = screen_report + "; not kept: the fit from the given start ends lower";
       plain.iterations += iterations;
+      plain.wall_time_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
       return plain;
     }
   }

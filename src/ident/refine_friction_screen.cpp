@@ -17,16 +17,13 @@ namespace {
 using friction_internal::FitSliding;
 
 bool IsFree(const FitSpec& spec, const std::string& path) {
-  return std::any_of(spec.parameters.begin(), spec.parameters.end(),
-                     [&](const FreeParameter& p) { return p.path == path; });
+  return spec.FindParameter(path) != nullptr;
 }
 
 // `value` inside the spec's bounds of `path` (unchanged when not free).
 double Bounded(const FitSpec& spec, const std::string& path, double value) {
-  for (const FreeParameter& p : spec.parameters) {
-    if (p.path == path) return std::clamp(value, p.lower, p.upper);
-  }
-  return value;
+  const FreeParameter* p = spec.FindParameter(path);
+  return p == nullptr ? value : std::clamp(value, p->lower, p->upper);
 }
 
 }  // namespace

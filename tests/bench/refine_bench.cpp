@@ -53,6 +53,8 @@ void RunRefine(benchmark::State& state, JacobianMethod method) {
   state.counters["iterations"] = result.iterations;
   state.counters["cost_after"] = result.final_cost;
   state.counters["converged"] = result.status == FitStatus::kConverged ? 1 : 0;
+  // Whether the start was screened (RefineOptions::screen_friction_starts).
+  state.SetLabel(result.screen_report.empty() ? "start not screened" : result.screen_report);
 }
 
 void BM_Refine10Experiments10Parameters(benchmark::State& state) {

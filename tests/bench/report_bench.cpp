@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "../report/fleet_results_util.h"
 #include "pneumaid/batch/batch.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
@@ -30,16 +31,11 @@ void BM_UnitReport(benchmark::State& state) {
 BENCHMARK(BM_UnitReport)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 void BM_FleetReport(benchmark::State& state) {
-  const fs::path results = fs::path(PNEUMAID_BINARY_DIR) / "report_bench_fleet";
-  fs::remove_all(results);
-  BatchOptions options;
-  options.prior = LoadParams(kSource + "/configs/paper.yaml");
-  options.identify.tool_version = "bench";
-  options.jobs = 2;
-  RunBatch(kSource + "/datasets/fleet", results.string(), options);
+  const std::string results =
+      testing::IdentifyBundledFleet(fs::path(PNEUMAID_BINARY_DIR) / "report_bench_fleet", "bench");
   std::size_t bytes = 0;
   for (auto _ : state) {
-    bytes = FleetReportHtml(MergeResults({results.string()}), ReportOptions{}).size();
+    bytes = FleetReportHtml(MergeResults({results}), ReportOptions{}).size();
   }
   state.counters["MB"] = bytes / 1e6;
 }

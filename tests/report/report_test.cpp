@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <regex>
 
+#include "fleet_results_util.h"
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
@@ -123,14 +124,9 @@ TEST(ReportTest, ADiagnosePageShowsTheNamedEffectTheRankingAndTheResiduals) {
 }
 
 TEST(ReportTest, TheFleetPageHighlightsTheOutlierAndListsTheFailedUnit) {
-  const fs::path results = fs::path(::testing::TempDir()) / "report_fleet";
-  fs::remove_all(results);
-  BatchOptions options;
-  options.prior = LoadParams(kRoot + "/configs/paper.yaml");
-  options.identify.tool_version = "test";
-  options.jobs = 2;
-  RunBatch(kRoot + "/datasets/fleet", results.string(), options);
-  const std::string html = FleetReportHtml(MergeResults({results.string()}), ReportOptions{});
+  const std::string results =
+      testing::IdentifyBundledFleet(fs::path(::testing::TempDir()) / "report_fleet", "test");
+  const std::string html = FleetReportHtml(MergeResults({results}), ReportOptions{});
   ExpectSelfContained(html);
   EXPECT_NE(html.find("13 units with a parameter set, 1 failed, 1 flagged"), std::string::npos);
   // The outlier: its rows highlighted, a plot per parameter that makes it one.

@@ -82,6 +82,9 @@ struct FitSpec {
   // a simulation stage, multistart 0..1000, max_iterations >= 1. On failure
   // `error` names the field. Refine() calls it.
   bool IsValid(std::string* error) const;
+
+  // The free parameter at `path`, or nullptr when the spec holds it fixed.
+  const FreeParameter* FindParameter(const std::string& path) const;
 };
 
 // Reads a fit spec; InputError (file, line, what was expected) for anything
