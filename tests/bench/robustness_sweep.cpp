@@ -72,6 +72,17 @@ T Pick(std::mt19937_64* rng, const std::vector<T>& options) {
   return options[std::uniform_int_distribution<std::size_t>(0, options.size() - 1)(*rng)];
 }
 
+// Both directions' friction, one line: +(Fs Fd b vs[mm/s]) -(...).
+std::string FrictionLine(const FrictionParams& f) {
+  char line[160];
+  std::snprintf(line, sizeof(line), "+(%.1f %.2f %.1f %.1f) -(%.1f %.2f %.1f %.1f)",
+                f.positive.static_force_N, f.positive.dynamic_force_N, f.positive.viscous_N_s_per_m,
+                f.positive.stribeck_velocity_m_per_s * 1e3, f.negative.static_force_N,
+                f.negative.dynamic_force_N, f.negative.viscous_N_s_per_m,
+                f.negative.stribeck_velocity_m_per_s * 1e3);
+  return line;
+}
+
 // Truth, protocol and mismatch of unit `index`, drawn as issue 12 says.
 Draw MakeDraw(std::uint64_t seed, int index) {
   std::mt19937_64 rng(seed * 1000003ULL + static_cast<std::uint64_t>(index));
@@ -138,15 +149,10 @@ Draw MakeDraw(std::uint64_t seed, int index) {
   char line[400];
   std::snprintf(
       line, sizeof(line),
-      "%s %.2f kg, u_sat %.2f, delta %.1f, +(%.1f %.2f %.1f %.1f) -(%.1f %.2f %.1f %.1f), "
-      "%.0f Hz, tube %s, strokes %s x%d margin %.0f mm, %s",
+      "%s %.2f kg, u_sat %.2f, delta %.1f, %s, %.0f Hz, tube %s, strokes %s x%d margin %.0f mm, %s",
       t.cylinder.orientation == Orientation::kVertical ? "vert" : "horiz", t.cylinder.load_mass_kg,
-      u_sat, t.pipeline.delta_per_s, t.friction.positive.static_force_N,
-      t.friction.positive.dynamic_force_N, t.friction.positive.viscous_N_s_per_m,
-      t.friction.positive.stribeck_velocity_m_per_s * 1e3, t.friction.negative.static_force_N,
-      t.friction.negative.dynamic_force_N, t.friction.negative.viscous_N_s_per_m,
-      t.friction.negative.stribeck_velocity_m_per_s * 1e3, p.sample_rate_Hz, shapes[shape],
-      low_only ? "low" : "spread", p.stroke_cycles, p.stroke_margin_m * 1e3,
+      u_sat, t.pipeline.delta_per_s, FrictionLine(t.friction).c_str(), p.sample_rate_Hz,
+      shapes[shape], low_only ? "low" : "spread", p.stroke_cycles, p.stroke_margin_m * 1e3,
       p.mismatch.regularized_friction ? "smooth stick" : "event stick");
   d.summary = line;
   return d;
@@ -183,17 +189,6 @@ std::map<std::string, bool> Check(const Parameters& fit, const Parameters& t, do
   return ok;
 }
 
-// +(Fs Fd b vs[mm/s]) -(...), as the draw's summary.
-std::string FrictionLine(const FrictionParams& f) {
-  char line[160];
-  std::snprintf(line, sizeof(line), "+(%.1f %.2f %.1f %.1f) -(%.1f %.2f %.1f %.1f)",
-                f.positive.static_force_N, f.positive.dynamic_force_N, f.positive.viscous_N_s_per_m,
-                f.positive.stribeck_velocity_m_per_s * 1e3, f.negative.static_force_N,
-                f.negative.dynamic_force_N, f.negative.viscous_N_s_per_m,
-                f.negative.stribeck_velocity_m_per_s * 1e3);
-  return line;
-}
-
 struct UnitResult {
   std::string id, summary, status;
   std::string friction;  // identified and refined friction, one line
@@ -227,14 +222,11 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     out.identify_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
     clock = std::chrono::steady_clock::now();
+    const FitSpec spec = LoadFitSpec(kSource + "/configs/fit-default.yaml");
     const RefineResult refined =
-        Refine(start_truth ? d.truth : identified, unit,
-               LoadFitSpec(kSource + "/configs/fit-default.yaml"), refine_options);
+        Refine(start_truth ? d.truth : identified, unit, spec, refine_options);
     out.refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
-    out.truth_chi_square =
-        EvaluateFit(d.truth, unit, LoadFitSpec(kSource + "/configs/fit-default.yaml"),
-                    refine_options)
-            .reduced_chi_square;
+    out.truth_chi_square = EvaluateFit(d.truth, unit, spec, refine_options).reduced_chi_square;
     out.status = ToString(refined.status);
     out.explained = refined.status == FitStatus::kConverged;
     out.chi_square = refined.reduced_chi_square;
@@ -300,7 +292,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   for (int i = 2; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
+    const std::string flag = argv[i], value = argv[i + 1];
     if (flag == "--seed")
       seed = std::strtoull(argv[i + 1], nullptr, 10);
     else if (flag == "--jobs")
@@ -311,11 +303,14 @@ int main(int argc, char** argv) {
       min_units_valve_tube = std::atoi(argv[i + 1]);
     else if (flag == "--keep")
       keep = argv[i + 1];
-    else if (flag == "--start")
-      start_truth = std::string(argv[i + 1]) == "truth";
-    else if (flag == "--start-prior")
-      refine_options.start_prior = std::string(argv[i + 1]) == "on";
-    else {
+    else if (flag == "--start" && (value == "identify" || value == "truth"))
+      start_truth = value == "truth";
+    else if (flag == "--start-prior" && (value == "on" || value == "off"))
+      refine_options.start_prior = value == "on";
+    else if (flag == "--start" || flag == "--start-prior") {
+      std::cerr << flag << ": unknown value " << value << "\n";
+      return 2;
+    } else {
       std::cerr << "unknown flag " << flag << "\n";
       return 2;
     }
