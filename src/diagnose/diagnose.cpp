@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -82,6 +83,25 @@ std::vector<std::string> Complement(const std::vector<std::string>& all,
   return out;
 }
 
+// The best of the fits from `starts` (each with the spec `spec_of` makes for
+// it), by normalised cost on the `scored` runs; `cost` (when given) gets its
+// cost, INFINITY when no fit was usable (then the first failure is returned).
+Outcome BestOfStarts(const std::vector<Parameters>& starts,
+                     const std::function<FitSpec(const Parameters&)>& spec_of, const Unit& unit,
+                     const std::vector<std::string>& runs, const std::vector<std::string>& scored,
+                     const std::map<std::string, double>& scale, const DiagnoseOptions& options,
+                     double* cost = nullptr) {
+  Outcome best;
+  double best_cost = INFINITY;
+  for (const Parameters& start : starts) {
+    Outcome o = FitAndEvaluate(start, unit, spec_of(start), runs, options.stop);
+    const double c = o.ok ? NormalisedCost(Pool(o.runs, scored), scale) : INFINITY;
+    if (c < best_cost || (!best.ok && best.why.empty())) best_cost = c, best = std::move(o);
+  }
+  if (cost != nullptr) *cost = best_cost;
+  return best;
+}
+
 // One candidate on one fold: fitted from its typical size, from a tenth of
 // it (near the base model, which it contains) and from what the training runs
 // give it (DataStarts), the best on its training runs kept.
@@ -103,19 +123,13 @@ Outcome FitCandidate(const Outcome& reference, const std::string& effect, const 
                                     WithEffect(reference.params, effect, 0.1)};
   for (Parameters& start : DataStarts(reference.params, effect, unit, train))
     starts.push_back(std::move(start));
-  Outcome best;
   double best_cost = INFINITY;
-  for (const Parameters& start : starts) {
-    Outcome o = FitAndEvaluate(
-        start, unit, MakeSpec(CandidateParameters(start, effect), train, scale, options, effect),
-        runs, options.stop);
-    if (!o.ok) {
-      if (!best.ok) best = std::move(o);
-      continue;
-    }
-    const double cost = NormalisedCost(Pool(o.runs, train), scale);
-    if (cost < best_cost) best_cost = cost, best = std::move(o);
-  }
+  Outcome best = BestOfStarts(
+      starts,
+      [&](const Parameters& start) {
+        return MakeSpec(CandidateParameters(start, effect), train, scale, options, effect);
+      },
+      unit, runs, train, scale, options, &best_cost);
   if (!best.ok) return best;
   best.base_runs = reference.runs;
   double base_cost = NormalisedCost(Pool(reference.runs, train), scale);
@@ -143,17 +157,15 @@ Outcome FitNamed(const std::string& effect, const Parameters& refitted, const Un
   std::vector<Parameters> starts = {WithEffect(refitted, effect)};
   for (Parameters& start : DataStarts(refitted, effect, unit, runs, true))
     starts.push_back(std::move(start));
-  Outcome named;
-  double named_cost = INFINITY;
-  for (const Parameters& start : starts) {
-    FitSpec spec = MakeSpec(CandidateParameters(start, effect, true), runs, scale, options, effect);
-    spec.max_iterations = 2 * options.max_iterations;  // once per iteration: fit it well
-    Outcome o = FitAndEvaluate(start, unit, spec, runs, options.stop);
-    const double cost = o.ok ? NormalisedCost(Pool(o.runs, runs), scale) : INFINITY;
-    if (cost < named_cost || (!named.ok && named.why.empty()))
-      named_cost = cost, named = std::move(o);
-  }
-  return named;
+  return BestOfStarts(
+      starts,
+      [&](const Parameters& start) {
+        FitSpec spec =
+            MakeSpec(CandidateParameters(start, effect, true), runs, scale, options, effect);
+        spec.max_iterations = 2 * options.max_iterations;  // once per iteration: fit it well
+        return spec;
+      },
+      unit, runs, runs, scale, options);
 }
 
 // Runs `tasks` on up to `threads` threads; the first exception a task threw
@@ -385,19 +397,15 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit,
         const auto train = Complement(runs, folds[f]);
         // From the set and from what the training runs give it (the same
         // data starts as friction_pressure's), the better on them kept ...
-        Outcome first;
-        double first_cost = INFINITY;
         std::vector<Parameters> starts = {result.params};
         for (Parameters& start : DataStarts(result.params, "", unit, train))
           starts.push_back(std::move(start));
-        for (const Parameters& start : starts) {
-          Outcome o = FitAndEvaluate(start, unit,
-                                     MakeSpec(BaseParameters(start), train, scale, options, "base"),
-                                     runs, options.stop);
-          const double cost = o.ok ? NormalisedCost(Pool(o.runs, train), scale) : INFINITY;
-          if (cost < first_cost || (!first.ok && first.why.empty()))
-            first_cost = cost, first = std::move(o);
-        }
+        const Outcome first = BestOfStarts(
+            starts,
+            [&](const Parameters& start) {
+              return MakeSpec(BaseParameters(start), train, scale, options, "base");
+            },
+            unit, runs, train, scale, options);
         // ... and fitted twice: a candidate starts where the reference
         // stopped and gets a whole fit more; the reference gets the same, so
         // that a gain is the effect's, not the extra iterations'.
