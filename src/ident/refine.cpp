@@ -84,6 +84,53 @@ void CheckInputs(const FitSpec& spec, const RefineOptions& options) {
   }
 }
 
+// One fit through every stage from `from`, judged by the verdict.
+struct StagedFit {
+  RefineResult result;
+  Parameters before_last;              // what the last stage started from
+  std::vector<ExperimentCost> before;  // the first fitted stage's costs at its start
+  double cost_before = 0;
+};
+
+StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spec,
+                    const std::vector<FitStage>& stages, const RefineOptions& options) {
+  StagedFit out;
+  RefineResult& r = out.result;
+  Parameters current = from;
+  out.before_last = from;
+  int iterations = 0;
+  bool first_fit = true;
+  for (size_t k = 0; k < stages.size(); ++k) {
+    if (stages[k].friction_replay) {
+      ReplayFriction(unit, &current, &r.replay_report);
+      continue;
+    }
+    const std::string replay_report = r.replay_report;
+    out.before_last = current;
+    r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows,
+                    k + 1 == stages.size(), options);
+    r.replay_report = replay_report;
+    iterations += r.iterations;
+    if (first_fit) {
+      out.before = r.fitted;
+      out.cost_before = r.initial_cost;
+      first_fit = false;
+    }
+    if (!r.has_values()) {
+      r.reason = "stage " + std::to_string(k + 1) + ": " + r.reason;
+      break;
+    }
+    current = r.params;
+  }
+  r.iterations = iterations;
+  // The verdict: a windowed last stage's runs are judged whole.
+  if (stages.back().windows && r.has_values()) {
+    r.misfits = WholeRunMisfits(r.params, unit, spec, options);
+  }
+  Judge(options, &r);
+  return out;
+}
+
 }  // namespace
 
 bool RefineOptions::IsValid(std::string* error) const {
@@ -116,64 +163,49 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   CheckInputs(spec, options);
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
-  RefineResult r;
-  Parameters current = start;
+  StagedFit fit = FitStages(start, unit, spec, stages, options);
+  const Parameters given_before_last = fit.before_last;
+  bool screened_kept = false;
   std::string screen_report;
-  if (options.screen_friction_starts) {
+  const bool stalled = fit.result.status == FitStatus::kNotExplained || !fit.result.has_values();
+  if (stalled && options.screen_friction_starts) {
+    // The fit from the given start stalled (or found nothing usable): a
+    // start whose friction is read off the logs may lie in the basin that
+    // explains the runs.
     FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options);
-    current = std::move(screen.start);
     screen_report = screen.report;
-  }
-  const Parameters fit_start = current;  // what the fit starts from
-  int iterations = 0;
-  std::vector<ExperimentCost> before;
-  double cost_before = 0;
-  bool first_fit = true;
-  Parameters before_last = fit_start;  // what the last stage started from
-  for (size_t k = 0; k < stages.size(); ++k) {
-    if (stages[k].friction_replay) {
-      ReplayFriction(unit, &current, &r.replay_report);
-      continue;
+    if (!screen_report.empty()) {
+      StagedFit screened = FitStages(screen.start, unit, spec, stages, options);
+      const int iterations = fit.result.iterations + screened.result.iterations;
+      if (screened.result.has_values() &&
+          (!fit.result.has_values() ||
+           screened.result.reduced_chi_square < fit.result.reduced_chi_square)) {
+        fit = std::move(screened);
+        screened_kept = true;
+      } else {
+        screen_report += "; not kept: the fit from the given start ends lower";
+      }
+      fit.result.iterations = iterations;
     }
-    const std::string replay_report = r.replay_report;
-    before_last = current;
-    r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows,
-                    k + 1 == stages.size(), options);
-    r.replay_report = replay_report;
-    iterations += r.iterations;
-    if (first_fit) {
-      before = r.fitted;
-      cost_before = r.initial_cost;
-      first_fit = false;
-    }
-    if (!r.has_values()) {
-      r.reason = "stage " + std::to_string(k + 1) + ": " + r.reason;
-      break;
-    }
-    current = r.params;
   }
-  r.iterations = iterations;
-  // The verdict: a windowed last stage's runs are judged whole.
-  if (stages.back().windows && r.has_values()) {
-    r.misfits = WholeRunMisfits(r.params, unit, spec, options);
-  }
-  Judge(options, &r);
+  RefineResult& r = fit.result;
   if (r.status == FitStatus::kNotExplained && options.rescue_starts > 0) {
     // Stalled far above what the noise explains: the last stage again (from
-    // what it started from, earlier stages included) from starts in a trust
-    // box around the start's values (not the whole bounds), those alone.
+    // what it started from in the fit from the given start, earlier stages
+    // included) from starts in a trust box around the given start's values
+    // (the component fits, not the whole bounds), those alone.
     const FitSpec last = StageSpec(spec, stages.back());
-    const Parameters conditioned = WithRigConditions(fit_start, unit);
+    const Parameters conditioned = WithRigConditions(start, unit);
     const ParameterMap map = MakeParameterMap(conditioned, last);
     RefineResult rescue = RefineStage(
-        before_last, unit, last, stages.back().windows, true, options,
+        given_before_last, unit, last, stages.back().windows, true, options,
         TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed),
         /*extra_starts_only=*/true);
     if (stages.back().windows && rescue.has_values()) {
       rescue.misfits = WholeRunMisfits(rescue.params, unit, spec, options);
     }
     Judge(options, &rescue);
-    iterations += rescue.iterations;
+    const int iterations = r.iterations + rescue.iterations;
     const int tried = rescue.starts;
     if (rescue.has_values() && rescue.reduced_chi_square < r.reduced_chi_square) {
       rescue.replay_report = r.replay_report;
@@ -182,24 +214,11 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     r.rescue_starts = tried;
     r.iterations = iterations;
   }
-  if (r.status == FitStatus::kNotExplained && !screen_report.empty()) {
-    // The screened start's basin does not explain the runs either: the fit
-    // from the caller's start may end lower (a unit the model cannot explain
-    // has no basin that the screen's median tells).
-    RefineOptions unscreened = options;
-    unscreened.screen_friction_starts = false;
-    RefineResult plain = Refine(start, unit, spec, unscreened);
-    if (plain.has_values() && plain.reduced_chi_square < r.reduced_chi_square) {
-      plain.screen_report = screen_report + "; not kept: the fit from the given start ends lower";
-      plain.iterations += iterations;
-      plain.wall_time_s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
-      return plain;
-    }
-  }
+  std::vector<ExperimentCost> before = std::move(fit.before);
+  double cost_before = fit.cost_before;
   // A windowed stage's costs are windows': report whole runs, as validated
   // (and at the caller's start when friction was replayed or screened first).
-  if (stages.front().windows || stages.front().friction_replay || !screen_report.empty()) {
+  if (stages.front().windows || stages.front().friction_replay || screened_kept) {
     before = WholeRunCosts(start, unit, spec, options);
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;

@@ -2,8 +2,8 @@
 // error has narrow basins in the friction when the rod sticks and slips (a
 // start a factor 2 off in Fs or vs stalls two orders of magnitude above the
 // noise), and the component fit misses Fs and vs where the slides are short
-// or the load heavy. Before the fit, a start that does not explain the runs
-// is screened against friction read off the logs: per direction, a grid in
+// or the load heavy. When the fit from the given start is not explained,
+// that start is screened against friction read off the logs: per direction, a grid in
 // Fs and vs, each point's Fd and b solved from the force balance of the
 // smooth slides (friction_segments.h), then a pattern search in Fs and vs;
 // every candidate is simulated once and judged by the verdict's measure. No

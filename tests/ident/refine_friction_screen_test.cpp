@@ -113,5 +113,25 @@ TEST(RefineFrictionScreenTest, AStartThatExplainsTheRunsIsNotScreened) {
   EXPECT_TRUE(result.screen_report.empty()) << result.screen_report;
 }
 
+// The screen runs only after the fit from the given start has failed the
+// verdict: a start that does not explain the runs (sliding friction 10 %
+// off) but that the fit takes to an explained end is not screened, so it
+// costs no simulation more than before the screen existed.
+TEST(RefineFrictionScreenTest, AStartThatTheFitTakesToAnExplainedEndIsNotScreened) {
+  const ScreenCase& c = HeavyUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  Parameters start = c.truth;
+  for (StribeckParams* f : {&start.friction.positive, &start.friction.negative}) {
+    f->dynamic_force_N *= 1.1;
+    f->viscous_N_s_per_m *= 0.9;
+  }
+  const RefineOptions options;
+  ASSERT_EQ(EvaluateFit(start, c.unit, spec, options).status, FitStatus::kNotExplained);
+  const RefineResult result = Refine(start, c.unit, spec, options);
+  EXPECT_EQ(result.status, FitStatus::kConverged) << result.reason;
+  EXPECT_TRUE(result.screen_report.empty()) << result.screen_report;
+  EXPECT_EQ(result.rescue_starts, 0);
+}
+
 }  // namespace
 }  // namespace pneumaid

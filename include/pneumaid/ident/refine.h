@@ -61,18 +61,21 @@ struct RefineOptions {
   // calibrated on the robustness sweep (every unit passes at its true
   // parameters, the stalls of issue 12 fail).
   double acceptable_reduced_chi_square = 10.0;
-  // When the verdict fails: this many more starts of the last stage, drawn
-  // (Latin hypercube) from a trust box around the start: each free parameter
+  // When the verdict still fails (after the screen below): this many more
+  // starts of the last stage, drawn (Latin hypercube) from a trust box around
+  // the given start (the component fits): each free parameter
   // within a factor (1 +- w) of its start value, w the larger of rescue_box
   // and 3 of its standard errors from the start's uncertainty (2 when it has
   // none: a coefficient the component fits did not determine).
   int rescue_starts = 6;
   double rescue_box = 0.3;
-  // Before the fit, a start whose verdict fails has its free friction (per
-  // direction with Fs and vs free) screened against friction read off the
-  // logs: a grid in Fs and vs, Fd and b from the slides' force balance, each
-  // candidate simulated once; the fit starts from the best
-  // (docs/refinement.md).
+  // When the fit from the given start ends "not explained", the start's free
+  // friction (per direction with Fs and vs free) is screened against
+  // friction read off the logs: a grid in Fs and vs, Fd and b from the
+  // slides' force balance, each candidate simulated once; the fit is run
+  // again from the best, and the lower median of the two fits is kept
+  // (docs/refinement.md). A start that the fit takes to an explained end
+  // costs nothing more.
   bool screen_friction_starts = true;
   // A weak prior ties each free parameter to its start (a MAP fit): sigma
   // is the larger of start_prior_errors of its standard errors from the
