@@ -46,6 +46,7 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   friction_internal::StrokeSelection selection;
   for (const Experiment* e : Select(unit, spec.fit, spec, false))
     selection.runs.push_back(e->entry.id);
+  selection.slides_under_segments = true;  // nothing here replays the segments
   const friction_internal::StrokeData data = friction_internal::PrepareStrokes(
       unit, friction, friction_internal::StuckBand(friction, sigma_m), sigma_m, selection);
   Parameters& best = out.start;
@@ -89,13 +90,23 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
     GetParameter(best, d.prefix + "Fs", fs);
     GetParameter(best, d.prefix + "vs", vs);
   };
-  // Coarse, per direction: Fs over the fleet's range and beyond (1 to 32 N,
-  // factors of sqrt 2) at the start's vs, then vs (1 to 32 mm/s, factors of
-  // 2) at the best Fs.
+  // First each direction's Fd and b from its slides at the start's Fs and
+  // vs, one direction, then the other (kept where the median drops): a
+  // direction searched below is then judged with the other's sliding
+  // friction as the slides tell it (the component fit's can be far off where
+  // the force balance is not: Fd 0 and b 19.5 for 0.27 and 13.6).
   for (const Direction& d : directions) {
     double fs = 0, vs = 0;
     at(d, &fs, &vs);
-    for (int g = 0; g <= 10; ++g) try_point(d.prefix, d.sign, std::pow(2.0, 0.5 * g), vs);
+    try_point(d.prefix, d.sign, fs, vs);
+  }
+  // Coarse, per direction: Fs over the fleet's range and beyond (1 to 32 N,
+  // factors of 2^(1/4): a basin can be narrower than sqrt 2) at the
+  // current vs, then vs (1 to 32 mm/s, factors of 2) at the best Fs.
+  for (const Direction& d : directions) {
+    double fs = 0, vs = 0;
+    at(d, &fs, &vs);
+    for (int g = 0; g <= 20; ++g) try_point(d.prefix, d.sign, std::pow(2.0, 0.25 * g), vs);
     at(d, &fs, &vs);
     for (int g = 0; g <= 5; ++g) try_point(d.prefix, d.sign, fs, 1e-3 * std::pow(2.0, g));
   }
