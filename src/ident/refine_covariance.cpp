@@ -17,9 +17,24 @@ Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m) {
   return information;
 }
 
+void ResidualCorrelation::Add(const FitExperiment& e, const Eigen::VectorXd& residuals) {
+  const Eigen::Index n = static_cast<Eigen::Index>(e.measured.size());
+  for (std::size_t c = 0; c < e.channels.size(); ++c) {
+    const auto r = residuals.segment(static_cast<Eigen::Index>(c) * n, n);
+    if (n < 2) continue;
+    lagged += r.head(n - 1).dot(r.tail(n - 1));
+    squared += r.squaredNorm();
+  }
+}
+
+double ResidualCorrelation::Inflation() const {
+  const double rho = squared > 0 ? std::min(lagged / squared, 0.999) : 0.0;
+  return rho > 0 ? (1 + rho) / (1 - rho) : 1.0;
+}
+
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
                                     const std::vector<double>& theta, double cost, long residuals,
-                                    double cost_resolution) {
+                                    double correlation_inflation, double cost_resolution) {
   const int m = map.size();
   if (normal.rows() != m) return {};
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
@@ -31,7 +46,8 @@ Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const Paramet
   const Eigen::MatrixXd theta_cov =
       eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose();
   const double dof = std::max(1.0, static_cast<double>(residuals - m));
-  const double inflation = std::max(1.0, 2.0 * cost / dof) + 2.0 * cost_resolution * cost;
+  const double inflation =
+      std::max(1.0, 2.0 * cost / dof) * correlation_inflation + 2.0 * cost_resolution * cost;
   Eigen::VectorXd d(m);
   for (int j = 0; j < m; ++j) d[j] = map.Derivative(j, theta[j]);
   return inflation * (d.asDiagonal() * theta_cov * d.asDiagonal());

@@ -17,11 +17,28 @@ namespace pneumaid::refine_internal {
 // A^T A - A^T B (B^T B)^-1 B^T A, so their uncertainty widens the parameters'.
 Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m);
 
+// The lag-one autocorrelation of the weighted residuals, pooled over the
+// channels of every run (a channel's first sample has no predecessor; the
+// start priors are left out). White noise gives about 0; a model error that
+// lasts many samples (mismatch, chaotic slips) gives nearly 1.
+struct ResidualCorrelation {
+  double lagged = 0, squared = 0;  // sum r_i r_(i+1), sum r_i^2
+
+  void Add(const FitExperiment& e, const Eigen::VectorXd& residuals);
+  // (1 + rho) / (1 - rho) for rho > 0, else 1: how much the residuals'
+  // correlation widens the Gauss-Newton covariance (an AR(1) residual
+  // carries that many times less information than as many white ones).
+  // rho is capped at 0.999.
+  double Inflation() const;
+};
+
 // Covariance of the free parameters at the optimum, in their SI units, from
 // the Gauss-Newton approximation (J^T J)^-1 (a pseudo-inverse: a direction
 // the data do not determine gets no finite variance but no crash either),
 // inflated by the reduced chi-square when the model misses the data by more
-// than the declared noise (the honest reading of a misfit), plus the fit's
+// than the declared noise (the honest reading of a misfit) and by the
+// residuals' correlation (`correlation_inflation`, ResidualCorrelation: a
+// misfit that lasts many samples is not many independent errors), plus the fit's
 // numerical resolution: the cost of the event-driven model jitters at
 // `cost_resolution` (relative), so every point whose cost lies within
 // cost_resolution x cost of the minimum is as good a stop as any; along
@@ -31,7 +48,7 @@ Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m);
 // with any estimated starts eliminated. Empty on failure.
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
                                     const std::vector<double>& theta, double cost, long residuals,
-                                    double cost_resolution);
+                                    double correlation_inflation, double cost_resolution);
 
 // Standard errors into r's parameters and uncertainty, correlations and the
 // poorly separable pairs.

@@ -145,6 +145,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   } else {
     r.params = WithValues(conditioned, map, p.theta.data());
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
+    ResidualCorrelation correlation;
     for (size_t k = 0; k < experiments.size(); ++k) {
       const EvaluationCache* at_best = nullptr;
       const std::vector<double> z =
@@ -155,6 +156,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         continue;
       }
       r.fitted[k].after = 0.5 * at_best->residuals.squaredNorm();
+      correlation.Add(experiments[k], at_best->residuals);
       r.final_cost += r.fitted[k].after;
       if (normal.size() > 0) normal += ParameterInformation(*at_best, map.size());
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
@@ -193,7 +195,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       }
     }
     Summarise(ParameterCovariance(with_prior, map, p.theta, r.final_cost, data_rows,
-                                  options.stall_tolerance),
+                                  correlation.Inflation(), options.stall_tolerance),
               map, options, &r);
   }
   if (windows) r.fitted = PerRun(r.fitted, experiments);
