@@ -93,7 +93,8 @@ struct StagedFit {
 };
 
 StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spec,
-                    const std::vector<FitStage>& stages, const RefineOptions& options) {
+                    const std::vector<FitStage>& stages, const RefineOptions& options,
+                    bool robust_runs = false) {
   StagedFit out;
   RefineResult& r = out.result;
   Parameters current = from;
@@ -108,7 +109,7 @@ StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spe
     const std::string replay_report = r.replay_report;
     out.before_last = current;
     r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows,
-                    k + 1 == stages.size(), options);
+                    k + 1 == stages.size(), options, robust_runs);
     r.replay_report = replay_report;
     iterations += r.iterations;
     if (first_fit) {
@@ -165,28 +166,52 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   StagedFit fit = FitStages(start, unit, spec, stages, options);
   const Parameters given_before_last = fit.before_last;
-  bool screened_kept = false;
-  std::string screen_report;
-  const bool stalled = fit.result.status == FitStatus::kNotExplained || !fit.result.has_values();
-  if (stalled && options.screen_friction_starts) {
+  bool other_start_kept = false;  // the kept fit started elsewhere than `start`
+  std::string screen_report, robust_report;
+  // Keeps `candidate` when it has values and the kept fit has none or a
+  // higher median; the iterations add up either way.
+  const auto keep_lower = [&fit](StagedFit&& candidate) {
+    const int iterations = fit.result.iterations + candidate.result.iterations;
+    const bool lower = candidate.result.has_values() &&
+                       (!fit.result.has_values() ||
+                        candidate.result.reduced_chi_square < fit.result.reduced_chi_square);
+    if (lower) fit = std::move(candidate);
+    fit.result.iterations = iterations;
+    return lower;
+  };
+  const auto stalled = [&fit] {
+    return fit.result.status == FitStatus::kNotExplained || !fit.result.has_values();
+  };
+  Parameters screened_start = start;
+  if (stalled() && options.screen_friction_starts) {
     // The fit from the given start stalled (or found nothing usable): a
     // start whose friction is read off the logs may lie in the basin that
     // explains the runs.
     FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options);
     screen_report = screen.report;
     if (!screen_report.empty()) {
-      StagedFit screened = FitStages(screen.start, unit, spec, stages, options);
-      const int iterations = fit.result.iterations + screened.result.iterations;
-      if (screened.result.has_values() &&
-          (!fit.result.has_values() ||
-           screened.result.reduced_chi_square < fit.result.reduced_chi_square)) {
-        fit = std::move(screened);
-        screened_kept = true;
+      screened_start = std::move(screen.start);
+      if (keep_lower(FitStages(screened_start, unit, spec, stages, options))) {
+        other_start_kept = true;
       } else {
         screen_report += "; not kept: the fit from the given start ends lower";
       }
-      fit.result.iterations = iterations;
     }
+  }
+  if (stalled() && options.robust_refit) {
+    // Still not explained: a run the model cannot follow may be dragging the
+    // others; the same start again with each run through a Cauchy loss.
+    const double before = fit.result.reduced_chi_square;
+    StagedFit robust = FitStages(screened_start, unit, spec, stages, options, true);
+    const double after = robust.result.reduced_chi_square;
+    const bool kept = keep_lower(std::move(robust));
+    other_start_kept = other_start_kept || (kept && !screen_report.empty());
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "robust refit (each run through a Cauchy loss): median reduced chi-square %.3g "
+                  "against %.3g, %s",
+                  after, before, kept ? "kept" : "not kept");
+    robust_report = line;
   }
   RefineResult& r = fit.result;
   if (r.status == FitStatus::kNotExplained && options.rescue_starts > 0) {
@@ -198,7 +223,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     const Parameters conditioned = WithRigConditions(start, unit);
     const ParameterMap map = MakeParameterMap(conditioned, last);
     RefineResult rescue = RefineStage(
-        given_before_last, unit, last, stages.back().windows, true, options,
+        given_before_last, unit, last, stages.back().windows, true, options, false,
         TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed),
         /*extra_starts_only=*/true);
     if (stages.back().windows && rescue.has_values()) {
@@ -218,7 +243,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   double cost_before = fit.cost_before;
   // A windowed stage's costs are windows': report whole runs, as validated
   // (and at the caller's start when friction was replayed or screened first).
-  if (stages.front().windows || stages.front().friction_replay || screened_kept) {
+  if (stages.front().windows || stages.front().friction_replay || other_start_kept) {
     before = WholeRunCosts(start, unit, spec, options);
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;
@@ -230,6 +255,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   }
   r.initial_cost = cost_before;
   r.screen_report = screen_report;
+  r.robust_report = robust_report;
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
     r.fitted[k].before = before[k].before;
   }
@@ -278,6 +304,7 @@ std::string RefineResult::BriefReport() const {
     out << line;
   }
   if (!screen_report.empty()) out << "  " << screen_report << "\n";
+  if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (estimated_starts > 0) {
     std::snprintf(line, sizeof(line),

@@ -17,13 +17,14 @@ Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m) {
   return information;
 }
 
-void ResidualCorrelation::Add(const FitExperiment& e, const Eigen::VectorXd& residuals) {
+void ResidualCorrelation::Add(const FitExperiment& e, const Eigen::VectorXd& residuals,
+                              double weight) {
   const Eigen::Index n = static_cast<Eigen::Index>(e.measured.size());
   for (std::size_t c = 0; c < e.channels.size(); ++c) {
     const auto r = residuals.segment(static_cast<Eigen::Index>(c) * n, n);
     if (n < 2) continue;
-    lagged += r.head(n - 1).dot(r.tail(n - 1));
-    squared += r.squaredNorm();
+    lagged += weight * r.head(n - 1).dot(r.tail(n - 1));
+    squared += weight * r.squaredNorm();
   }
 }
 

@@ -24,7 +24,8 @@ Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m);
 struct ResidualCorrelation {
   double lagged = 0, squared = 0;  // sum r_i r_(i+1), sum r_i^2
 
-  void Add(const FitExperiment& e, const Eigen::VectorXd& residuals);
+  // `weight`: the run's weight in the fit (a robust loss's slope; 1 else).
+  void Add(const FitExperiment& e, const Eigen::VectorXd& residuals, double weight = 1.0);
   // (1 + rho) / (1 - rho) for rho > 0, else 1: how much the residuals'
   // correlation widens the Gauss-Newton covariance (an AR(1) residual
   // carries that many times less information than as many white ones).

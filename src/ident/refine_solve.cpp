@@ -46,7 +46,7 @@ void RecordStartOffset(const FitExperiment& e, const StartOffsets& offsets, Refi
 }
 
 RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                         bool windows, bool last, const RefineOptions& options,
+                         bool windows, bool last, const RefineOptions& options, bool robust_runs,
                          const std::vector<std::vector<double>>& extra_starts,
                          bool extra_starts_only) {
   const Parameters conditioned = WithRigConditions(start, unit);
@@ -56,18 +56,22 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   Problem p;
   p.theta = map.ThetaOf(conditioned);
   p.offsets.assign(experiments.size(), StartOffsets{0, 0});  // never reallocated below
-  long data_rows = 0;  // residuals less the start priors (one per start offset)
+  std::vector<double> run_scale;  // each run's robust scale a^2 (0: plain least squares)
   for (size_t k = 0; k < experiments.size(); ++k) {
     const FitExperiment& e = experiments[k];
     auto* block =
         new ExperimentResidual(&conditioned, &map, &e, &options.simulation, options.jacobian);
+    run_scale.push_back(robust_runs ? options.acceptable_reduced_chi_square *
+                                          static_cast<double>(e.residuals())
+                                    : 0.0);
+    ceres::LossFunction* loss =
+        robust_runs ? new ceres::CauchyLoss(std::sqrt(run_scale.back())) : nullptr;
     if (e.FitsStart()) {
-      p.problem.AddResidualBlock(block, nullptr, p.theta.data(), p.offsets[k].data());
+      p.problem.AddResidualBlock(block, loss, p.theta.data(), p.offsets[k].data());
     } else {
-      p.problem.AddResidualBlock(block, nullptr, p.theta.data());
+      p.problem.AddResidualBlock(block, loss, p.theta.data());
     }
     p.blocks.push_back(block);
-    data_rows += e.residuals() - (e.FitsStart() ? kStartOffsets : 0);
   }
 
   // The weak prior toward the start (after the runs: Ceres' cost includes it,
@@ -146,6 +150,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     r.params = WithValues(conditioned, map, p.theta.data());
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
     ResidualCorrelation correlation;
+    double weighted_cost = 0, weighted_rows = 0;  // the runs' costs and rows, weighted
     for (size_t k = 0; k < experiments.size(); ++k) {
       const EvaluationCache* at_best = nullptr;
       const std::vector<double> z =
@@ -156,9 +161,18 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         continue;
       }
       r.fitted[k].after = 0.5 * at_best->residuals.squaredNorm();
-      correlation.Add(experiments[k], at_best->residuals);
       r.final_cost += r.fitted[k].after;
-      if (normal.size() > 0) normal += ParameterInformation(*at_best, map.size());
+      // A run the robust loss down-weights informs the parameters less: its
+      // information, its misfit and its correlation count with the loss's
+      // slope 1 / (1 + |r|^2 / a^2).
+      const double weight =
+          run_scale[k] > 0 ? 1.0 / (1.0 + at_best->residuals.squaredNorm() / run_scale[k]) : 1.0;
+      weighted_cost += weight * r.fitted[k].after;
+      weighted_rows +=
+          weight * static_cast<double>(experiments[k].residuals() -
+                                       (experiments[k].FitsStart() ? kStartOffsets : 0));
+      correlation.Add(experiments[k], at_best->residuals, weight);
+      if (normal.size() > 0) normal += weight * ParameterInformation(*at_best, map.size());
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
       if (!windows) {
         for (const ChannelMisfit& m :
@@ -194,9 +208,10 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         with_prior(j, j) += slope * slope;
       }
     }
-    Summarise(ParameterCovariance(with_prior, map, p.theta, r.final_cost, data_rows,
-                                  correlation.Inflation(), options.stall_tolerance),
-              map, options, &r);
+    Summarise(
+        ParameterCovariance(with_prior, map, p.theta, weighted_cost, std::lround(weighted_rows),
+                            correlation.Inflation(), options.stall_tolerance),
+        map, options, &r);
   }
   if (windows) r.fitted = PerRun(r.fitted, experiments);
   return r;

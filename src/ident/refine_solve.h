@@ -80,9 +80,13 @@ ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& o
 // One Levenberg-Marquardt fit of spec.parameters (all starts: the given one
 // and spec.multistart Latin-hypercube points, plus `extra_starts` in the
 // solver's coordinates; only those with extra_starts_only); held-out
-// validation and provenance are the caller's.
+// validation and provenance are the caller's. robust_runs: each run through
+// a Cauchy loss on its whole squared residual, quadratic up to
+// acceptable_reduced_chi_square times its residuals (RefineOptions::
+// robust_refit), its information in the covariance weighted by the loss's
+// slope; else plain least squares.
 RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                         bool windows, bool last, const RefineOptions& options,
+                         bool windows, bool last, const RefineOptions& options, bool robust_runs,
                          const std::vector<std::vector<double>>& extra_starts = {},
                          bool extra_starts_only = false);
 

@@ -61,6 +61,14 @@ struct RefineOptions {
   // calibrated on the robustness sweep (every unit passes at its true
   // parameters, the stalls of issue 12 fail).
   double acceptable_reduced_chi_square = 10.0;
+  // When neither the fit from the given start nor the one from the screened
+  // start explains the runs: one more fit, from the screened start (the
+  // given one when the screen moved nothing), with each run through a Cauchy
+  // loss on its whole squared residual, quadratic up to
+  // acceptable_reduced_chi_square times its residuals: a run the model
+  // cannot follow (a chaotic stick-slip) then no longer drags the runs it can
+  // follow into another basin. The lower median of the fits is kept.
+  bool robust_refit = true;
   // When the verdict still fails (after the screen below): this many more
   // starts of the last stage, drawn (Latin hypercube) from a trust box around
   // the given start (the component fits): each free parameter
@@ -148,6 +156,9 @@ struct RefineResult : FitResult {
   // What the friction screen (RefineOptions::screen_friction_starts) found
   // (empty when it kept the start).
   std::string screen_report;
+  // What the robust refit (RefineOptions::robust_refit) ended at and whether
+  // it was kept (empty when it did not run).
+  std::string robust_report;
   // Held-out experiments, validated with the start and the refined set.
   ValidationReport held_out_before, held_out_after;
 
