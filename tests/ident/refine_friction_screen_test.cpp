@@ -12,7 +12,7 @@
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
-#include "refine_test_util.h"
+#include "refine_mismatch_util.h"
 
 namespace pneumaid {
 namespace {
@@ -30,17 +30,10 @@ struct ScreenCase {
 const ScreenCase& HeavyUnit() {
   static const ScreenCase c = [] {
     ScreenCase s;
-    s.truth = LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
-    s.truth.cylinder.load_mass_kg = 1.4;
+    s.truth = testing::HeavyHorizontalTruth();
     s.truth.friction.positive = {12.6, 8.9, 14.4, 0.0053};
     s.truth.friction.negative = {13.8, 2.1, 8.1, 0.0030};
-    Protocol protocol = testing::RefinementProtocol({0.5, 0.7, 0.9}, false);
-    protocol.mismatch.regularized_friction = true;
-    protocol.mismatch.stick_velocity_m_per_s = 1e-4;
-    protocol.mismatch.relative_tolerance = 1e-8;
-    s.unit = testing::WriteAndRead(
-        Synthesize(s.truth, protocol, 12, "S"),
-        (std::filesystem::path(::testing::TempDir()) / "refine_screen_heavy").string());
+    s.unit = testing::MismatchedStrokes(s.truth, 12, "S", "refine_screen_heavy");
     s.start = s.truth;
     for (StribeckParams* f : {&s.start.friction.positive, &s.start.friction.negative}) {
       f->static_force_N *= 0.45;
@@ -51,12 +44,6 @@ const ScreenCase& HeavyUnit() {
   return c;
 }
 
-double Value(const Parameters& p, const std::string& path) {
-  double value = NAN;
-  EXPECT_TRUE(GetParameter(p, path, &value)) << path;
-  return value;
-}
-
 TEST(RefineFrictionScreenTest, AStartInTheWrongBasinIsScreenedAndTheFrictionRecovered) {
   const ScreenCase& c = HeavyUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
@@ -64,20 +51,7 @@ TEST(RefineFrictionScreenTest, AStartInTheWrongBasinIsScreenedAndTheFrictionReco
   std::cout << result.BriefReport();
   ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;
   EXPECT_NE(result.screen_report.find("friction start read off the logs"), std::string::npos);
-  // The tolerances: Fs, Fd 5 % or 0.1 N; b 15 % or 0.5 N s/m; vs
-  // 25 % or 1 mm/s.
-  for (const char* direction : {"positive", "negative"}) {
-    const std::string p = std::string("friction.") + direction + ".";
-    const auto near = [&](const char* name, double fraction, double floor) {
-      const double truth = Value(c.truth, p + name);
-      EXPECT_NEAR(Value(result.params, p + name), truth, std::max(fraction * truth, floor))
-          << p + name;
-    };
-    near("Fs", 0.05, 0.1);
-    near("Fd", 0.05, 0.1);
-    near("b", 0.15, 0.5);
-    near("vs", 0.25, 1e-3);
-  }
+  testing::ExpectFrictionWithinTolerance(result.params, c.truth);
   // The reported start and costs are the caller's, not the screened start's.
   EXPECT_DOUBLE_EQ(result.coefficients[2].start, c.start.friction.positive.static_force_N);
   EXPECT_GT(result.initial_cost, 10 * result.final_cost);

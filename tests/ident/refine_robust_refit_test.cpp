@@ -15,7 +15,7 @@
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/synth/synthetic_rig.h"
-#include "refine_test_util.h"
+#include "refine_mismatch_util.h"
 
 namespace pneumaid {
 namespace {
@@ -31,15 +31,8 @@ struct FaultCase {
 const FaultCase& OneFaultyRun() {
   static const FaultCase c = [] {
     FaultCase f;
-    f.truth = LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
-    f.truth.cylinder.load_mass_kg = 1.4;
-    Protocol protocol = testing::RefinementProtocol({0.5, 0.7, 0.9}, false);
-    protocol.mismatch.regularized_friction = true;
-    protocol.mismatch.stick_velocity_m_per_s = 1e-4;
-    protocol.mismatch.relative_tolerance = 1e-8;
-    f.unit = testing::WriteAndRead(
-        Synthesize(f.truth, protocol, 21, "F"),
-        (std::filesystem::path(::testing::TempDir()) / "refine_robust_fault").string());
+    f.truth = testing::HeavyHorizontalTruth();
+    f.unit = testing::MismatchedStrokes(f.truth, 21, "F", "refine_robust_fault");
     for (Experiment& e : f.unit.experiments) {
       if (e.entry.kind != ExperimentKind::kStroke) continue;
       for (double& p : e.columns.at("p2")) p += 0.3e5;
@@ -51,26 +44,8 @@ const FaultCase& OneFaultyRun() {
   return c;
 }
 
-double Value(const Parameters& p, const std::string& path) {
-  double value = NAN;
-  EXPECT_TRUE(GetParameter(p, path, &value)) << path;
-  return value;
-}
-
-// The tolerances: Fs, Fd 5 % or 0.1 N; b 15 % or 0.5 N s/m; vs 25 %
-// or 1 mm/s; delta 5 %.
 void ExpectWithinTolerance(const Parameters& fit, const Parameters& truth) {
-  for (const char* direction : {"positive", "negative"}) {
-    const std::string p = std::string("friction.") + direction + ".";
-    const auto near = [&](const char* name, double fraction, double floor) {
-      const double t = Value(truth, p + name);
-      EXPECT_NEAR(Value(fit, p + name), t, std::max(fraction * t, floor)) << p + name;
-    };
-    near("Fs", 0.05, 0.1);
-    near("Fd", 0.05, 0.1);
-    near("b", 0.15, 0.5);
-    near("vs", 0.25, 1e-3);
-  }
+  testing::ExpectFrictionWithinTolerance(fit, truth);
   EXPECT_NEAR(fit.pipeline.delta_per_s, truth.pipeline.delta_per_s,
               0.05 * truth.pipeline.delta_per_s);
 }

@@ -1,0 +1,62 @@
+// The heavy horizontal unit that the refinement's screen and robust-refit
+// tests write with model mismatch, and the issue's friction tolerances.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/model/parameter_table.h"
+#include "refine_test_util.h"
+
+namespace pneumaid::testing {
+
+// configs/paper-horizontal.yaml with a 1.4 kg load: the truth of the
+// mismatch tests (their friction is each test's).
+inline Parameters HeavyHorizontalTruth() {
+  Parameters truth =
+      LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
+  truth.cylinder.load_mass_kg = 1.4;
+  return truth;
+}
+
+// One stroke cycle at 0.5, 0.7 and 0.9 V, written with model mismatch:
+// smooth stick (creep below 0.1 mm/s), the rig integrated at rtol 1e-8;
+// synthetic, from `truth` and `seed`, into the test's temporary `dir`.
+inline Unit MismatchedStrokes(const Parameters& truth, std::uint64_t seed, const std::string& id,
+                              const std::string& dir) {
+  Protocol protocol = RefinementProtocol({0.5, 0.7, 0.9}, false);
+  protocol.mismatch.regularized_friction = true;
+  protocol.mismatch.stick_velocity_m_per_s = 1e-4;
+  protocol.mismatch.relative_tolerance = 1e-8;
+  return WriteAndRead(Synthesize(truth, protocol, seed, id),
+                      (std::filesystem::path(::testing::TempDir()) / dir).string());
+}
+
+inline double ParameterValue(const Parameters& p, const std::string& path) {
+  double value = NAN;
+  EXPECT_TRUE(GetParameter(p, path, &value)) << path;
+  return value;
+}
+
+// Issue 12's tolerances on every friction coefficient: Fs, Fd 5 % or 0.1 N;
+// b 15 % or 0.5 N s/m; vs 25 % or 1 mm/s.
+inline void ExpectFrictionWithinTolerance(const Parameters& fit, const Parameters& truth) {
+  for (const char* direction : {"positive", "negative"}) {
+    const std::string p = std::string("friction.") + direction + ".";
+    const auto near = [&](const char* name, double fraction, double floor) {
+      const double t = ParameterValue(truth, p + name);
+      EXPECT_NEAR(ParameterValue(fit, p + name), t, std::max(fraction * t, floor)) << p + name;
+    };
+    near("Fs", 0.05, 0.1);
+    near("Fd", 0.05, 0.1);
+    near("b", 0.15, 0.5);
+    near("vs", 0.25, 1e-3);
+  }
+}
+
+}  // namespace pneumaid::testing
