@@ -182,11 +182,20 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const auto stalled = [&fit] {
     return fit.result.status == FitStatus::kNotExplained || !fit.result.has_values();
   };
+  // A friction coefficient at a bound of its range (Fd and b at 0, vs at
+  // 1 m/s: Coulomb friction passed off as Stribeck) is a basin the runs
+  // tolerate but do not determine: screened like a stall.
+  const bool friction_at_bound =
+      fit.result.has_values() &&
+      std::any_of(fit.result.coefficients.begin(), fit.result.coefficients.end(),
+                  [](const FittedCoefficient& c) {
+                    return c.at_bound && c.path.rfind("friction.", 0) == 0;
+                  });
   Parameters screened_start = start;
-  if (stalled() && options.screen_friction_starts) {
-    // The fit from the given start stalled (or found nothing usable): a
-    // start whose friction is read off the logs may lie in the basin that
-    // explains the runs.
+  if ((stalled() || friction_at_bound) && options.screen_friction_starts) {
+    // The fit from the given start stalled (or found nothing usable, or left
+    // friction at a bound): a start whose friction is read off the logs may
+    // lie in the basin that explains the runs.
     FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options);
     screen_report = screen.report;
     if (!screen_report.empty()) {

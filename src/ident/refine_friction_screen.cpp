@@ -102,10 +102,13 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   }
   // Coarse, per direction: Fs over the fleet's range and beyond (1 to 32 N,
   // factors of 2^(1/4): a basin can be narrower than sqrt 2) at the
-  // current vs, then vs (1 to 32 mm/s, factors of 2) at the best Fs.
+  // current vs brought into the vs grid's range (at vs 1 m/s the Stribeck
+  // curve is flat and Fs only the sliding force), then vs (1 to 32 mm/s,
+  // factors of 2) at the best Fs.
   for (const Direction& d : directions) {
     double fs = 0, vs = 0;
     at(d, &fs, &vs);
+    vs = std::clamp(vs, 1e-3, 32e-3);
     for (int g = 0; g <= 20; ++g) try_point(d.prefix, d.sign, std::pow(2.0, 0.25 * g), vs);
     at(d, &fs, &vs);
     for (int g = 0; g <= 5; ++g) try_point(d.prefix, d.sign, fs, 1e-3 * std::pow(2.0, g));
