@@ -15,7 +15,11 @@
 #include "refine_verdict.h"
 
 // Refinement's orchestration: stages (friction replay, windows, parameter
-// subsets) in order, the held-out validation before and after, provenance.
+// subsets) in order; the order of attempts (the fit from the given start;
+// when it is not explained or leaves friction at a bound, the friction
+// screen and a fit from its start; when still not explained, a robust refit
+// and then the rescue starts; the Better one kept at each step); the
+// held-out validation before and after, provenance.
 // Its parts: refine_parameters (bounds map, multistart and trust-box points,
 // the prior toward the start), refine_runs (runs and windows),
 // refine_residual (the residual block), refine_solve (one stage's
@@ -132,6 +136,21 @@ StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spe
   return out;
 }
 
+// Whether fit `a` is better than `b`: explained first, then any with values
+// by the lower median (NaN, no run simulated, counts as infinite), nothing
+// usable last.
+bool Better(const RefineResult& a, const RefineResult& b) {
+  if (!a.has_values()) return false;
+  if (!b.has_values()) return true;
+  const bool a_explained = a.status == FitStatus::kConverged;
+  const bool b_explained = b.status == FitStatus::kConverged;
+  if (a_explained != b_explained) return a_explained;
+  const auto median = [](const RefineResult& r) {
+    return std::isnan(r.reduced_chi_square) ? HUGE_VAL : r.reduced_chi_square;
+  };
+  return median(a) < median(b);
+}
+
 }  // namespace
 
 bool RefineOptions::IsValid(std::string* error) const {
@@ -165,26 +184,24 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   StagedFit fit = FitStages(start, unit, spec, stages, options);
+  const bool given_has_values = fit.result.has_values();
   const Parameters given_before_last = fit.before_last;
   bool other_start_kept = false;  // the kept fit started elsewhere than `start`
   std::string screen_report, robust_report;
-  // Keeps `candidate` when it has values and the kept fit has none or a
-  // higher median; the iterations add up either way.
-  const auto keep_lower = [&fit](StagedFit&& candidate) {
+  int screened_candidates = 0;
+  // Keeps `candidate` when it is Better; the iterations add up either way.
+  const auto keep_better = [&fit](StagedFit&& candidate) {
     const int iterations = fit.result.iterations + candidate.result.iterations;
-    const bool lower = candidate.result.has_values() &&
-                       (!fit.result.has_values() ||
-                        candidate.result.reduced_chi_square < fit.result.reduced_chi_square);
-    if (lower) fit = std::move(candidate);
+    const bool better = Better(candidate.result, fit.result);
+    if (better) fit = std::move(candidate);
     fit.result.iterations = iterations;
-    return lower;
+    return better;
   };
-  const auto stalled = [&fit] {
-    return fit.result.status == FitStatus::kNotExplained || !fit.result.has_values();
-  };
+  const auto explained = [&fit] { return fit.result.status == FitStatus::kConverged; };
   // A friction coefficient at a bound of its range (Fd and b at 0, vs at
   // 1 m/s: Coulomb friction passed off as Stribeck) is a basin the runs
-  // tolerate but do not determine: screened like a stall.
+  // tolerate but do not determine: screened like a stall, even when the
+  // given start itself passes the verdict.
   const bool friction_at_bound =
       fit.result.has_values() &&
       std::any_of(fit.result.coefficients.begin(), fit.result.coefficients.end(),
@@ -192,28 +209,31 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
                     return c.at_bound && c.path.rfind("friction.", 0) == 0;
                   });
   Parameters screened_start = start;
-  if ((stalled() || friction_at_bound) && options.screen_friction_starts) {
-    // The fit from the given start stalled (or found nothing usable, or left
-    // friction at a bound): a start whose friction is read off the logs may
-    // lie in the basin that explains the runs.
-    FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options);
+  if ((!explained() || friction_at_bound) && options.screen_friction_starts) {
+    // The fit from the given start stalled (not explained, out of
+    // iterations or nothing usable) or left friction at a bound: a start
+    // whose friction is read off the logs may lie in the basin that explains
+    // the runs.
+    FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options, friction_at_bound);
     screen_report = screen.report;
+    screened_candidates = screen.candidates;
     if (!screen_report.empty()) {
       screened_start = std::move(screen.start);
-      if (keep_lower(FitStages(screened_start, unit, spec, stages, options))) {
+      if (keep_better(FitStages(screened_start, unit, spec, stages, options))) {
         other_start_kept = true;
       } else {
         screen_report += "; not kept: the fit from the given start ends lower";
       }
     }
   }
-  if (stalled() && options.robust_refit) {
+  if (!explained() && options.robust_refit) {
     // Still not explained: a run the model cannot follow may be dragging the
-    // others; the same start again with each run through a Cauchy loss.
+    // others. The screened start (the given one when the screen moved
+    // nothing) again, each run through a Cauchy loss.
     const double before = fit.result.reduced_chi_square;
     StagedFit robust = FitStages(screened_start, unit, spec, stages, options, true);
     const double after = robust.result.reduced_chi_square;
-    const bool kept = keep_lower(std::move(robust));
+    const bool kept = keep_better(std::move(robust));
     other_start_kept = other_start_kept || (kept && !screen_report.empty());
     char line[200];
     std::snprintf(line, sizeof(line),
@@ -223,16 +243,18 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     robust_report = line;
   }
   RefineResult& r = fit.result;
-  if (r.status == FitStatus::kNotExplained && options.rescue_starts > 0) {
+  if (!explained() && r.has_values() && options.rescue_starts > 0) {
     // Stalled far above what the noise explains: the last stage again (from
     // what it started from in the fit from the given start, earlier stages
-    // included) from starts in a trust box around the given start's values
-    // (the component fits, not the whole bounds), those alone.
+    // included; the kept fit's when that one found nothing) from starts in a
+    // trust box around the given start's values (the component fits, not the
+    // whole bounds), those alone.
     const FitSpec last = StageSpec(spec, stages.back());
     const Parameters conditioned = WithRigConditions(start, unit);
     const ParameterMap map = MakeParameterMap(conditioned, last);
     RefineResult rescue = RefineStage(
-        given_before_last, unit, last, stages.back().windows, true, options, false,
+        given_has_values ? given_before_last : fit.before_last, unit, last, stages.back().windows,
+        true, options, false,
         TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed),
         /*extra_starts_only=*/true);
     if (stages.back().windows && rescue.has_values()) {
@@ -241,9 +263,11 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     Judge(options, &rescue);
     const int iterations = r.iterations + rescue.iterations;
     const int tried = rescue.starts;
-    if (rescue.has_values() && rescue.reduced_chi_square < r.reduced_chi_square) {
+    if (Better(rescue, r)) {
       rescue.replay_report = r.replay_report;
       r = rescue;
+      if (!robust_report.empty()) robust_report += "; a rescue start then ended lower";
+      if (other_start_kept) screen_report += "; a rescue start then ended lower";
     }
     r.rescue_starts = tried;
     r.iterations = iterations;
@@ -251,7 +275,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   std::vector<ExperimentCost> before = std::move(fit.before);
   double cost_before = fit.cost_before;
   // A windowed stage's costs are windows': report whole runs, as validated
-  // (and at the caller's start when friction was replayed or screened first).
+  // (and at the caller's start when friction was replayed first or the kept
+  // fit started elsewhere).
   if (stages.front().windows || stages.front().friction_replay || other_start_kept) {
     before = WholeRunCosts(start, unit, spec, options);
     cost_before = 0;
@@ -264,6 +289,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   }
   r.initial_cost = cost_before;
   r.screen_report = screen_report;
+  r.screened_candidates = screened_candidates;
   r.robust_report = robust_report;
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
     r.fitted[k].before = before[k].before;

@@ -29,7 +29,7 @@ double Bounded(const FitSpec& spec, const std::string& path, double value) {
 }  // namespace
 
 FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                                    const RefineOptions& options) {
+                                    const RefineOptions& options, bool even_if_explained) {
   FrictionScreen out;
   out.start = start;
   const auto score = [&](const Parameters& p) {
@@ -38,7 +38,8 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
     return std::isnan(chi) ? HUGE_VAL : chi;
   };
   out.chi_square_before = out.chi_square_after = score(start);
-  if (out.chi_square_before <= options.acceptable_reduced_chi_square) return out;
+  if (out.chi_square_before <= options.acceptable_reduced_chi_square && !even_if_explained)
+    return out;
   // The force balance of the fitted runs' smooth slides.
   FrictionFitOptions friction;
   friction.force_balance = true;

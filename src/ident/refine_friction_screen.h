@@ -2,12 +2,13 @@
 // error has narrow basins in the friction when the rod sticks and slips (a
 // start a factor 2 off in Fs or vs stalls two orders of magnitude above the
 // noise), and the component fit misses Fs and vs where the slides are short
-// or the load heavy. When the fit from the given start is not explained,
-// that start is screened against friction read off the logs: per direction, a grid in
+// or the load heavy. When the fit from the given start is not explained (or
+// leaves friction at a bound), that start is screened against friction read
+// off the logs: per direction, a grid in
 // Fs and vs, each point's Fd and b solved from the force balance of the
 // smooth slides (friction_segments.h), then a pattern search in Fs and vs;
 // every candidate is simulated once and judged by the verdict's measure. No
-// Jacobian, no fit: 60 to 100 whole-run simulations.
+// Jacobian, no fit: 90 to 120 whole-run simulations.
 #pragma once
 
 #include <string>
@@ -27,7 +28,9 @@ struct FrictionScreen {
 // (directions whose Fs and vs are both free); a coefficient it moves loses
 // its standard error in `start.uncertainty` (the component fit's no longer
 // applies: the start prior treats it as undetermined).
+// A start whose runs' median already passes the verdict is returned as it
+// is (one simulation) unless `even_if_explained`.
 FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                                    const RefineOptions& options);
+                                    const RefineOptions& options, bool even_if_explained = false);
 
 }  // namespace pneumaid::refine_internal

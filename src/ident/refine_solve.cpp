@@ -62,7 +62,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     auto* block =
         new ExperimentResidual(&conditioned, &map, &e, &options.simulation, options.jacobian);
     run_scale.push_back(robust_runs ? options.acceptable_reduced_chi_square *
-                                          static_cast<double>(e.residuals())
+                                          static_cast<double>(std::max(e.residuals(), 1L))
                                     : 0.0);
     ceres::LossFunction* loss =
         robust_runs ? new ceres::CauchyLoss(std::sqrt(run_scale.back())) : nullptr;

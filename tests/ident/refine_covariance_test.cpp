@@ -65,6 +65,17 @@ TEST(ResidualCorrelationTest, PoolsRunsAndNeverNarrowsIt) {
   EXPECT_NEAR(correlation.Inflation(), (1 + rho) / (1 - rho), 0.1 * (1 + rho) / (1 - rho));
 }
 
+// A run the robust loss down-weights counts with its weight: at weight 0
+// an AR(1) run leaves the white one's factor.
+TEST(ResidualCorrelationTest, ARunCountsWithItsWeight) {
+  ResidualCorrelation correlation;
+  correlation.Add(TwoChannelRun(), Ar1(0.0, 4));
+  correlation.Add(TwoChannelRun(), 10.0 * Ar1(0.95, 5), 0.0);
+  EXPECT_NEAR(correlation.Inflation(), 1.0, 0.03);
+  correlation.Add(TwoChannelRun(), 10.0 * Ar1(0.95, 5), 1.0);
+  EXPECT_GT(correlation.Inflation(), 20.0);
+}
+
 // Where the channels meet, the last sample of one and the first of the next
 // are not neighbours: channels (1, 1) and (-1, -1) give rho = 2 / 4 (the
 // seam's product -1 would make it 1 / 4).

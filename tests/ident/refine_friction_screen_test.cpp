@@ -85,6 +85,7 @@ TEST(RefineFrictionScreenTest, AStartThatExplainsTheRunsIsNotScreened) {
   const RefineResult result = Refine(c.truth, c.unit, LoadFitSpec(kDefaultSpec), RefineOptions{});
   EXPECT_EQ(result.status, FitStatus::kConverged) << result.reason;
   EXPECT_TRUE(result.screen_report.empty()) << result.screen_report;
+  EXPECT_EQ(result.screened_candidates, 0);
 }
 
 // The screen runs only after the fit from the given start has failed the
@@ -104,6 +105,7 @@ TEST(RefineFrictionScreenTest, AStartThatTheFitTakesToAnExplainedEndIsNotScreene
   const RefineResult result = Refine(start, c.unit, spec, options);
   EXPECT_EQ(result.status, FitStatus::kConverged) << result.reason;
   EXPECT_TRUE(result.screen_report.empty()) << result.screen_report;
+  EXPECT_EQ(result.screened_candidates, 0);
   EXPECT_EQ(result.rescue_starts, 0);
 }
 

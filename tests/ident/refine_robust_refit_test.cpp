@@ -51,7 +51,8 @@ void ExpectWithinTolerance(const Parameters& fit, const Parameters& truth) {
 }
 
 // From the true parameters the plain fit is dragged by the faulty run: the
-// other two runs end at 223 and the positive Fd at its bound (0 for 0.5 N).
+// runs' median ends at 120 (the other two runs' p2 at 223) and the positive
+// Fd at its bound (0 for 0.5 N).
 // The robust refit follows the two runs the model can follow: explained
 // (median 1.6), every coefficient within the tolerance, the faulty
 // run named as the worst.
@@ -62,6 +63,8 @@ TEST(RefineRobustRefitTest, OneRunTheModelCannotFollowDoesNotDragTheOthers) {
   std::cout << result.BriefReport();
   ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;
   EXPECT_NE(result.robust_report.find(", kept"), std::string::npos) << result.robust_report;
+  EXPECT_EQ(result.robust_report.find("rescue"), std::string::npos) << result.robust_report;
+  EXPECT_EQ(result.rescue_starts, 0);
   ExpectWithinTolerance(result.params, c.truth);
   ASSERT_FALSE(result.misfits.empty());
   EXPECT_EQ(result.misfits.front().run, c.faulty_run);

@@ -69,7 +69,8 @@ struct RefineOptions {
   // cannot follow (a chaotic stick-slip) then no longer drags the runs it can
   // follow into another basin. The lower median of the fits is kept.
   bool robust_refit = true;
-  // When the verdict still fails (after the screen below): this many more
+  // When the verdict still fails (after the screen and the robust refit
+  // below): this many more
   // starts of the last stage, drawn (Latin hypercube) from a trust box around
   // the given start (the component fits): each free parameter
   // within a factor (1 +- w) of its start value, w the larger of rescue_box
@@ -77,9 +78,10 @@ struct RefineOptions {
   // none: a coefficient the component fits did not determine).
   int rescue_starts = 6;
   double rescue_box = 0.3;
-  // When the fit from the given start ends "not explained", the start's free
-  // friction (per direction with Fs and vs free) is screened against
-  // friction read off the logs: a grid in Fs and vs, Fd and b from the
+  // When the fit from the given start is not explained (stalled, out of
+  // iterations or nothing usable), or leaves a friction coefficient at a
+  // bound, the start's free friction (per direction with Fs and vs free) is
+  // screened against friction read off the logs: a grid in Fs and vs, Fd and b from the
   // slides' force balance, each candidate simulated once; the fit is run
   // again from the best, and the lower median of the two fits is kept
   // (docs/refinement.md). A start that the fit takes to an explained end
@@ -154,8 +156,10 @@ struct RefineResult : FitResult {
   // What a friction_replay stage found (empty without one).
   std::string replay_report;
   // What the friction screen (RefineOptions::screen_friction_starts) found
-  // (empty when it kept the start).
+  // (empty when it kept the start), and how many candidates it simulated (0:
+  // not screened).
   std::string screen_report;
+  int screened_candidates = 0;
   // What the robust refit (RefineOptions::robust_refit) ended at and whether
   // it was kept (empty when it did not run).
   std::string robust_report;
