@@ -111,3 +111,26 @@ TEST(RefineFrictionScreenTest, AStartThatTheFitTakesToAnExplainedEndIsNotScreene
 
 }  // namespace
 }  // namespace pneumaid
+
+namespace pneumaid {
+namespace {
+
+// A fit that explains the runs but leaves a friction coefficient at a bound
+// of its range is screened too (the friction may be Coulomb passed off as
+// Stribeck): here the truth's negative Fd is 0, the fit keeps it there, the
+// screen runs (even though its start passes the verdict) and the better of
+// the two fits is explained with the friction within tolerance.
+TEST(RefineFrictionScreenTest, AnExplainedFitWithFrictionAtABoundIsScreenedToo) {
+  Parameters truth = testing::HeavyHorizontalTruth();
+  truth.friction.positive = {9.0, 3.0, 10.0, 0.006};
+  truth.friction.negative = {6.0, 0.0, 4.0, 0.004};
+  const Unit unit = testing::MismatchedStrokes(truth, 31, "B", "refine_screen_bound");
+  const RefineResult result = Refine(truth, unit, LoadFitSpec(kDefaultSpec), RefineOptions{});
+  std::cout << result.BriefReport();
+  ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;
+  EXPECT_GT(result.screened_candidates, 0);
+  testing::ExpectFrictionWithinTolerance(result.params, truth);
+}
+
+}  // namespace
+}  // namespace pneumaid
