@@ -4,6 +4,7 @@
 #include "pneumaid/ident/refine.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 
@@ -20,8 +21,11 @@ const std::string kDefaultSpec = std::string(PNEUMAID_SOURCE_DIR) + "/configs/fi
 const std::string kFromScratchSpec =
     std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-from-scratch.yaml";
 
+// One directory per process: ctest runs each test of this file as its own
+// process, in parallel, and two writing one directory collide.
 std::string UnitDir(const std::string& name) {
-  return (std::filesystem::path(::testing::TempDir()) / name).string();
+  return (std::filesystem::path(::testing::TempDir()) / (name + "-" + std::to_string(::getpid())))
+      .string();
 }
 
 double Value(const Parameters& p, const std::string& path) {
