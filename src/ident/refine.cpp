@@ -88,12 +88,23 @@ void CheckInputs(const FitSpec& spec, const RefineOptions& options) {
   }
 }
 
+// The verdict on a fit's last stage: a windowed stage's runs are judged
+// whole, from their logged starts.
+void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options, RefineResult* r) {
+  if (last.windows && r->has_values()) {
+    r->misfits = WholeRunMisfits(r->params, unit, spec, options);
+  }
+  Judge(options, r);
+}
+
 // One fit through every stage from `from`, judged by the verdict.
 struct StagedFit {
   RefineResult result;
   Parameters before_last;              // what the last stage started from
   std::vector<ExperimentCost> before;  // the first fitted stage's costs at its start
   double cost_before = 0;
+  bool from_screened_start = false;  // else from the caller's start
 };
 
 StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spec,
@@ -128,11 +139,7 @@ StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spe
     current = r.params;
   }
   r.iterations = iterations;
-  // The verdict: a windowed last stage's runs are judged whole.
-  if (stages.back().windows && r.has_values()) {
-    r.misfits = WholeRunMisfits(r.params, unit, spec, options);
-  }
-  Judge(options, &r);
+  JudgeLastStage(stages.back(), unit, spec, options, &r);
   return out;
 }
 
@@ -186,7 +193,6 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   StagedFit fit = FitStages(start, unit, spec, stages, options);
   const bool given_has_values = fit.result.has_values();
   const Parameters given_before_last = fit.before_last;
-  bool other_start_kept = false;  // the kept fit started elsewhere than `start`
   std::string screen_report, robust_report;
   int screened_candidates = 0;
   // Keeps `candidate` when it is Better; the iterations add up either way.
@@ -209,6 +215,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
                     return c.at_bound && c.path.rfind("friction.", 0) == 0;
                   });
   Parameters screened_start = start;
+  bool screened = false;  // screened_start differs from start
   if ((!explained() || friction_at_bound) && options.screen_friction_starts) {
     // The fit from the given start stalled (not explained, out of
     // iterations or nothing usable) or left friction at a bound: a start
@@ -219,9 +226,10 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     screened_candidates = screen.candidates;
     if (!screen_report.empty()) {
       screened_start = std::move(screen.start);
-      if (keep_better(FitStages(screened_start, unit, spec, stages, options))) {
-        other_start_kept = true;
-      } else {
+      screened = true;
+      StagedFit from_screened = FitStages(screened_start, unit, spec, stages, options);
+      from_screened.from_screened_start = true;
+      if (!keep_better(std::move(from_screened))) {
         screen_report += "; not kept: the fit from the given start ends lower";
       }
     }
@@ -232,9 +240,9 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     // nothing) again, each run through a Cauchy loss.
     const double before = fit.result.reduced_chi_square;
     StagedFit robust = FitStages(screened_start, unit, spec, stages, options, true);
+    robust.from_screened_start = screened;
     const double after = robust.result.reduced_chi_square;
     const bool kept = keep_better(std::move(robust));
-    other_start_kept = other_start_kept || (kept && !screen_report.empty());
     char line[200];
     std::snprintf(line, sizeof(line),
                   "robust refit (each run through a Cauchy loss): median reduced chi-square %.3g "
@@ -257,17 +265,14 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
         true, options, false,
         TrustBox(map, conditioned, options.rescue_starts, options.rescue_box, spec.seed),
         /*extra_starts_only=*/true);
-    if (stages.back().windows && rescue.has_values()) {
-      rescue.misfits = WholeRunMisfits(rescue.params, unit, spec, options);
-    }
-    Judge(options, &rescue);
+    JudgeLastStage(stages.back(), unit, spec, options, &rescue);
     const int iterations = r.iterations + rescue.iterations;
     const int tried = rescue.starts;
     if (Better(rescue, r)) {
       rescue.replay_report = r.replay_report;
       r = rescue;
       if (!robust_report.empty()) robust_report += "; a rescue start then ended lower";
-      if (other_start_kept) screen_report += "; a rescue start then ended lower";
+      if (fit.from_screened_start) screen_report += "; a rescue start then ended lower";
     }
     r.rescue_starts = tried;
     r.iterations = iterations;
@@ -277,7 +282,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   // A windowed stage's costs are windows': report whole runs, as validated
   // (and at the caller's start when friction was replayed first or the kept
   // fit started elsewhere).
-  if (stages.front().windows || stages.front().friction_replay || other_start_kept) {
+  if (stages.front().windows || stages.front().friction_replay || fit.from_screened_start) {
     before = WholeRunCosts(start, unit, spec, options);
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;

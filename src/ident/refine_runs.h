@@ -41,10 +41,10 @@ struct FitExperiment {
   std::array<double, kStartOffsets> start_sigma_Pa = {0, 0};
 
   bool FitsStart() const { return start_sigma_Pa[0] > 0; }
+  // The data's rows: one per sample and channel.
+  long data_rows() const { return static_cast<long>(measured.size() * channels.size()); }
   // Data rows, then one prior row per estimated initial pressure.
-  long residuals() const {
-    return static_cast<long>(measured.size() * channels.size()) + (FitsStart() ? kStartOffsets : 0);
-  }
+  long residuals() const { return data_rows() + (FitsStart() ? kStartOffsets : 0); }
 };
 
 // The coordinates z of an experiment's residual block: the free parameters'

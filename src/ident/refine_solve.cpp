@@ -168,9 +168,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       const double weight =
           run_scale[k] > 0 ? 1.0 / (1.0 + at_best->residuals.squaredNorm() / run_scale[k]) : 1.0;
       weighted_cost += weight * r.fitted[k].after;
-      weighted_rows +=
-          weight * static_cast<double>(experiments[k].residuals() -
-                                       (experiments[k].FitsStart() ? kStartOffsets : 0));
+      weighted_rows += weight * static_cast<double>(experiments[k].data_rows());
       correlation.Add(experiments[k], at_best->residuals, weight);
       if (normal.size() > 0) normal += weight * ParameterInformation(*at_best, map.size());
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
