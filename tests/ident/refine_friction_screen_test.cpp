@@ -17,7 +17,7 @@
 namespace pneumaid {
 namespace {
 
-const std::string kDefaultSpec = std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml";
+const std::string& kDefaultSpec = testing::kDefaultFitSpec;
 
 struct ScreenCase {
   Parameters truth, start;

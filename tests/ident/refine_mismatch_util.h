@@ -1,5 +1,6 @@
 // The heavy horizontal unit that the refinement's screen and robust-refit
-// tests write with model mismatch, and the friction tolerances.
+// tests write with model mismatch, the friction tolerances, and what
+// the refinement tests share (the default spec, a parameter's value by path).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -15,6 +16,10 @@
 #include "refine_test_util.h"
 
 namespace pneumaid::testing {
+
+// The default fit spec, as `identify --refine` uses it.
+inline const std::string kDefaultFitSpec =
+    std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml";
 
 // configs/paper-horizontal.yaml with a 1.4 kg load: the truth of the
 // mismatch tests (their friction is each test's).

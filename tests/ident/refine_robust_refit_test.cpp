@@ -20,7 +20,7 @@
 namespace pneumaid {
 namespace {
 
-const std::string kDefaultSpec = std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml";
+const std::string& kDefaultSpec = testing::kDefaultFitSpec;
 
 struct FaultCase {
   Parameters truth;

@@ -12,12 +12,12 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
-#include "refine_test_util.h"
+#include "refine_mismatch_util.h"
 
 namespace pneumaid {
 namespace {
 
-const std::string kDefaultSpec = std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml";
+const std::string& kDefaultSpec = testing::kDefaultFitSpec;
 const std::string kFromScratchSpec =
     std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-from-scratch.yaml";
 
@@ -26,12 +26,6 @@ const std::string kFromScratchSpec =
 std::string UnitDir(const std::string& name) {
   return (std::filesystem::path(::testing::TempDir()) / (name + "-" + std::to_string(::getpid())))
       .string();
-}
-
-double Value(const Parameters& p, const std::string& path) {
-  double value = NAN;
-  EXPECT_TRUE(GetParameter(p, path, &value)) << path;
-  return value;
 }
 
 // The tolerances: Fs, Fd 5 % or 0.1 N; b 15 % or 0.5 N s/m; vs 25 %
@@ -53,8 +47,10 @@ void ExpectRecovered(const RefineResult& result, const Parameters& truth, const 
   std::cout << result.BriefReport();
   ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;
   for (const FreeParameter& free : spec.parameters) {
-    const double exact = Value(truth, free.path);
-    EXPECT_NEAR(Value(result.params, free.path), exact, Tolerance(free.path, exact)) << free.path;
+    const double exact = testing::ParameterValue(truth, free.path);
+    EXPECT_NEAR(testing::ParameterValue(result.params, free.path), exact,
+                Tolerance(free.path, exact))
+        << free.path;
     EXPECT_GT(result.params.uncertainty.count(free.path), 0u) << free.path;
   }
 }
@@ -65,7 +61,9 @@ std::vector<double> ZScores(const RefineResult& result, const Parameters& truth,
   std::vector<double> z;
   for (const FreeParameter& free : spec.parameters) {
     const double error = result.params.uncertainty.at(free.path);
-    z.push_back((Value(result.params, free.path) - Value(truth, free.path)) / error);
+    z.push_back((testing::ParameterValue(result.params, free.path) -
+                 testing::ParameterValue(truth, free.path)) /
+                error);
     std::cout << "  z " << free.path << " " << z.back() << "\n";
   }
   return z;
@@ -94,7 +92,7 @@ TEST(RefineTest, RecoversTenParametersFromTrajectoriesAloneStartingThirtyPercent
   Parameters start = truth;
   for (size_t j = 0; j < spec.parameters.size(); ++j) {
     const std::string& path = spec.parameters[j].path;
-    SetParameter(&start, path, Value(truth, path) * (j % 2 == 0 ? 1.3 : 0.7));
+    SetParameter(&start, path, testing::ParameterValue(truth, path) * (j % 2 == 0 ? 1.3 : 0.7));
   }
   const RefineResult result = Refine(start, unit, spec, RefineOptions{});
   ExpectRecovered(result, truth, spec);
