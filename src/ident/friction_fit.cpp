@@ -13,6 +13,7 @@
 
 #include "determination.h"
 #include "friction_cost.h"
+#include "friction_problem.h"
 #include "friction_segments.h"
 #include "friction_slides.h"
 #include "pneumaid/ident/rod_replay.h"
@@ -22,75 +23,6 @@ namespace pneumaid {
 namespace {
 
 using namespace friction_internal;
-
-// The Ceres problem over the segments: friction blocks shared, one arrest
-// time per two-sided segment.
-struct SegmentProblem {
-  ceres::Problem problem;
-  std::vector<int> rows;  // residuals per segment
-  // Per segment (unused when one-sided); kept from one pass to the next.
-  std::vector<double>* stop_time_s = nullptr;
-};
-
-void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptions& options,
-                  const std::vector<double>& huber_scale, Block* positive, Block* negative,
-                  SegmentProblem* p) {
-  for (std::size_t k = 0; k < data.segments.size(); ++k) {
-    const Segment& s = data.segments[k];
-    const RodReplayInput replay = ReplayOf(s, mass_kg, options.substeps);
-    const int rows = static_cast<int>(replay.samples) - 1;
-    auto* cost = new SegmentCost(&s, replay, rows);
-    ceres::LossFunction* loss =
-        huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
-    if (s.two_sided) {
-      double* stop = &(*p->stop_time_s)[k];
-      p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data(), stop);
-      p->problem.SetParameterLowerBound(stop, 0, s.stop_time_min_s);
-      p->problem.SetParameterUpperBound(stop, 0, s.stop_time_max_s);
-    } else {
-      p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data());
-    }
-    p->rows.push_back(rows);
-  }
-  for (std::size_t c = 0; c < data.clusters.size(); ++c) {
-    const int rows = static_cast<int>(data.clusters[c].speed_m_per_s.size());
-    auto* cost = new ceres::AutoDiffCostFunction<internal::SlideResidual, ceres::DYNAMIC,
-                                                 kDirectionParameters, kDirectionParameters>(
-        new internal::SlideResidual{&data.clusters[c]}, rows);
-    const std::size_t k = data.segments.size() + c;
-    ceres::LossFunction* loss =
-        huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
-    p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data());
-    p->rows.push_back(rows);
-  }
-  for (Block* block : {positive, negative}) {
-    for (int i = 0; i < kDirectionParameters; ++i) {
-      p->problem.SetParameterLowerBound(block->data(), i, kLowerBounds[i]);
-      p->problem.SetParameterUpperBound(block->data(), i, kUpperBounds[i]);
-    }
-  }
-}
-
-ceres::Solver::Summary Solve(const FrictionFitOptions& options, ceres::Problem* problem) {
-  ceres::Solver::Options solver_options;
-  // The arrest times are eliminated per segment (Schur complement).
-  solver_options.linear_solver_type = ceres::DENSE_SCHUR;
-  solver_options.max_num_iterations = options.max_iterations;
-  // Relative changes far below the standard errors: more iterations would
-  // move nothing that the covariance resolves.
-  solver_options.function_tolerance = 1e-8;
-  solver_options.parameter_tolerance = 1e-8;
-  // With bounds, Ceres follows every trust-region step with a projected
-  // Armijo search along it. That search is what keeps steps that push arrest
-  // times against their bounds useful (without it: 24 iterations instead of 9
-  // on the benchmark's 10^5 samples), but its default cubic interpolation
-  // evaluates the whole Jacobian at each trial point, doubling the cost of an
-  // iteration. Bisection needs the cost alone.
-  solver_options.line_search_interpolation_type = ceres::BISECTION;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, problem, &summary);
-  return summary;
-}
 
 // Per segment: its residuals, the Jacobian's friction columns (the free
 // blocks, positive first) and its arrest-time column (empty when one-sided),
@@ -134,22 +66,6 @@ bool Evaluate(const StrokeData& data, const std::vector<double*>& free_blocks, S
         }
       }
     }
-  }
-  return true;
-}
-
-// Mean squared residual of each segment (residuals only: cheap).
-bool SegmentMeanSquares(SegmentProblem* p, std::vector<double>* out) {
-  std::vector<double> r;
-  if (!p->problem.Evaluate(ceres::Problem::EvaluateOptions(), nullptr, &r, nullptr, nullptr)) {
-    return false;
-  }
-  out->clear();
-  std::size_t row = 0;
-  for (const int n : p->rows) {
-    double squares = 0;
-    for (int i = 0; i < n; ++i, ++row) squares += r[row] * r[row];
-    out->push_back(squares / n);
   }
   return true;
 }
@@ -207,6 +123,92 @@ void SetCoefficients(const Block (&starts)[2], const Block (&values)[2],
     }
     result->coefficients.push_back(coefficient);
   }
+}
+
+// One fit from a start: the solve and, when some segments fit far worse than
+// the typical one (a disturbed stroke, a bump on the rod), a refit with each
+// segment's influence bounded by a Huber loss; the Jacobians of the last
+// problem, and the misfit (DirectionMisfits, no loss) that ranks fits from
+// other starts.
+struct Attempt {
+  Block blocks[2];
+  std::vector<double> stop_time_s;
+  std::vector<SegmentJacobian> jacobians;
+  double initial_cost = 0, final_cost = 0, misfit = HUGE_VAL;
+  int iterations = 0, outlier_segments = 0;
+  bool stopped = true;  // the last solve stopped before its iteration limit
+  std::string failure;  // why Ceres failed; empty: usable
+};
+
+Attempt FitFrom(const StrokeData& data, double mass_kg, const FrictionFitOptions& options,
+                const Block (&prior_blocks)[2], const Block (&start)[2],
+                const bool (&free_direction)[2],
+                const std::array<double, kDirectionParameters>& sigma) {
+  Attempt a;
+  a.blocks[0] = start[0];
+  a.blocks[1] = start[1];
+  for (const Segment& s : data.segments) a.stop_time_s.push_back(s.stop_time_guess_s);
+  std::vector<double*> free_blocks;
+  for (int d = 0; d < 2; ++d) {
+    if (free_direction[d]) free_blocks.push_back(a.blocks[d].data());
+  }
+  std::vector<double> huber_scale;  // empty: plain least squares
+  for (int pass = 0; pass < 2; ++pass) {
+    SegmentProblem problem;
+    problem.stop_time_s = &a.stop_time_s;
+    BuildProblem(data, mass_kg, options, huber_scale, &a.blocks[0], &a.blocks[1], &problem);
+    for (int d = 0; d < 2; ++d) {
+      double* block = a.blocks[d].data();
+      if (!free_direction[d]) {
+        problem.problem.SetParameterBlockConstant(block);
+        continue;
+      }
+      problem.problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<PriorResidual, kDirectionParameters,
+                                          kDirectionParameters>(
+              new PriorResidual{prior_blocks[d], sigma}),
+          nullptr, block);
+    }
+    const ceres::Solver::Summary summary = Solve(options, &problem.problem);
+    if (pass == 0) a.initial_cost = summary.initial_cost;
+    a.final_cost = summary.final_cost;
+    a.iterations += static_cast<int>(summary.iterations.size());
+    a.stopped = summary.termination_type != ceres::NO_CONVERGENCE;
+    if (!summary.IsSolutionUsable()) {
+      a.failure = summary.message;
+      return a;
+    }
+    if (pass == 0) {
+      std::vector<double> mean_squares;
+      if (!SegmentMeanSquares(&problem, &mean_squares)) {
+        a.failure = "a replay failed at the solution";
+        return a;
+      }
+      const double typical = Median(mean_squares);
+      a.outlier_segments =
+          static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
+            return m > options.outlier_ratio * typical;
+          }));
+      if (a.outlier_segments > 0) {
+        // Huber's a: the loss turns robust where a segment's squared norm
+        // passes a^2 = outlier_ratio x the typical mean square x its rows.
+        for (int n : problem.rows)
+          huber_scale.push_back(std::sqrt(options.outlier_ratio * typical * n));
+        continue;  // the Jacobians are taken after the refit
+      }
+    }
+    if (!Evaluate(data, free_blocks, &problem, &a.jacobians)) {
+      a.failure = "a replay failed at the solution";
+      return a;
+    }
+    break;
+  }
+  SegmentProblem plain;
+  plain.stop_time_s = &a.stop_time_s;
+  BuildProblem(data, mass_kg, options, {}, &a.blocks[0], &a.blocks[1], &plain);
+  double misfit[2];
+  if (DirectionMisfits(data, &plain, misfit)) a.misfit = misfit[0] + misfit[1];
+  return a;
 }
 
 }  // namespace
@@ -277,6 +279,11 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   }
   Block* const blocks[2] = {&positive, &negative};
   const double mass_kg = unit.manifest.rig.load_mass_kg;
+  Block logs_start[2] = {positive, negative};
+  bool stopped = true;  // the kept solve stopped before its iteration limit
+  if (options.screen_starts && !data.segments.empty()) {
+    result.start_screen = ScreenStarts(data, mass_kg, options, &positive, &negative);
+  }
   // Held coefficients (columns 0-3 positive, 4-7 negative) with why: a
   // direction without slides keeps the prior whole.
   std::array<std::string, 2 * kDirectionParameters> held;
@@ -286,14 +293,11 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     for (int i = 0; i < kDirectionParameters; ++i)
       held[d * kDirectionParameters + i] = "no slide this way";
     *blocks[d] = prior_blocks[d];
+    logs_start[d] = prior_blocks[d];
   }
-  std::vector<double> stop_time_s;
-  for (const Segment& s : data.segments) stop_time_s.push_back(s.stop_time_guess_s);
   std::vector<SegmentJacobian> jacobians;
-  std::vector<double> huber_scale;  // empty: plain least squares
-  std::vector<int> free;            // the columns fitted (then: determined)
+  std::vector<int> free;  // the columns fitted (then: determined)
   Eigen::MatrixXd covariance;
-  bool stopped = true;  // the last solve stopped before its iteration limit
   const std::array<double, kDirectionParameters> sigma = PriorSigmas(options);
   // One fit of every coefficient of a direction with slides (the weak prior
   // keeps it regular); what it finds undetermined is then reported as held,
@@ -301,71 +305,48 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   // with them held at the prior's distorted the determined ones (Fd 0.19 for
   // 0.29 on a heavy unit whose one fit gave 0.292), so there is none.
   {
-    free.clear();
-    std::vector<double*> free_blocks;
+    bool free_direction[2] = {false, false};
     std::vector<int> columns;  // of the free blocks, in Evaluate's order
     for (int d = 0; d < 2; ++d) {
-      bool any = false;
       for (int i = 0; i < kDirectionParameters; ++i)
-        any = any || held[d * kDirectionParameters + i].empty();
-      if (!any) continue;
-      free_blocks.push_back(blocks[d]->data());
+        free_direction[d] = free_direction[d] || held[d * kDirectionParameters + i].empty();
+      if (!free_direction[d]) continue;
       for (int i = 0; i < kDirectionParameters; ++i)
         columns.push_back(d * kDirectionParameters + i);
     }
     for (int c : columns) {
       if (held[c].empty()) free.push_back(c);
     }
-    for (int pass = 0; pass < 2; ++pass) {
-      SegmentProblem problem;
-      problem.stop_time_s = &stop_time_s;
-      BuildProblem(data, mass_kg, options, huber_scale, &positive, &negative, &problem);
-      for (int d = 0; d < 2; ++d) {
-        double* block = blocks[d]->data();
-        if (std::find(free_blocks.begin(), free_blocks.end(), block) == free_blocks.end()) {
-          problem.problem.SetParameterBlockConstant(block);
-          continue;
-        }
-        problem.problem.AddResidualBlock(
-            new ceres::AutoDiffCostFunction<PriorResidual, kDirectionParameters,
-                                            kDirectionParameters>(
-                new PriorResidual{prior_blocks[d], sigma}),
-            nullptr, block);
+    // From the starts read off the logs and, when the screen found a better
+    // one, from that too: the lower misfit wins.
+    const Block start[2] = {positive, negative};
+    Attempt fit = FitFrom(data, mass_kg, options, prior_blocks, logs_start, free_direction, sigma);
+    if (start[0] != logs_start[0] || start[1] != logs_start[1]) {
+      Attempt screened =
+          FitFrom(data, mass_kg, options, prior_blocks, start, free_direction, sigma);
+      screened.iterations += fit.iterations;
+      if (screened.failure.empty() && (!fit.failure.empty() || screened.misfit < fit.misfit)) {
+        fit = std::move(screened);
+        result.start_screen.used = true;
+      } else {
+        fit.iterations = screened.iterations;
       }
-      const ceres::Solver::Summary summary = Solve(options, &problem.problem);
-      if (pass == 0) result.initial_cost = summary.initial_cost;
-      result.final_cost = summary.final_cost;
-      result.iterations += static_cast<int>(summary.iterations.size());
-      stopped = summary.termination_type != ceres::NO_CONVERGENCE;
-      const auto failed = [&] {
-        result.reason = "Ceres failed (" + summary.message + "); the prior is kept";
-        std::array<std::string, 2 * kDirectionParameters> all;
-        all.fill("Ceres failed");
-        SetCoefficients(prior_blocks, prior_blocks, all, {}, {}, &result);
-        return result;
-      };
-      if (!summary.IsSolutionUsable()) return failed();
-      if (pass == 0) {
-        // Segments far worse than the typical one (a disturbed stroke, a
-        // bump on the rod): refit with each segment's influence bounded.
-        std::vector<double> mean_squares;
-        if (!SegmentMeanSquares(&problem, &mean_squares)) return failed();
-        const double typical = Median(mean_squares);
-        result.outlier_segments =
-            static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
-              return m > options.outlier_ratio * typical;
-            }));
-        if (result.outlier_segments > 0) {
-          // Huber's a: the loss turns robust where a segment's squared norm
-          // passes a^2 = outlier_ratio x the typical mean square x its rows.
-          for (int n : problem.rows)
-            huber_scale.push_back(std::sqrt(options.outlier_ratio * typical * n));
-          continue;  // the Jacobians are taken after the refit
-        }
-      }
-      if (!Evaluate(data, free_blocks, &problem, &jacobians)) return failed();
-      break;
     }
+    if (!fit.failure.empty()) {
+      result.reason = "Ceres failed (" + fit.failure + "); the prior is kept";
+      std::array<std::string, 2 * kDirectionParameters> all;
+      all.fill("Ceres failed");
+      SetCoefficients(prior_blocks, prior_blocks, all, {}, {}, &result);
+      return result;
+    }
+    positive = fit.blocks[0];
+    negative = fit.blocks[1];
+    jacobians = std::move(fit.jacobians);
+    result.initial_cost = fit.initial_cost;
+    result.final_cost = fit.final_cost;
+    result.iterations = fit.iterations;
+    result.outlier_segments = fit.outlier_segments;
+    stopped = fit.stopped;
     // The robust covariance of the free columns: the data's information plus
     // the prior's in the bread, the clusters' scores and the prior (one more
     // independent observation of each coefficient) in the meat, so that
@@ -477,6 +458,17 @@ std::string FrictionFitResult::BriefReport() const {
        {std::make_pair("positive", &positive), std::make_pair("negative", &negative)}) {
     std::snprintf(line, sizeof(line), "  %s: %d slides replayed, %d smooth slides\n", name,
                   fit->segments, fit->smooth_slides);
+    out << line;
+  }
+  if (start_screen.candidates > 0) {
+    std::snprintf(line, sizeof(line),
+                  "  start screened (%d candidates): misfit positive %.4g -> %.4g, negative %.4g "
+                  "-> %.4g; %s\n",
+                  start_screen.candidates, start_screen.start_misfit[0],
+                  start_screen.best_misfit[0], start_screen.start_misfit[1],
+                  start_screen.best_misfit[1],
+                  start_screen.used ? "the fit from the screened start was kept"
+                                    : "the fit from the logs' start was kept");
     out << line;
   }
   out << CoefficientReport("  ");

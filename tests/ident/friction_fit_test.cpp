@@ -185,15 +185,27 @@ TEST(FrictionFitTest, ADisturbedSlideIsBoundedByTheRobustLoss) {
 // 0.1 mm/s), integrated at rtol 1e-8, the rod logged at `rate_Hz` with 10 um
 // quantisation, strokes at `levels`.
 Unit MismatchedStrokes(const Parameters& truth, std::uint64_t seed, double rate_Hz,
-                       std::vector<double> levels, int cycles) {
+                       std::vector<double> levels, int cycles, double margin_m = -1) {
   Protocol protocol = testing::StrokeProtocol(cycles);
   protocol.sample_rate_Hz = rate_Hz;
   protocol.stroke_levels_V = std::move(levels);
+  if (margin_m >= 0) protocol.stroke_margin_m = margin_m;
   protocol.mismatch.regularized_friction = true;
   protocol.mismatch.stick_velocity_m_per_s = 1e-4;
   protocol.mismatch.relative_tolerance = 1e-8;
   return testing::WriteAndReadUnit(Synthesize(truth, protocol, seed, "M"),
                                    "friction_mismatch_" + std::to_string(seed));
+}
+
+// The paper's horizontal cylinder with `mass_kg` and this friction.
+Parameters HorizontalTruth(double mass_kg, const StribeckParams& positive,
+                           const StribeckParams& negative) {
+  Parameters truth =
+      LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
+  truth.cylinder.load_mass_kg = mass_kg;
+  truth.friction.positive = positive;
+  truth.friction.negative = negative;
+  return truth;
 }
 
 // Every coefficient is within the tolerances or reported as held, never a
@@ -228,11 +240,7 @@ void ExpectWithinToleranceOrHeld(const FrictionFitResult& result, const char* di
 // segment): the sliding friction comes from the force balance, Fs and vs
 // (never slower than a few mm/s away from the ends) are held and say so.
 TEST(FrictionFitTest, AHeavyLoadThatNeverSticksGetsItsSlidingFrictionAndSaysWhatIsHeld) {
-  Parameters truth =
-      LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
-  truth.cylinder.load_mass_kg = 1.5;
-  truth.friction.positive = {8.0, 2.0, 6.0, 0.012};
-  truth.friction.negative = {12.0, 4.0, 12.0, 0.006};
+  const Parameters truth = HorizontalTruth(1.5, {8.0, 2.0, 6.0, 0.012}, {12.0, 4.0, 12.0, 0.006});
   const Unit unit = MismatchedStrokes(truth, 7, 2000, {0.6, 1.0}, 1);
   const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
   std::cout << fit.BriefReport();
@@ -257,6 +265,31 @@ TEST(FrictionFitTest, ADirectionWithAnUndeterminedVsStillGetsItsSlidingFriction)
   EXPECT_NEAR(fit.negative.params.viscous_N_s_per_m, 3.0, 0.5);
   EXPECT_EQ(Determined(fit, "positive"), 4);
   EXPECT_NEAR(fit.positive.params.static_force_N, 10.0, 0.5);
+}
+
+// A light rod with a strong Stribeck drop slips violently: from the prior's
+// Fd, b and vs (no smooth slide gives a force-balance start) the replay fit
+// ends in another basin. The screen of starts finds the truth's.
+TEST(FrictionFitTest, TheStartScreenFindsTheBasinOfALightRodThatSticksAndSlips) {
+  const Parameters truth =
+      HorizontalTruth(0.14, {20.0, 0.71, 12.5, 0.0236}, {16.0, 4.96, 9.0, 0.0224});
+  // Stopping 5 mm short of the ends.
+  const Unit unit = MismatchedStrokes(truth, 2, 2000, {0.5, 0.7, 0.9}, 1, 0.005);
+  FrictionFitOptions unscreened;
+  unscreened.screen_starts = false;
+  // Without the screen the negative direction ends far off (Fs 0, Fd 13.8 N).
+  const FrictionFitResult plain = FitFriction(unit, FrictionParams{}, unscreened);
+  std::cout << plain.BriefReport();
+  EXPECT_GT(std::fabs(plain.negative.params.dynamic_force_N - 4.96), 1.0);
+  const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
+  std::cout << fit.BriefReport();
+  ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
+  EXPECT_EQ(fit.start_screen.candidates, 144);
+  EXPECT_LT(fit.start_screen.best_misfit[1], fit.start_screen.start_misfit[1]);
+  EXPECT_TRUE(fit.start_screen.used);
+  EXPECT_NE(fit.BriefReport().find("start screened (144 candidates)"), std::string::npos);
+  ExpectWithinToleranceOrHeld(fit, "positive", truth.friction.positive, {"Fs", "Fd", "b", "vs"});
+  ExpectWithinToleranceOrHeld(fit, "negative", truth.friction.negative, {"Fs", "Fd", "b", "vs"});
 }
 
 TEST(FrictionFitTest, InvalidOptionsAreNamed) {

@@ -66,6 +66,11 @@ struct FrictionFitOptions {
   // F - M a, v and a by a local quadratic over smoothing_window_s).
   bool force_balance = true;
   double smoothing_window_s = 0.01;
+  // Screen a grid of Fs, Fd, b and vs per direction (each candidate one
+  // replay of every segment); where a candidate beats the starts read off the
+  // logs, fit from both and keep the lower misfit. Stick-slip replays have
+  // narrow basins.
+  bool screen_starts = true;
   // RK4 substeps per sample interval while sliding.
   int substeps = 8;
   // Ceres Levenberg-Marquardt iterations.
@@ -105,8 +110,21 @@ struct DirectionFit {
 // each one the logs do not determine is held with the reason
 // (FrictionFitOptions::held_at_prior says at which value). Not fitted: no
 // slide in the stroke logs, or the solver failed; the prior is kept.
+// The screen of starts (FrictionFitOptions::screen_starts): per direction
+// (positive first) the misfit of the starts read off the logs and of the best
+// candidate, sum over segments of rows x ln(1 + mean square residual). When
+// the screen moved a start, the fit runs from both and keeps the lower
+// misfit.
+struct FrictionStartScreen {
+  int candidates = 0;  // 0: not screened
+  double start_misfit[2] = {0, 0};
+  double best_misfit[2] = {0, 0};
+  bool used = false;  // the fit from the screened start was kept
+};
+
 struct FrictionFitResult : FitResult {
   DirectionFit positive, negative;
+  FrictionStartScreen start_screen;
   int segments = 0, samples = 0, excluded_segments = 0, outlier_segments = 0;
   int smooth_samples = 0;     // force-balance samples
   double position_rms_m = 0;  // replay vs log over all fitted samples
