@@ -174,6 +174,7 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (!(acceptable_reduced_chi_square >= 1))
     return fail("acceptable_reduced_chi_square must be >= 1");
   if (rescue_starts < 0) return fail("rescue_starts must be >= 0");
+  if (screened_alternatives < 0) return fail("screened_alternatives must be >= 0");
   if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");
   if (!(misfit_window_s > 0)) return fail("misfit_window_s must be > 0");
   if (!(start_prior_errors > 0) || !(start_prior_fraction > 0))
@@ -221,7 +222,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     // iterations or nothing usable) or left friction at a bound: a start
     // whose friction is read off the logs may lie in the basin that explains
     // the runs.
-    FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options, friction_at_bound);
+    FrictionScreen screen = ScreenFrictionStarts(start, unit, spec, options, friction_at_bound,
+                                                 options.screened_alternatives);
     screen_report = screen.report;
     screened_candidates = screen.candidates;
     if (!screen_report.empty()) {
@@ -231,6 +233,24 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       from_screened.from_screened_start = true;
       if (!keep_better(std::move(from_screened))) {
         screen_report += "; not kept: the fit from the given start ends lower";
+      }
+      // Not explained from the best candidate either: the next-best ones.
+      int tried = 0, kept = 0;
+      for (Parameters& alternative : screen.alternatives) {
+        if (explained()) break;
+        ++tried;
+        StagedFit from_alternative = FitStages(alternative, unit, spec, stages, options);
+        from_alternative.from_screened_start = true;
+        if (keep_better(std::move(from_alternative))) {
+          kept = tried;
+          screened_start = std::move(alternative);
+        }
+      }
+      if (tried > 0) {
+        screen_report +=
+            "; " + std::to_string(tried) + " next-best candidate(s) fitted" +
+            (kept > 0 ? ", the fit from candidate " + std::to_string(kept + 1) + " kept"
+                      : ", none ended lower");
       }
     }
   }

@@ -29,7 +29,8 @@ double Bounded(const FitSpec& spec, const std::string& path, double value) {
 }  // namespace
 
 FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                                    const RefineOptions& options, bool even_if_explained) {
+                                    const RefineOptions& options, bool even_if_explained,
+                                    int alternatives) {
   FrictionScreen out;
   out.start = start;
   const auto score = [&](const Parameters& p) {
@@ -71,10 +72,13 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
     }
     return p;
   };
+  // Every candidate simulated, with its median (for the alternatives).
+  std::vector<std::pair<double, Parameters>> simulated;
   // Simulates (fs, vs) for a direction; keeps it when it is the best yet.
   const auto try_point = [&](const std::string& prefix, int direction, double fs, double vs) {
     Parameters p = candidate(prefix, direction, fs, vs);
     const double chi = score(p);
+    if (alternatives > 0 && std::isfinite(chi)) simulated.emplace_back(chi, p);
     if (chi < best_chi) best_chi = chi, best = std::move(p);
   };
   struct Direction {
@@ -133,14 +137,41 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
       if (!(best_chi < before)) break;
     }
   }
-  // A moved coefficient's standard error was the component fit's.
-  for (const FreeParameter& p : spec.parameters) {
-    double before = 0, after = 0;
-    if (GetParameter(start, p.path, &before) && GetParameter(best, p.path, &after) &&
-        before != after) {
-      best.uncertainty.erase(p.path);
+  // The next-best candidates that differ from those already taken.
+  std::stable_sort(simulated.begin(), simulated.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  const auto distinct = [&](const Parameters& a, const Parameters& b) {
+    for (const Direction& d : directions) {
+      double fa = 0, fb = 0, va = 0, vb = 0;
+      GetParameter(a, d.prefix + "Fs", &fa);
+      GetParameter(b, d.prefix + "Fs", &fb);
+      GetParameter(a, d.prefix + "vs", &va);
+      GetParameter(b, d.prefix + "vs", &vb);
+      const auto ratio = [](double x, double y) {
+        return std::max(x, y) / std::max(std::min(x, y), 1e-12);
+      };
+      if (ratio(fa, fb) > kDistinctStatic || ratio(va, vb) > kDistinctStribeck) return true;
     }
+    return false;
+  };
+  for (auto& [chi, p] : simulated) {
+    if (static_cast<int>(out.alternatives.size()) >= alternatives) break;
+    bool fresh = distinct(p, best) && distinct(p, start);
+    for (const Parameters& taken : out.alternatives) fresh = fresh && distinct(p, taken);
+    if (fresh) out.alternatives.push_back(std::move(p));
   }
+  // A moved coefficient's standard error was the component fit's.
+  const auto forget_moved = [&](Parameters* p) {
+    for (const FreeParameter& free : spec.parameters) {
+      double before = 0, after = 0;
+      if (GetParameter(start, free.path, &before) && GetParameter(*p, free.path, &after) &&
+          before != after) {
+        p->uncertainty.erase(free.path);
+      }
+    }
+  };
+  forget_moved(&best);
+  for (Parameters& alternative : out.alternatives) forget_moved(&alternative);
   if (best_chi < out.chi_square_before) {
     char line[200];
     std::snprintf(line, sizeof(line),

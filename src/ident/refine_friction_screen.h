@@ -12,6 +12,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "pneumaid/ident/refine.h"
 
@@ -22,7 +23,13 @@ struct FrictionScreen {
   double chi_square_before = 0, chi_square_after = 0;  // the verdict's measure
   int candidates = 0;                                  // simulated
   std::string report;                                  // one line, empty when nothing moved
+  // Up to `alternatives` next-best candidates (lowest median first), each
+  // differing from `start` and from one another in some direction's Fs by a
+  // factor kDistinctStatic or its vs by kDistinctStribeck.
+  std::vector<Parameters> alternatives;
 };
+
+inline constexpr double kDistinctStatic = 1.15, kDistinctStribeck = 1.3;
 
 // The screened start for the free friction coefficients of `spec`
 // (directions whose Fs and vs are both free); a coefficient it moves loses
@@ -31,6 +38,7 @@ struct FrictionScreen {
 // A start whose runs' median already passes the verdict is returned as it
 // is (one simulation) unless `even_if_explained`.
 FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                                    const RefineOptions& options, bool even_if_explained = false);
+                                    const RefineOptions& options, bool even_if_explained = false,
+                                    int alternatives = 0);
 
 }  // namespace pneumaid::refine_internal

@@ -4,11 +4,14 @@
 // friction read off the logs, and the fit from the screened start recovers
 // the friction; without the screen the same fit stalls. Logs written with
 // model mismatch: smooth stick, the rig integrated at rtol 1e-8.
+#include "../../src/ident/refine_friction_screen.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <iostream>
 
+#include "../../src/ident/refine_verdict.h"
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
@@ -55,6 +58,45 @@ TEST(RefineFrictionScreenTest, AStartInTheWrongBasinIsScreenedAndTheFrictionReco
   // The reported start and costs are the caller's, not the screened start's.
   EXPECT_DOUBLE_EQ(result.coefficients[2].start, c.start.friction.positive.static_force_N);
   EXPECT_GT(result.initial_cost, 10 * result.final_cost);
+}
+
+// The screen's next-best candidates (fitted while the fit from the best is
+// not explained): no worse than the best by the verdict's measure, ordered,
+// and each different from the start, the best and one another.
+TEST(RefineFrictionScreenTest, TheNextBestCandidatesAreOrderedAndDistinct) {
+  using refine_internal::kDistinctStatic;
+  using refine_internal::kDistinctStribeck;
+  const ScreenCase& c = HeavyUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineOptions options;
+  const refine_internal::FrictionScreen screen =
+      refine_internal::ScreenFrictionStarts(c.start, c.unit, spec, options, false, 3);
+  ASSERT_EQ(screen.alternatives.size(), 3u);
+  const auto median = [&](const Parameters& p) {
+    return refine_internal::MedianRunChiSquare(
+        refine_internal::WholeRunMisfits(p, c.unit, spec, options));
+  };
+  const auto distinct = [](const Parameters& a, const Parameters& b) {
+    bool any = false;
+    for (const auto& [fa, fb] : {std::make_pair(a.friction.positive, b.friction.positive),
+                                 std::make_pair(a.friction.negative, b.friction.negative)}) {
+      const double fs = fa.static_force_N / fb.static_force_N;
+      const double vs = fa.stribeck_velocity_m_per_s / fb.stribeck_velocity_m_per_s;
+      any =
+          any || std::max(fs, 1 / fs) > kDistinctStatic || std::max(vs, 1 / vs) > kDistinctStribeck;
+    }
+    return any;
+  };
+  double previous = screen.chi_square_after;
+  for (std::size_t k = 0; k < screen.alternatives.size(); ++k) {
+    const Parameters& a = screen.alternatives[k];
+    const double chi = median(a);
+    EXPECT_GE(chi, previous) << k;
+    previous = chi;
+    EXPECT_TRUE(distinct(a, screen.start)) << k;
+    EXPECT_TRUE(distinct(a, c.start)) << k;
+    for (std::size_t j = 0; j < k; ++j) EXPECT_TRUE(distinct(a, screen.alternatives[j])) << k;
+  }
 }
 
 // The screen is what finds the basin: without it the same start ends in

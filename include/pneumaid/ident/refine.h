@@ -87,6 +87,12 @@ struct RefineOptions {
   // (docs/refinement.md). A start that the fit takes to an explained end
   // costs nothing more.
   bool screen_friction_starts = true;
+  // While the fit from the screened start is not explained either: up to
+  // this many more fits, from the screen's next-best candidates that differ
+  // from the ones fitted (some direction's Fs by a factor 1.15 or vs by 1.3):
+  // under stick-slip the best simulated candidate is not always in the basin
+  // that explains the runs, the second or third can be.
+  int screened_alternatives = 2;
   // A weak prior ties each free parameter to its start (a MAP fit): sigma
   // is the larger of start_prior_errors of its standard errors from the
   // start's uncertainty and start_prior_fraction of its value, or, without
