@@ -58,7 +58,11 @@ std::string FitResult::CoefficientReport(const std::string& indent, double corre
   std::ostringstream out;
   char line[512];
   for (const FittedCoefficient& c : coefficients) {
-    if (c.determined()) {
+    if (c.determined() && c.at_bound && c.standard_error == 0) {
+      std::snprintf(line, sizeof(line),
+                    "%s%-28s %12.6g -> %12.6g  (at a bound: no standard error)\n", indent.c_str(),
+                    c.path.c_str(), c.start, c.value);
+    } else if (c.determined()) {
       std::snprintf(line, sizeof(line), "%s%-28s %12.6g -> %12.6g +- %.3g%s\n", indent.c_str(),
                     c.path.c_str(), c.start, c.value, c.standard_error,
                     c.at_bound ? "  (at a bound)" : "");

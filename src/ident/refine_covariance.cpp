@@ -17,6 +17,17 @@ Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m) {
   return information;
 }
 
+Eigen::VectorXd ParameterScore(const EvaluationCache& at, int m) {
+  const auto a = at.jacobian.leftCols(m);
+  Eigen::VectorXd score = a.transpose() * at.residuals;
+  if (at.jacobian.cols() == m) return score;
+  const auto b = at.jacobian.rightCols(at.jacobian.cols() - m);
+  const Eigen::MatrixXd cross = a.transpose() * b;
+  const Eigen::MatrixXd start = b.transpose() * b;
+  score -= cross * start.ldlt().solve(b.transpose() * at.residuals);
+  return score;
+}
+
 void ResidualCorrelation::Add(const FitExperiment& e, const Eigen::VectorXd& residuals,
                               double weight) {
   const Eigen::Index n = static_cast<Eigen::Index>(e.measured.size());
@@ -35,7 +46,8 @@ double ResidualCorrelation::Inflation() const {
 
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
                                     const std::vector<double>& theta, double cost, long residuals,
-                                    double correlation_inflation, double cost_resolution) {
+                                    double correlation_inflation, double cost_resolution,
+                                    const Eigen::MatrixXd& run_meat, int runs) {
   const int m = map.size();
   if (normal.rows() != m) return {};
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
@@ -49,9 +61,13 @@ Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const Paramet
   const double dof = std::max(1.0, static_cast<double>(residuals - m));
   const double inflation =
       std::max(1.0, 2.0 * cost / dof) * correlation_inflation + 2.0 * cost_resolution * cost;
+  Eigen::MatrixXd cov = inflation * theta_cov;
+  if (runs >= 2 && run_meat.rows() == m && run_meat.cols() == m) {
+    cov += theta_cov * run_meat * theta_cov * (runs / (runs - 1.0));
+  }
   Eigen::VectorXd d(m);
   for (int j = 0; j < m; ++j) d[j] = map.Derivative(j, theta[j]);
-  return inflation * (d.asDiagonal() * theta_cov * d.asDiagonal());
+  return d.asDiagonal() * cov * d.asDiagonal();
 }
 
 void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const RefineOptions& options,
@@ -61,8 +77,17 @@ void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const Refine
   r->covariance = cov;
   r->correlation_flag = options.correlation_flag;
   for (int i = 0; i < m; ++i) {
-    r->coefficients[i].standard_error = std::sqrt(std::max(0.0, cov(i, i)));
-    r->params.uncertainty[map.free[i].path] = r->coefficients[i].standard_error;
+    FittedCoefficient& c = r->coefficients[i];
+    // At a bound the mapped coordinate's slope vanishes, and so would the
+    // error (1e-111 on a sweep unit): the runs would take the value past its
+    // range, its uncertainty is one-sided. No standard error, then.
+    if (c.at_bound) {
+      c.standard_error = 0;
+      r->params.uncertainty.erase(map.free[i].path);
+      continue;
+    }
+    c.standard_error = std::sqrt(std::max(0.0, cov(i, i)));
+    r->params.uncertainty[map.free[i].path] = c.standard_error;
   }
 }
 

@@ -17,6 +17,13 @@ namespace pneumaid::refine_internal {
 // A^T A - A^T B (B^T B)^-1 B^T A, so their uncertainty widens the parameters'.
 Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m);
 
+// J^T r of the free parameters from one experiment, its start offsets
+// eliminated (A^T r - A^T B (B^T B)^-1 B^T r): how hard the run pulls the
+// parameters away from the common optimum. Runs that a mismatched model
+// cannot all follow pull in different directions; the sum of the scores'
+// outer products is the meat of the run-clustered covariance.
+Eigen::VectorXd ParameterScore(const EvaluationCache& at, int m);
+
 // The lag-one autocorrelation of the weighted residuals, pooled over the
 // channels of every run (a channel's first sample has no predecessor; the
 // start priors are left out). White noise gives about 0; a model error that
@@ -46,10 +53,16 @@ struct ResidualCorrelation {
 // parameter j that band reaches sqrt(2 cost_resolution cost (J^T J)^-1_jj).
 // Without that term the errors were 5 to 20 times smaller than the distance
 // to the truth on synthetic units. `normal` is J^T J of the free parameters
-// with any estimated starts eliminated. Empty on failure.
+// with any estimated starts eliminated.
+// Robust over runs: with `run_meat` (sum over G >= 2 runs of score score^T,
+// ParameterScore) the run-clustered sandwich N^-1 run_meat N^-1 G/(G-1) is
+// added: where the runs disagree about a parameter (model error that differs
+// from run to run) its error widens, whatever the noise says. Empty on
+// failure.
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
                                     const std::vector<double>& theta, double cost, long residuals,
-                                    double correlation_inflation, double cost_resolution);
+                                    double correlation_inflation, double cost_resolution,
+                                    const Eigen::MatrixXd& run_meat = {}, int runs = 0);
 
 // Standard errors into r's parameters and uncertainty, correlations and the
 // poorly separable pairs.

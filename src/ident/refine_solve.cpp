@@ -151,6 +151,8 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
     ResidualCorrelation correlation;
     double weighted_cost = 0, weighted_rows = 0;  // the runs' costs and rows, weighted
+    Eigen::MatrixXd run_meat = Eigen::MatrixXd::Zero(map.size(), map.size());
+    int scored_runs = 0;
     for (size_t k = 0; k < experiments.size(); ++k) {
       const EvaluationCache* at_best = nullptr;
       const std::vector<double> z =
@@ -170,7 +172,12 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       weighted_cost += weight * r.fitted[k].after;
       weighted_rows += weight * static_cast<double>(experiments[k].data_rows());
       correlation.Add(experiments[k], at_best->residuals, weight);
-      if (normal.size() > 0) normal += weight * ParameterInformation(*at_best, map.size());
+      if (normal.size() > 0) {
+        normal += weight * ParameterInformation(*at_best, map.size());
+        const Eigen::VectorXd score = weight * ParameterScore(*at_best, map.size());
+        run_meat += score * score.transpose();
+        ++scored_runs;
+      }
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
       if (!windows) {
         for (const ChannelMisfit& m :
@@ -206,10 +213,11 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         with_prior(j, j) += slope * slope;
       }
     }
-    Summarise(
-        ParameterCovariance(with_prior, map, p.theta, weighted_cost, std::lround(weighted_rows),
-                            correlation.Inflation(), options.stall_tolerance),
-        map, options, &r);
+    Summarise(ParameterCovariance(
+                  with_prior, map, p.theta, weighted_cost, std::lround(weighted_rows),
+                  correlation.Inflation(), options.stall_tolerance,
+                  options.run_clustered_errors ? run_meat : Eigen::MatrixXd(), scored_runs),
+              map, options, &r);
   }
   if (windows) r.fitted = PerRun(r.fitted, experiments);
   return r;

@@ -198,6 +198,7 @@ struct UnitResult {
   double held_out_mm = 0, held_out_limit_mm = 0;  // worst validation run, and its limit
   bool held_out_ok = false;
   int errors_checked = 0, errors_within_3 = 0;
+  std::string outside_3;  // the refined coefficients farther than 3 SE: path (z)
   std::string failure;
 };
 
@@ -242,7 +243,13 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
       double truth = 0;
       if (!(rp.standard_error > 0) || !GetParameter(t, rp.path, &truth)) continue;
       ++out.errors_checked;
-      out.errors_within_3 += std::fabs(rp.value - truth) <= 3 * rp.standard_error;
+      const double z = std::fabs(rp.value - truth) / rp.standard_error;
+      out.errors_within_3 += z <= 3;
+      if (z > 3) {
+        char item[120];
+        std::snprintf(item, sizeof(item), " %s (%.3g)", rp.path.c_str(), z);
+        out.outside_3 += item;
+      }
     }
     ValidationOptions v;
     for (const auto& e : unit.experiments)
@@ -354,6 +361,7 @@ int main(int argc, char** argv) {
             identify_misses.empty() ? " none" : identify_misses.c_str(), r.held_out_mm,
             r.held_out_limit_mm, r.held_out_ok ? "" : " MISSED", r.errors_within_3,
             r.errors_checked, r.identify_s, r.refine_s);
+        if (!r.outside_3.empty()) std::printf("  outside 3 SE (z):%s\n", r.outside_3.c_str());
         std::fflush(stdout);
       }
     });

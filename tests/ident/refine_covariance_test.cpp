@@ -1,6 +1,7 @@
 // Refinement's uncertainty (src/ident/refine_covariance.h): the residuals'
 // lag-one autocorrelation that widens the covariance when a misfit lasts
-// many samples. Closed forms on seeded synthetic residuals.
+// many samples, the run-clustered sandwich that widens it where the runs
+// disagree, no error at a bound. Closed forms on seeded synthetic residuals.
 #include "../../src/ident/refine_covariance.h"
 
 #include <gtest/gtest.h>
@@ -85,6 +86,94 @@ TEST(ResidualCorrelationTest, ChannelsAreNotNeighbours) {
   steps << 1.0, 1.0, -1.0, -1.0;
   correlation.Add(TwoChannelRun(2), steps);
   EXPECT_DOUBLE_EQ(correlation.Inflation(), (1 + 0.5) / (1 - 0.5));
+}
+
+// Two free parameters, linear scale over [-10, 10], at theta = 0 (the middle:
+// dp/dtheta = 20 / 4 = 5).
+ParameterMap TwoLinearParameters() {
+  ParameterMap map;
+  for (const char* path : {"a", "b"}) {
+    FreeParameter p;
+    p.path = path;
+    p.lower = -10;
+    p.upper = 10;
+    p.scale = ParameterScale::kLinear;
+    map.free.push_back(p);
+  }
+  return map;
+}
+
+TEST(RunClusteredErrorsTest, TheScoreHasTheStartOffsetsEliminated) {
+  // Columns: two parameters, then one start offset.
+  EvaluationCache at;
+  at.jacobian.resize(4, 3);
+  at.jacobian << 1, 0, 1, 0, 1, 1, 1, 1, 0, 2, 0, 1;
+  at.residuals.resize(4);
+  at.residuals << 0.5, -1, 2, 0.25;
+  const Eigen::MatrixXd a = at.jacobian.leftCols(2), b = at.jacobian.rightCols(1);
+  const Eigen::VectorXd expected =
+      a.transpose() * at.residuals -
+      a.transpose() * b * (b.transpose() * b).inverse() * b.transpose() * at.residuals;
+  const Eigen::VectorXd score = ParameterScore(at, 2);
+  ASSERT_EQ(score.size(), 2);
+  EXPECT_NEAR(score[0], expected[0], 1e-12);
+  EXPECT_NEAR(score[1], expected[1], 1e-12);
+  // Without offsets it is J^T r.
+  EvaluationCache plain;
+  plain.jacobian = at.jacobian.leftCols(2);
+  plain.residuals = at.residuals;
+  EXPECT_NEAR(ParameterScore(plain, 2)[0], (a.transpose() * at.residuals)[0], 1e-12);
+}
+
+// Runs that pull the parameters apart widen the errors by the sandwich
+// N^-1 (sum of the scores' outer products) N^-1 G / (G - 1), in values.
+TEST(RunClusteredErrorsTest, RunsThatDisagreeWidenTheErrorsByTheSandwich) {
+  const ParameterMap map = TwoLinearParameters();
+  const std::vector<double> theta = {0.0, 0.0};
+  Eigen::MatrixXd normal(2, 2);
+  normal << 4, 1, 1, 2;
+  // A cost at the noise (reduced chi-square 1), white residuals, no
+  // resolution term: the plain covariance is N^-1 in theta.
+  const long rows = 1002;
+  const double cost = 0.5 * (rows - 2);
+  const Eigen::MatrixXd plain = ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0);
+  Eigen::Vector2d g1(3, -1), g2(-3, 1);  // two runs, opposite pulls
+  const Eigen::MatrixXd meat = g1 * g1.transpose() + g2 * g2.transpose();
+  const Eigen::MatrixXd robust =
+      ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0, meat, 2);
+  const Eigen::MatrixXd inverse = normal.inverse();
+  const Eigen::MatrixXd expected = 25.0 * (inverse + inverse * meat * inverse * 2.0);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(plain(i, i), 25.0 * inverse(i, i), 1e-9);
+    for (int j = 0; j < 2; ++j) EXPECT_NEAR(robust(i, j), expected(i, j), 1e-9);
+  }
+  // Runs that agree (no pull) add nothing; one run alone is no cluster.
+  const Eigen::MatrixXd agree =
+      ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0, Eigen::MatrixXd::Zero(2, 2), 2);
+  const Eigen::MatrixXd single =
+      ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0, meat, 1);
+  EXPECT_NEAR(agree(0, 0), plain(0, 0), 1e-12);
+  EXPECT_NEAR(single(1, 1), plain(1, 1), 1e-12);
+}
+
+// A coefficient on a bound gets no standard error (the mapped slope vanishes
+// there, and the uncertainty is one-sided); the others keep theirs.
+TEST(RunClusteredErrorsTest, ACoefficientAtABoundHasNoStandardError) {
+  const ParameterMap map = TwoLinearParameters();
+  RefineResult r;
+  r.coefficients.resize(2);
+  r.coefficients[0].path = "a";
+  r.coefficients[1].path = "b";
+  r.coefficients[1].at_bound = true;
+  r.params.uncertainty["b"] = 1.0;
+  Eigen::MatrixXd cov(2, 2);
+  cov << 4, 0, 0, 1e-200;
+  Summarise(cov, map, RefineOptions{}, &r);
+  EXPECT_DOUBLE_EQ(r.coefficients[0].standard_error, 2.0);
+  EXPECT_EQ(r.params.uncertainty.at("a"), 2.0);
+  EXPECT_EQ(r.coefficients[1].standard_error, 0.0);
+  EXPECT_EQ(r.params.uncertainty.count("b"), 0u);
+  EXPECT_NE(r.CoefficientReport().find("at a bound: no standard error"), std::string::npos);
 }
 
 }  // namespace

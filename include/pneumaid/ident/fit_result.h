@@ -32,7 +32,8 @@ struct FittedCoefficient {
   double value = 0;           // what the fit gives; for a held coefficient what it was held at
   double standard_error = 0;  // with model error where the fit estimates it; 0 when held
   std::string held;           // empty: determined by the data; otherwise why it is not
-  bool at_bound = false;      // the value sits on one of the fit's bounds
+  bool at_bound = false;      // the value sits on one of the fit's bounds (refinement: then
+                              // no standard error, its uncertainty is one-sided)
 
   bool determined() const { return held.empty(); }
 };

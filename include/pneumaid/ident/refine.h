@@ -93,6 +93,10 @@ struct RefineOptions {
   // under stick-slip the best simulated candidate is not always in the basin
   // that explains the runs, the second or third can be.
   int screened_alternatives = 2;
+  // Standard errors robust over runs: the run-clustered sandwich (how much
+  // the fitted runs disagree about each parameter) is added to the
+  // Gauss-Newton covariance scaled by the misfit (refine_covariance.h).
+  bool run_clustered_errors = true;
   // A weak prior ties each free parameter to its start (a MAP fit): sigma
   // is the larger of start_prior_errors of its standard errors from the
   // start's uncertainty and start_prior_fraction of its value, or, without
