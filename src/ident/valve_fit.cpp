@@ -212,8 +212,7 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   BranchFit best;
   double gap_low = 0, gap_high = 0;
   const std::size_t saturated = static_cast<std::size_t>(options.min_saturated_openings);
-  for (size_t k = 0; k + saturated < openings.size(); ++k) {
-    if (!FlatAbove(plateaus, openings[k], options.saturation_flatness)) continue;
+  const auto try_split = [&](std::size_t k) {
     KvpBranchParams candidate = prior;
     candidate.u_sat_V = 0.5 * (openings[k] + openings[k + 1]);
     const BranchFit fit = FitBranch(plateaus, candidate, prefix, options);
@@ -222,7 +221,17 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
       gap_low = openings[k];
       gap_high = openings[k + 1];
     }
+  };
+  for (size_t k = 0; k + saturated < openings.size(); ++k) {
+    if (FlatAbove(plateaus, openings[k], options.saturation_flatness)) try_split(k);
   }
+  // Where the staircase shows saturation, the top opening alone above u_sat
+  // competes too: a decreasing branch starts one step below the staircase's
+  // top, so a valve saturating between its two highest openings leaves it
+  // one saturated plateau, and the split below, whose two top plateaus pass
+  // as flat (0.8 and 0.9 V for u_sat 0.83), capped K_vp where it still rises
+  // (1.9 % of q_max at 0.78 V on four sweep units).
+  if (best.has_values() && saturated > 1 && openings.size() >= 2) try_split(openings.size() - 2);
   if (!best.has_values()) {
     best = FitBranch(plateaus, prior, prefix, options);
     if (best.has_values()) {

@@ -96,6 +96,28 @@ TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
   }
 }
 
+// A valve saturating at 0.83 V logged by a staircase of 0.1 V steps up to
+// 1 V: the decreasing branch (0.9 V down) has one saturated plateau, and its
+// 0.8 and 0.9 V plateaus differ by less than the flatness rule's 0.5 %. Held
+// at the split below 0.8 V, its K_vp was 1.9 % of q_max off at 0.78 V; the
+// top opening alone competes, and both branches are within 1 % outside the
+// gap that holds u_sat.
+TEST(ValveFitTest, ABranchWithOneSaturatedPlateauGetsItsSaturationThere) {
+  Parameters truth;
+  truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.83;
+  const Unit unit = SyntheticValveUnit(truth, 83, 0.1);
+  const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
+    ASSERT_TRUE(fitted->u_sat_fitted) << fitted->reason;
+    EXPECT_GT(fitted->params.u_sat_V, 0.80);
+    EXPECT_LE(fitted->params.u_sat_V, 0.90);
+    EXPECT_LT(WorstKvpError(fitted->params, *real, 0.80, 0.90), 0.01);
+  }
+}
+
 // Short holds at a low rate: 0.2 s per level at 500 Hz, a 30 ms meter. Waiting
 // out 7 meter lags left no sample of a plateau; the meter's lag is modelled
 // instead, so every level counts and K_vp is recovered.
