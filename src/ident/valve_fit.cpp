@@ -231,7 +231,19 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   // one saturated plateau, and the split below, whose two top plateaus pass
   // as flat (0.8 and 0.9 V for u_sat 0.83), capped K_vp where it still rises
   // (1.9 % of q_max at 0.78 V on four sweep units).
-  if (best.has_values() && saturated > 1 && openings.size() >= 2) try_split(openings.size() - 2);
+  // It must fit clearly better (by 9 in chi-square, 3 sigma): on a valve
+  // saturated well below the top, noise alone let it win by 0.6.
+  if (best.has_values() && saturated > 1 && openings.size() >= 2) {
+    const BranchFit lower = best;
+    const double lower_gap[2] = {gap_low, gap_high};
+    best = BranchFit{};
+    try_split(openings.size() - 2);
+    if (!best.has_values() || !(best.final_cost < lower.final_cost - 4.5)) {
+      best = lower;
+      gap_low = lower_gap[0];
+      gap_high = lower_gap[1];
+    }
+  }
   if (!best.has_values()) {
     best = FitBranch(plateaus, prior, prefix, options);
     if (best.has_values()) {
