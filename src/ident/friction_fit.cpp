@@ -318,14 +318,17 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
       if (held[c].empty()) free.push_back(c);
     }
     // From the starts read off the logs and, when the screen found a better
-    // one, from that too: the lower misfit wins.
+    // one, from that too: the screened fit is kept when its misfit is lower
+    // by more than 1 % (two fits into one minimum differ in the fifth digit,
+    // and the refinement started from either takes another path).
     const Block start[2] = {positive, negative};
     Attempt fit = FitFrom(data, mass_kg, options, prior_blocks, logs_start, free_direction, sigma);
     if (start[0] != logs_start[0] || start[1] != logs_start[1]) {
       Attempt screened =
           FitFrom(data, mass_kg, options, prior_blocks, start, free_direction, sigma);
       screened.iterations += fit.iterations;
-      if (screened.failure.empty() && (!fit.failure.empty() || screened.misfit < fit.misfit)) {
+      if (screened.failure.empty() &&
+          (!fit.failure.empty() || screened.misfit < 0.99 * fit.misfit)) {
         fit = std::move(screened);
         result.start_screen.used = true;
       } else {
