@@ -57,6 +57,7 @@ Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec&
   options.simulation.stop = stop;
   options.validation.stop = stop;
   options.rescue_starts = 0;
+  options.screened_alternatives = 0;  // as the rescue starts: one candidate fit each, for speed
   options.start_prior = false;
   const RefineResult r = Refine(start, unit, spec, options);
   out.fit = r;

@@ -206,8 +206,8 @@ Attempt FitFrom(const StrokeData& data, double mass_kg, const FrictionFitOptions
   SegmentProblem plain;
   plain.stop_time_s = &a.stop_time_s;
   BuildProblem(data, mass_kg, options, {}, &a.blocks[0], &a.blocks[1], &plain);
-  double misfit[2];
-  if (DirectionMisfits(data, &plain, misfit)) a.misfit = misfit[0] + misfit[1];
+  double misfit[3];
+  if (DirectionMisfits(data, &plain, misfit)) a.misfit = misfit[0] + misfit[1] + misfit[2];
   return a;
 }
 

@@ -84,18 +84,16 @@ bool SegmentMeanSquares(SegmentProblem* p, std::vector<double>* out) {
   return true;
 }
 
-bool DirectionMisfits(const StrokeData& data, SegmentProblem* p, double misfit[2]) {
+bool DirectionMisfits(const StrokeData& data, SegmentProblem* p, double misfit[3]) {
   std::vector<double> mean_squares;
   if (!SegmentMeanSquares(p, &mean_squares)) return false;
-  misfit[0] = misfit[1] = 0;
+  misfit[0] = misfit[1] = misfit[2] = 0;
   for (std::size_t k = 0; k < mean_squares.size(); ++k) {
     // Segments first, then the force-balance slides.
     const int direction = k < data.segments.size()
                               ? data.segments[k].direction
                               : data.clusters[k - data.segments.size()].direction;
-    if (direction == 0) continue;
-    const double m = std::isfinite(mean_squares[k]) ? mean_squares[k] : 1e30;
-    misfit[direction > 0 ? 0 : 1] += p->rows[k] * std::log1p(m);
+    misfit[direction > 0 ? 0 : direction < 0 ? 1 : 2] += p->rows[k] * std::log1p(mean_squares[k]);
   }
   return true;
 }
@@ -110,16 +108,24 @@ FrictionStartScreen ScreenStarts(const StrokeData& data, double mass_kg,
   SegmentProblem problem;
   problem.stop_time_s = &stop_time_s;
   BuildProblem(data, mass_kg, options, {}, &trial[0], &trial[1], &problem);
-  const auto score = [&](double* misfit) {
+  // The misfit of `trial`: per direction with the stuck segments' part, and
+  // the total; false when a replay failed.
+  const auto score = [&](double* direction, double* total) {
     for (std::size_t k = 0; k < data.segments.size(); ++k)
       stop_time_s[k] = data.segments[k].stop_time_guess_s;
-    return DirectionMisfits(data, &problem, misfit);
+    double misfit[3];
+    if (!DirectionMisfits(data, &problem, misfit)) return false;
+    direction[0] = misfit[0] + misfit[2];
+    direction[1] = misfit[1] + misfit[2];
+    *total = misfit[0] + misfit[1] + misfit[2];
+    return true;
   };
-  Block* const given[2] = {positive, negative};
-  if (!score(out.start_misfit)) out.start_misfit[0] = out.start_misfit[1] = HUGE_VAL;
+  const Block start[2] = {*positive, *negative};
+  double start_total = HUGE_VAL;
+  if (!score(out.start_misfit, &start_total)) out.start_misfit[0] = out.start_misfit[1] = HUGE_VAL;
   out.best_misfit[0] = out.start_misfit[0];
   out.best_misfit[1] = out.start_misfit[1];
-  Block best[2] = {*positive, *negative};
+  Block best[2] = {start[0], start[1]};
   // Fs around the breakaways' (which read a slow creep or an early slip as
   // breakaway), Fd as a fraction of Fs, b and vs over the fleet's ranges.
   static constexpr double kStaticFactor[] = {0.8, 1.0, 1.25};
@@ -131,12 +137,12 @@ FrictionStartScreen ScreenStarts(const StrokeData& data, double mass_kg,
       for (const double b : kViscous_N_s_per_m) {
         for (const double vs : kStribeck_m_per_s) {
           for (int d = 0; d < 2; ++d) {
-            const double static_N = std::min(fs * (*given[d])[0], kUpperBounds[0]);
+            const double static_N = std::min(fs * start[d][0], kUpperBounds[0]);
             trial[d] = {static_N, fd * static_N, b, vs};
           }
-          double misfit[2];
+          double misfit[2], total = 0;
           ++out.candidates;
-          if (!score(misfit)) continue;
+          if (!score(misfit, &total)) continue;
           for (int d = 0; d < 2; ++d) {
             if (misfit[d] < out.best_misfit[d]) out.best_misfit[d] = misfit[d], best[d] = trial[d];
           }
@@ -144,8 +150,19 @@ FrictionStartScreen ScreenStarts(const StrokeData& data, double mass_kg,
       }
     }
   }
-  *positive = best[0];
-  *negative = best[1];
+  // Each direction's best was scored with the other at the same grid point
+  // (a replay can slide back the other way): the pairs are replayed
+  // together, the start last, and the lowest total kept.
+  *positive = start[0];
+  *negative = start[1];
+  double kept = start_total;
+  for (const auto& [p, n] : {std::make_pair(best[0], best[1]), std::make_pair(best[0], start[1]),
+                             std::make_pair(start[0], best[1])}) {
+    trial[0] = p;
+    trial[1] = n;
+    double misfit[2], total = HUGE_VAL;
+    if (score(misfit, &total) && total < kept) kept = total, *positive = p, *negative = n;
+  }
   return out;
 }
 

@@ -37,21 +37,24 @@ ceres::Solver::Summary Solve(const FrictionFitOptions& options, ceres::Problem* 
 // only: cheap), no loss applied.
 bool SegmentMeanSquares(SegmentProblem* p, std::vector<double>* out);
 
-// Per direction (positive first) the misfit of the blocks' current values:
-// sum over that direction's segments and slides of rows x ln(1 + mean square
-// residual), no loss applied. Residuals are in units of their expected noise,
-// so a good fit's blocks add about rows x ln 2 each, and a few wild segments
-// cannot dominate the sum. False when a replay failed.
-bool DirectionMisfits(const StrokeData& data, SegmentProblem* p, double misfit[2]);
+// The misfit of the blocks' current values: sum over blocks of rows x
+// ln(1 + mean square residual), no loss applied, per direction of the slide
+// (positive, negative) and, third, of the segments that stay stuck (the
+// evidence against a low Fs). Residuals are in units of their expected
+// noise, so a good fit's blocks add about rows x ln 2 each, and a few wild
+// segments cannot dominate the sum. False when a replay failed.
+bool DirectionMisfits(const StrokeData& data, SegmentProblem* p, double misfit[3]);
 
 // The starts' screen. With stick-slip the replay's misfit has basins narrow
 // in Fd, b and vs (a light rod whose slips overshoot: from the prior's
 // Fd 0.5 N, b 5 N s/m the fit of a unit with Fd 0.7, b 12.5 ended at Fd 14.8
-// with 60 x the truth's cost). Each direction's start keeps its Fs (the
-// breakaways) and tries a grid of Fd (fractions of Fs), b and vs; every
-// candidate is one replay of all segments (no Jacobian), scored per
-// direction by DirectionMisfits; each direction takes its best candidate
-// when that scores below its start.
+// with 60 x the truth's cost). Every candidate moves both directions to one
+// grid point (Fs at 0.8, 1 and 1.25 x the direction's start, Fd a fraction of
+// Fs, b and vs over the fleet's ranges) and is one replay of all segments (no
+// Jacobian), scored per direction by DirectionMisfits (the stuck segments'
+// part counted in both). Each direction takes its best candidate; the pair is
+// then replayed together, and of the pair, each direction's best with the
+// other's start, and the start the lowest total misfit is returned.
 FrictionStartScreen ScreenStarts(const StrokeData& data, double mass_kg,
                                  const FrictionFitOptions& options, Block* positive,
                                  Block* negative);

@@ -63,7 +63,16 @@ Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const Paramet
       std::max(1.0, 2.0 * cost / dof) * correlation_inflation + 2.0 * cost_resolution * cost;
   Eigen::MatrixXd cov = inflation * theta_cov;
   if (runs >= 2 && run_meat.rows() == m && run_meat.cols() == m) {
-    cov += theta_cov * run_meat * theta_cov * (runs / (runs - 1.0));
+    // The sandwich holds the noise too (a correct model's scores give about
+    // N^-1 s^2), so it is not added: each parameter's error is widened to the
+    // sandwich's where that is larger, the correlations kept.
+    const Eigen::MatrixXd sandwich = theta_cov * run_meat * theta_cov * (runs / (runs - 1.0));
+    Eigen::VectorXd widen = Eigen::VectorXd::Ones(m);
+    for (int j = 0; j < m; ++j) {
+      if (cov(j, j) > 0 && sandwich(j, j) > cov(j, j))
+        widen[j] = std::sqrt(sandwich(j, j) / cov(j, j));
+    }
+    cov = widen.asDiagonal() * cov * widen.asDiagonal();
   }
   Eigen::VectorXd d(m);
   for (int j = 0; j < m; ++j) d[j] = map.Derivative(j, theta[j]);
@@ -84,6 +93,8 @@ void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const Refine
     if (c.at_bound) {
       c.standard_error = 0;
       r->params.uncertainty.erase(map.free[i].path);
+      r->covariance.row(i).setZero();
+      r->covariance.col(i).setZero();
       continue;
     }
     c.standard_error = std::sqrt(std::max(0.0, cov(i, i)));

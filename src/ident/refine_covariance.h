@@ -55,17 +55,20 @@ struct ResidualCorrelation {
 // to the truth on synthetic units. `normal` is J^T J of the free parameters
 // with any estimated starts eliminated.
 // Robust over runs: with `run_meat` (sum over G >= 2 runs of score score^T,
-// ParameterScore) the run-clustered sandwich N^-1 run_meat N^-1 G/(G-1) is
-// added: where the runs disagree about a parameter (model error that differs
-// from run to run) its error widens, whatever the noise says. Empty on
-// failure.
+// ParameterScore) each parameter's variance is widened to the run-clustered
+// sandwich's, N^-1 run_meat N^-1 G/(G-1), where that is larger (the
+// correlations kept): where the runs disagree about a parameter more than
+// their noise and misfit say (model error that differs from run to run) its
+// error widens. Empty on failure.
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
                                     const std::vector<double>& theta, double cost, long residuals,
                                     double correlation_inflation, double cost_resolution,
                                     const Eigen::MatrixXd& run_meat = {}, int runs = 0);
 
 // Standard errors into r's parameters and uncertainty, correlations and the
-// poorly separable pairs.
+// poorly separable pairs. A coefficient at a bound gets none (its row and
+// column of the covariance zeroed, no uncertainty entry): the mapped
+// coordinate's slope vanishes there and its uncertainty is one-sided.
 void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const RefineOptions& options,
                RefineResult* r);
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <string>
 
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/validate.h"
@@ -150,9 +152,8 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     r.params = WithValues(conditioned, map, p.theta.data());
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(map.size(), map.size());
     ResidualCorrelation correlation;
-    double weighted_cost = 0, weighted_rows = 0;  // the runs' costs and rows, weighted
-    Eigen::MatrixXd run_meat = Eigen::MatrixXd::Zero(map.size(), map.size());
-    int scored_runs = 0;
+    double weighted_cost = 0, weighted_rows = 0;        // the runs' costs and rows, weighted
+    std::map<std::string, Eigen::VectorXd> run_scores;  // J^T r summed per run
     for (size_t k = 0; k < experiments.size(); ++k) {
       const EvaluationCache* at_best = nullptr;
       const std::vector<double> z =
@@ -174,9 +175,14 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       correlation.Add(experiments[k], at_best->residuals, weight);
       if (normal.size() > 0) {
         normal += weight * ParameterInformation(*at_best, map.size());
-        const Eigen::VectorXd score = weight * ParameterScore(*at_best, map.size());
-        run_meat += score * score.transpose();
-        ++scored_runs;
+        if (options.run_clustered_errors) {
+          // One cluster per run: a window's score adds to its run's.
+          const std::string& run =
+              experiments[k].parent.empty() ? experiments[k].id : experiments[k].parent;
+          Eigen::VectorXd& score = run_scores[run];
+          if (score.size() == 0) score = Eigen::VectorXd::Zero(map.size());
+          score += weight * ParameterScore(*at_best, map.size());
+        }
       }
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
       if (!windows) {
@@ -213,11 +219,13 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         with_prior(j, j) += slope * slope;
       }
     }
-    Summarise(ParameterCovariance(
-                  with_prior, map, p.theta, weighted_cost, std::lround(weighted_rows),
-                  correlation.Inflation(), options.stall_tolerance,
-                  options.run_clustered_errors ? run_meat : Eigen::MatrixXd(), scored_runs),
-              map, options, &r);
+    Eigen::MatrixXd run_meat = Eigen::MatrixXd::Zero(map.size(), map.size());
+    for (const auto& [run, score] : run_scores) run_meat += score * score.transpose();
+    Summarise(
+        ParameterCovariance(with_prior, map, p.theta, weighted_cost, std::lround(weighted_rows),
+                            correlation.Inflation(), options.stall_tolerance, run_meat,
+                            static_cast<int>(run_scores.size())),
+        map, options, &r);
   }
   if (windows) r.fitted = PerRun(r.fitted, experiments);
   return r;

@@ -238,7 +238,9 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
     const double lower_gap[2] = {gap_low, gap_high};
     best = BranchFit{};
     try_split(openings.size() - 2);
-    if (!best.has_values() || !(best.final_cost < lower.final_cost - 4.5)) {
+    constexpr double kClearlyBetterChiSquare = 9.0;  // Ceres' cost is chi-square / 2
+    if (!best.has_values() ||
+        !(2.0 * (lower.final_cost - best.final_cost) > kClearlyBetterChiSquare)) {
       best = lower;
       gap_low = lower_gap[0];
       gap_high = lower_gap[1];

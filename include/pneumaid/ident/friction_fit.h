@@ -10,8 +10,10 @@
 // the slide and the next arrest (friction_segments.h). No segment starts at a
 // stroke end (end-stop forces, fast pressures there). Smooth slides that no
 // segment covers enter as force balance, friction(v) = F - M a
-// (friction_slides.h). Breakaways and the force balance start the fit; a weak
-// prior per coefficient keeps what the logs do not determine near the prior.
+// (friction_slides.h). Breakaways and the force balance start the fit, and a
+// screen of replayed candidates a second fit where it finds a better start; a
+// weak prior per coefficient keeps what the logs do not determine near the
+// prior.
 //
 // Uncertainty: the replay integrates the pressure sensors' noise twice, so the
 // residuals inside a segment are correlated and (J'J)^-1 s^2 would understate
@@ -68,8 +70,8 @@ struct FrictionFitOptions {
   double smoothing_window_s = 0.01;
   // Screen a grid of Fs, Fd, b and vs per direction (each candidate one
   // replay of every segment); where a candidate beats the starts read off the
-  // logs, fit from both and keep the lower misfit. Stick-slip replays have
-  // narrow basins.
+  // logs, fit from both and keep the screened fit when its misfit is lower by
+  // more than 1 %. Stick-slip replays have narrow basins.
   bool screen_starts = true;
   // RK4 substeps per sample interval while sliding.
   int substeps = 8;
@@ -112,9 +114,10 @@ struct DirectionFit {
 // slide in the stroke logs, or the solver failed; the prior is kept.
 // The screen of starts (FrictionFitOptions::screen_starts): per direction
 // (positive first) the misfit of the starts read off the logs and of the best
-// candidate, sum over segments of rows x ln(1 + mean square residual). When
-// the screen moved a start, the fit runs from both and keeps the lower
-// misfit.
+// candidate (grid points), sum over its segments and slides and the stuck
+// segments of rows x ln(1 + mean square residual). When the screen moved a
+// start, the fit runs from both and keeps the screened fit when its misfit is
+// lower by more than 1 %.
 struct FrictionStartScreen {
   int candidates = 0;  // 0: not screened
   double start_misfit[2] = {0, 0};

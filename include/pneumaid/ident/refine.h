@@ -61,9 +61,10 @@ struct RefineOptions {
   // calibrated on the robustness sweep (every unit passes at its true
   // parameters, the stalls of issue 12 fail).
   double acceptable_reduced_chi_square = 10.0;
-  // When neither the fit from the given start nor the one from the screened
-  // start explains the runs: one more fit, from the screened start (the
-  // given one when the screen moved nothing), with each run through a Cauchy
+  // When neither the fit from the given start nor the ones from the screened
+  // starts explain the runs: one more fit, from the screened start kept (the
+  // best candidate's, or a next-best one whose fit was kept; the given start
+  // when the screen moved nothing), with each run through a Cauchy
   // loss on its whole squared residual, quadratic up to
   // acceptable_reduced_chi_square times its residuals: a run the model
   // cannot follow (a chaotic stick-slip) then no longer drags the runs it can
@@ -93,9 +94,10 @@ struct RefineOptions {
   // under stick-slip the best simulated candidate is not always in the basin
   // that explains the runs, the second or third can be.
   int screened_alternatives = 2;
-  // Standard errors robust over runs: the run-clustered sandwich (how much
-  // the fitted runs disagree about each parameter) is added to the
-  // Gauss-Newton covariance scaled by the misfit (refine_covariance.h).
+  // Standard errors robust over runs: each parameter's error is widened to
+  // the run-clustered sandwich's (how much the fitted runs, windows summed
+  // per run, disagree about it) where that is larger than the misfit-scaled
+  // Gauss-Newton error (refine_covariance.h).
   bool run_clustered_errors = true;
   // A weak prior ties each free parameter to its start (a MAP fit): sigma
   // is the larger of start_prior_errors of its standard errors from the

@@ -36,8 +36,11 @@ struct ValveFitOptions {
   // its gap u_sat is where the fitted polynomial reaches 1 (K_vp continuous at
   // saturation), or the gap's middle; its standard error is the gap /
   // sqrt(12). A split counts only when the plateaus above it are flat: each
-  // within saturation_flatness (relative) of their mean. A staircase that
-  // shows no saturation keeps the prior's u_sat.
+  // within saturation_flatness (relative) of their mean. Where one counts,
+  // the split with the top opening alone above it competes too and is kept
+  // when it fits better by 9 in chi-square (a decreasing branch starts one
+  // step below the staircase's top). A staircase that shows no saturation
+  // keeps the prior's u_sat.
   bool fit_u_sat = true;
   int min_saturated_openings = 2;
   double saturation_flatness = 0.005;
