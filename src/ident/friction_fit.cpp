@@ -326,14 +326,13 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     if (start[0] != logs_start[0] || start[1] != logs_start[1]) {
       Attempt screened =
           FitFrom(data, mass_kg, options, prior_blocks, start, free_direction, sigma);
-      screened.iterations += fit.iterations;
+      const int iterations = fit.iterations + screened.iterations;  // both fits ran
       if (screened.failure.empty() &&
           (!fit.failure.empty() || screened.misfit < 0.99 * fit.misfit)) {
         fit = std::move(screened);
         result.start_screen.used = true;
-      } else {
-        fit.iterations = screened.iterations;
       }
+      fit.iterations = iterations;
     }
     if (!fit.failure.empty()) {
       result.reason = "Ceres failed (" + fit.failure + "); the prior is kept";

@@ -212,18 +212,21 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   BranchFit best;
   double gap_low = 0, gap_high = 0;
   const std::size_t saturated = static_cast<std::size_t>(options.min_saturated_openings);
-  const auto try_split = [&](std::size_t k) {
+  // Fits u_sat between openings k and k + 1; kept when it beats the best
+  // split by more than `margin` in chi-square (Ceres' cost is half of it).
+  const auto try_split = [&](std::size_t k, double margin) {
     KvpBranchParams candidate = prior;
     candidate.u_sat_V = 0.5 * (openings[k] + openings[k + 1]);
     const BranchFit fit = FitBranch(plateaus, candidate, prefix, options);
-    if (fit.has_values() && (!best.has_values() || fit.final_cost < best.final_cost)) {
+    if (fit.has_values() &&
+        (!best.has_values() || fit.final_cost < best.final_cost - 0.5 * margin)) {
       best = fit;
       gap_low = openings[k];
       gap_high = openings[k + 1];
     }
   };
   for (size_t k = 0; k + saturated < openings.size(); ++k) {
-    if (FlatAbove(plateaus, openings[k], options.saturation_flatness)) try_split(k);
+    if (FlatAbove(plateaus, openings[k], options.saturation_flatness)) try_split(k, 0.0);
   }
   // Where the staircase shows saturation, the top opening alone above u_sat
   // competes too: a decreasing branch starts one step below the staircase's
@@ -233,19 +236,9 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   // (1.9 % of q_max at 0.78 V on four sweep units).
   // It must fit clearly better (by 9 in chi-square, 3 sigma): on a valve
   // saturated well below the top, noise alone let it win by 0.6.
-  if (best.has_values() && saturated > 1 && openings.size() >= 2) {
-    const BranchFit lower = best;
-    const double lower_gap[2] = {gap_low, gap_high};
-    best = BranchFit{};
-    try_split(openings.size() - 2);
-    constexpr double kClearlyBetterChiSquare = 9.0;  // Ceres' cost is chi-square / 2
-    if (!best.has_values() ||
-        !(2.0 * (lower.final_cost - best.final_cost) > kClearlyBetterChiSquare)) {
-      best = lower;
-      gap_low = lower_gap[0];
-      gap_high = lower_gap[1];
-    }
-  }
+  constexpr double kClearlyBetterChiSquare = 9.0;
+  if (best.has_values() && saturated > 1 && openings.size() >= 2)
+    try_split(openings.size() - 2, kClearlyBetterChiSquare);
   if (!best.has_values()) {
     best = FitBranch(plateaus, prior, prefix, options);
     if (best.has_values()) {
