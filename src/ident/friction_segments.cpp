@@ -126,25 +126,38 @@ double UniformPeriod(const std::vector<double>& t) {
 }
 
 // Residual weights of `s`: a sample n intervals from the last known state
-// (the breakaway forward, the arrest backward) carries the position noise and
-// a drift of variance (sigma_F h^2 / M)^2 n^3 / 3 from the force's noise.
-void SetWeights(double sigma_x_m, double drift_m, Segment* s) {
+// (the breakaway forward, the arrest backward) carries the position noise, a
+// drift of variance (sigma_F h^2 / M)^2 n^3 / 3 from the force's noise and,
+// replayed forward, the breakaway's velocity error times n h.
+void SetWeights(double sigma_x_m, double drift_m, double escape_error_m_per_s, Segment* s) {
   s->weight.assign(s->end - s->begin, 1.0 / sigma_x_m);
   for (std::size_t i = s->begin; i < s->end; ++i) {
     double n = i > s->slide_begin ? static_cast<double>(i - s->slide_begin) : 0.0;
     if (s->two_sided && i > s->split) {
       n = s->arrest > i ? static_cast<double>(s->arrest - i) : 0.0;
     }
-    const double variance = sigma_x_m * sigma_x_m + drift_m * drift_m * n * n * n / 3.0;
+    double variance = sigma_x_m * sigma_x_m + drift_m * drift_m * n * n * n / 3.0;
+    if (!(s->two_sided && i > s->split)) {
+      const double escape_m = escape_error_m_per_s * n * s->period_s;
+      variance += escape_m * escape_m;
+    }
     s->weight[i - s->begin] = 1.0 / std::sqrt(variance);
   }
 }
 
 // The slide of `s` ends in the stuck run `next`: where it stopped, when
 // (a guess and bounds for the nuisance parameter), and its fastest sample.
+// A slide that turned back before it stopped (beyond `band`) arrives in the
+// other direction, which a backward replay in the slide's direction cannot
+// follow: it stays one-sided, replayed forward through its reversal.
 void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
-                std::pair<std::size_t, std::size_t> next, double period_s, Segment* s) {
+                std::pair<std::size_t, std::size_t> next, double period_s, double band,
+                Segment* s) {
   const auto [arrest, next_end] = next;
+  double farthest = s->direction * x[arrest];
+  for (std::size_t j = slide_begin; j < arrest; ++j)
+    farthest = std::max(farthest, s->direction * x[j]);
+  if (farthest - s->direction * x[arrest] > band) return;
   std::size_t split = slide_begin - 1;
   for (std::size_t j = slide_begin - 1; j + 1 < arrest; ++j) {
     if (std::fabs(x[j + 1] - x[j]) > std::fabs(x[split + 1] - x[split])) split = j;
@@ -175,6 +188,33 @@ int EndContact(double x, double half_stroke_m, double contact_m) {
   return 0;
 }
 
+// The breakaway of the stuck run [stuck_begin, stuck_end): its last sample
+// still within 3 sigma of where the rod rested (the stuck band's edge is
+// crossed later, at a higher force; a long slide is far past it after a
+// quarter of its travel).
+std::size_t BreakawaySample(const std::vector<double>& x, std::size_t stuck_begin,
+                            std::size_t stuck_end, double sigma_x_m) {
+  const double rested = Median(std::vector<double>(x.begin() + stuck_begin, x.begin() + stuck_end));
+  std::size_t at = stuck_end - 1;
+  while (at > stuck_begin && std::fabs(x[at] - rested) > 3 * sigma_x_m) --at;
+  return at;
+}
+
+// The velocity error a forward replay carries from its breakaway on
+// (FrictionFitOptions::breakaway_timing_per_s): a timing error tau leaves the
+// velocity wrong by the rod's acceleration after breakaway times tau, read
+// off the log over the first 4 ms of the slide (at least 2 samples).
+double EscapeVelocityError(const std::vector<double>& x, std::size_t at, std::size_t end,
+                           double period_s, double timing_per_s) {
+  if (!(timing_per_s > 0) || at + 2 >= end) return 0.0;
+  const std::size_t samples =
+      std::max<std::size_t>(2, static_cast<std::size_t>(std::lround(0.004 / period_s)));
+  const std::size_t j = std::min(at + samples, end - 1);
+  const double t = static_cast<double>(j - at) * period_s;
+  const double acceleration = 2.0 * std::fabs(x[j] - x[at]) / (t * t);
+  return acceleration * timing_per_s * period_s * period_s;
+}
+
 void CutSegments(const std::vector<double>& force, const std::vector<double>& x, const Runs& runs,
                  double band, double half_stroke_m, double contact_m, double period_s,
                  double sigma_x_m, double drift_m, const FrictionFitOptions& options,
@@ -196,13 +236,8 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
       const double travel = x[after] - x[stuck_end - 1];
       if (std::fabs(travel) > band) {
         const int direction = travel > 0 ? +1 : -1;
-        // The breakaway: the last sample still within 3 sigma of where the
-        // rod rested (the band's edge is crossed later, at a higher force).
-        std::vector<double> rest(x.begin() + stuck_begin, x.begin() + stuck_end);
-        const double rested = Median(rest);
-        std::size_t at = stuck_end - 1;
-        while (at > stuck_begin && std::fabs(x[at] - rested) > 3 * sigma_x_m) --at;
-        data->end_breakaway_N[direction > 0 ? 0 : 1].push_back(direction * force[at]);
+        data->end_breakaway_N[direction > 0 ? 0 : 1].push_back(
+            direction * force[BreakawaySample(x, stuck_begin, stuck_end, sigma_x_m)]);
       }
       ++data->excluded;
       continue;
@@ -240,9 +275,16 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
     const double travel = x[s.end - 1] - s.initial_position_m;
     s.direction = travel > band ? +1 : (travel < -band ? -1 : 0);
     s.slide_begin = stuck_end - 1;
+    double escape_error_m_per_s = 0;
+    if (s.direction != 0) {
+      const std::size_t at = BreakawaySample(x, stuck_begin, stuck_end, sigma_x_m);
+      s.breakaway_force_N = s.direction * force[at];
+      escape_error_m_per_s =
+          EscapeVelocityError(x, at, s.end, period_s, options.breakaway_timing_per_s);
+    }
     if (s.direction != 0 && k + 1 < runs.size() && !cut)
-      MarkArrest(x, stuck_end, runs[k + 1], period_s, &s);
-    SetWeights(sigma_x_m, drift_m, &s);
+      MarkArrest(x, stuck_end, runs[k + 1], period_s, band, &s);
+    SetWeights(sigma_x_m, drift_m, escape_error_m_per_s, &s);
     data->segments.push_back(s);
   }
 }
@@ -326,13 +368,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
 double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
   std::vector<double> forces;
   for (const Segment& s : data.segments) {
-    if (s.direction != direction) continue;
-    std::size_t i = s.begin;
-    while (i + 1 < s.end && std::fabs((*s.position_m)[i + 1] - s.initial_position_m) <
-                                std::fabs((*s.position_m)[s.end - 1] - s.initial_position_m) / 4) {
-      ++i;
-    }
-    forces.push_back(direction * (*s.force_N)[i]);
+    if (s.direction == direction) forces.push_back(s.breakaway_force_N);
   }
   if (forces.size() >= 3) return Median(forces);
   const std::vector<double>& at_ends = data.end_breakaway_N[direction > 0 ? 0 : 1];

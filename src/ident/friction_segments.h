@@ -60,6 +60,8 @@ struct Segment {
   double stop_position_m = 0, stop_time_guess_s = 0, stop_time_min_s = 0, stop_time_max_s = 0;
   // Where the logged slide starts and (two-sided) stops, for the weights.
   std::size_t slide_begin = 0, arrest = 0;
+  // The force magnitude at the slide's breakaway (the last sample at rest).
+  double breakaway_force_N = 0;
   // 1 / (expected residual std) per sample of the segment: the position
   // noise, and the drift that the force's noise integrated twice adds with
   // the distance from the nearest exactly known state (stuck, v = 0).

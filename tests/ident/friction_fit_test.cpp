@@ -267,27 +267,48 @@ TEST(FrictionFitTest, ADirectionWithAnUndeterminedVsStillGetsItsSlidingFriction)
   EXPECT_NEAR(fit.positive.params.static_force_N, 10.0, 0.5);
 }
 
-// A light rod with a strong Stribeck drop slips violently: from the prior's
-// Fd, b and vs (no smooth slide gives a force-balance start) the replay fit
-// ends in another basin. The screen of starts finds the truth's.
+// How many of the eight coefficients are within the tolerances.
+int WithinTolerance(const FrictionFitResult& fit, const FrictionParams& truth) {
+  int count = 0;
+  const auto within = [](double value, double real, double fraction, double floor) {
+    return std::fabs(value - real) <= std::max(fraction * std::fabs(real), floor);
+  };
+  for (int d = 0; d < 2; ++d) {
+    const StribeckParams& f = d == 0 ? fit.positive.params : fit.negative.params;
+    const StribeckParams& t = d == 0 ? truth.positive : truth.negative;
+    count += within(f.static_force_N, t.static_force_N, 0.05, 0.1) +
+             within(f.dynamic_force_N, t.dynamic_force_N, 0.05, 0.1) +
+             within(f.viscous_N_s_per_m, t.viscous_N_s_per_m, 0.15, 0.5) +
+             within(f.stribeck_velocity_m_per_s, t.stribeck_velocity_m_per_s, 0.25, 1e-3);
+  }
+  return count;
+}
+
+// A light rod with a strong Stribeck drop slips violently and gives no
+// smooth slide, so Fd, b and vs start from the prior; from a prior far off
+// (Fd 6 N where the truth has 0.71, vs 4 mm/s for 24) the replay fit ends in
+// another basin. The screen of starts finds the truth's. (Before the
+// breakaway was read where the rod leaves its rest, even the paper's prior
+// failed here: Fs started where the slip was a quarter done.)
 TEST(FrictionFitTest, TheStartScreenFindsTheBasinOfALightRodThatSticksAndSlips) {
   const Parameters truth =
       HorizontalTruth(0.14, {20.0, 0.71, 12.5, 0.0236}, {16.0, 4.96, 9.0, 0.0224});
-  // Stopping 5 mm short of the ends.
-  const Unit unit = MismatchedStrokes(truth, 2, 2000, {0.5, 0.7, 0.9}, 1, 0.005);
+  const Unit unit = MismatchedStrokes(truth, 2, 2000, {0.5, 0.7, 0.9}, 1, 0.0);
+  FrictionParams prior;
+  prior.positive = {10.0, 6.0, 2.0, 0.004};
+  prior.negative = {10.0, 0.5, 2.0, 0.004};
   FrictionFitOptions unscreened;
   unscreened.screen_starts = false;
-  // Without the screen the negative direction ends far off (Fs 0, Fd 13.8 N).
-  const FrictionFitResult plain = FitFriction(unit, FrictionParams{}, unscreened);
+  const FrictionFitResult plain = FitFriction(unit, prior, unscreened);
   std::cout << plain.BriefReport();
-  EXPECT_GT(std::fabs(plain.negative.params.dynamic_force_N - 4.96), 1.0);
-  const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
+  EXPECT_LE(WithinTolerance(plain, truth.friction), 5);
+  const FrictionFitResult fit = FitFriction(unit, prior, FrictionFitOptions{});
   std::cout << fit.BriefReport();
   ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
   EXPECT_EQ(fit.start_screen.candidates, 144);
-  EXPECT_LT(fit.start_screen.best_misfit[1], fit.start_screen.start_misfit[1]);
   EXPECT_TRUE(fit.start_screen.used);
   EXPECT_NE(fit.BriefReport().find("start screened (144 candidates)"), std::string::npos);
+  EXPECT_EQ(WithinTolerance(fit, truth.friction), 8);
   ExpectWithinToleranceOrHeld(fit, "positive", truth.friction.positive, {"Fs", "Fd", "b", "vs"});
   ExpectWithinToleranceOrHeld(fit, "negative", truth.friction.negative, {"Fs", "Fd", "b", "vs"});
 }

@@ -73,6 +73,18 @@ struct FrictionFitOptions {
   // logs, fit from both and keep the screened fit when its misfit is lower by
   // more than 1 %. Stick-slip replays have narrow basins.
   bool screen_starts = true;
+  // Where a replay breaks away is uncertain by this x h^2 [s] (h the sample
+  // interval): the rod escapes from the flat top of the Stribeck curve (its
+  // slope is zero at v = 0) under a slowly rising force, so small errors of
+  // that force move the escape, and between samples the force is
+  // interpolated linearly, missing the kink where the chamber starts to
+  // expand. A forward replay then carries the acceleration after breakaway
+  // x that time as a velocity error, which its weights include. On
+  // noise-free rig data a heavy rod's replays at the true coefficients are
+  // off by the equivalent of ~60 /s; 125 /s (0.5 ms at 500 Hz, 5 us at
+  // 5 kHz) gave the sweep's component fits the most coefficients within
+  // tolerance. 0: no such error.
+  double breakaway_timing_per_s = 125.0;
   // RK4 substeps per sample interval while sliding.
   int substeps = 8;
   // Ceres Levenberg-Marquardt iterations.
