@@ -108,11 +108,13 @@ TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
 // 0.8 and 0.9 V plateaus differ by less than the flatness rule's 0.5 %. Held
 // at the split below 0.8 V, its K_vp was 1.9 % of q_max off at 0.78 V; the
 // top opening alone competes, and both branches are within 1 % outside the
-// gap that holds u_sat.
+// gap that holds u_sat. With model mismatch: the valve opens with a lag of
+// its own (10 ms, not in the fitted model) and the meter is quantised.
 TEST(ValveFitTest, ABranchWithOneSaturatedPlateauGetsItsSaturationThere) {
   Parameters truth;
   truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.83;
-  const Unit unit = SyntheticValveUnit(truth, 83, 0.1);
+  truth.effects["valve_lag"] = {{"tau", 0.01}};
+  const Unit unit = SyntheticValveUnit(truth, 83, 0.1, 0.3, 1000, 1e-7);
   const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
   std::cout << fit.BriefReport();
   ExpectSaturationInGap(fit, truth.valve, 0.80, 0.90);
