@@ -50,7 +50,13 @@ std::string AppendProvenance(const std::string& provenance, const RefineResult& 
         << ", initial_pressures: " << (spec.fit_initial_pressures ? "fit" : "logged")
         << ", status: " << ToString(r.status) << ", reduced_chi_square: " << r.reduced_chi_square
         << ", acceptable_reduced_chi_square: " << r.acceptable_reduced_chi_square
-        << ", converged: " << (r.status == FitStatus::kConverged ? "true" : "false") << "}";
+        << ", converged: " << (r.status == FitStatus::kConverged ? "true" : "false");
+  // Fitted, but on a bound of its range: no standard error, so no entry in
+  // `uncertainty` (a reader would otherwise take it for the prior's).
+  std::string at_bound;
+  for (const FittedCoefficient& c : r.coefficients)
+    if (c.at_bound) at_bound += (at_bound.empty() ? "" : ", ") + std::string("\"") + c.path + "\"";
+  entry << ", at_bound: [" << at_bound << "]}";
   const std::size_t close = provenance.rfind('}');
   if (provenance.empty() || close == std::string::npos) return "{" + entry.str() + "}";
   const bool empty = provenance.find_first_not_of("{} \n") == std::string::npos;

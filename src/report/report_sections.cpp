@@ -1,5 +1,9 @@
 #include "report_sections.h"
 
+#include <yaml-cpp/yaml.h>
+
+#include <set>
+
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
 #include "pneumaid/model/effects.h"
@@ -24,17 +28,37 @@ void CheckOptions(const ReportOptions& options) {
   if (!options.IsValid(&error)) throw InputError("report options", 0, 0, error);
 }
 
+// The coefficients the refinement left on a bound of their range, from the
+// set's provenance (refine.at_bound): fitted, but without a standard error,
+// so without an `uncertainty` entry. Empty when the provenance has none.
+std::set<std::string> AtBound(const Parameters& params) {
+  std::set<std::string> paths;
+  try {
+    const YAML::Node list = YAML::Load(params.provenance_yaml)["refine"]["at_bound"];
+    if (list.IsSequence())
+      for (const YAML::Node& path : list) paths.insert(path.as<std::string>());
+  } catch (const YAML::Exception&) {
+    // Free-form provenance written by someone else: no such list.
+  }
+  return paths;
+}
+
 std::string ParameterTable(const Parameters& params) {
   std::ostringstream out;
   out << "<table><tr><th class=l>parameter</th><th>value</th><th class=l>unit</th>"
          "<th>standard error</th><th class=l>source</th></tr>\n";
+  const std::set<std::string> at_bound = AtBound(params);
   const auto row = [&](const std::string& path, double value, const std::string& unit) {
     const auto error = params.uncertainty.find(path);
-    const bool fitted = error != params.uncertainty.end();
-    out << "<tr" << (fitted ? "" : " class=prior") << "><td class=l>" << Html(path) << "</td><td>"
-        << Printf("%.6g", value) << "</td><td class=l>" << Html(unit) << "</td><td>"
-        << (fitted ? Printf("%.3g", error->second) : "") << "</td><td class=l>"
-        << (fitted ? "fitted" : "prior / given") << "</td></tr>\n";
+    const bool with_error = error != params.uncertainty.end();
+    const bool bounded = !with_error && at_bound.count(path) > 0;
+    out << "<tr" << (with_error || bounded ? "" : " class=prior") << "><td class=l>" << Html(path)
+        << "</td><td>" << Printf("%.6g", value) << "</td><td class=l>" << Html(unit) << "</td><td>"
+        << (with_error ? Printf("%.3g", error->second) : "") << "</td><td class=l>"
+        << (with_error ? "fitted"
+            : bounded  ? "fitted, at a bound (no standard error)"
+                       : "prior / given")
+        << "</td></tr>\n";
   };
   for (const ScalarParameterInfo& info : ScalarParameterTable())
     row(info.path, info.get(params), info.unit);

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cmath>
 
@@ -203,6 +204,19 @@ TEST(RefineTest, FromBiasedComponentFitsItSaysWhenTheRunsAreNotExplained) {
     const double before = result.held_out_before.experiments[i].channels.at("x").rmse;
     const double after = result.held_out_after.experiments[i].channels.at("x").rmse;
     EXPECT_LE(after, 0.5 * before) << result.held_out_after.experiments[i].id;
+  }
+  // The provenance names every coefficient left on a bound (fitted, but with
+  // no standard error, so no `uncertainty` entry), and only those.
+  const YAML::Node at_bound = YAML::Load(result.params.provenance_yaml)["refine"]["at_bound"];
+  ASSERT_TRUE(at_bound.IsSequence());
+  std::size_t bounded = 0;
+  for (const FittedCoefficient& c : result.coefficients) bounded += c.at_bound;
+  EXPECT_EQ(at_bound.size(), bounded);
+  for (const YAML::Node& path : at_bound) {
+    const FittedCoefficient* c = result.Find(path.as<std::string>());
+    ASSERT_NE(c, nullptr) << path.as<std::string>();
+    EXPECT_TRUE(c->at_bound);
+    EXPECT_EQ(result.params.uncertainty.count(c->path), 0u);
   }
 }
 

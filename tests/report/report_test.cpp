@@ -58,6 +58,28 @@ TEST(ReportTest, AUnitsReportIsOneSmallSelfContainedPage) {
   EXPECT_NE(html.find("a &lt;fit&gt; report"), std::string::npos);  // the command's text
 }
 
+// A coefficient the refinement left on a bound has no standard error and so
+// no `uncertainty` entry; the provenance says it was fitted, and the table
+// must not call it the prior's.
+TEST(ReportTest, TheParameterTableTellsACoefficientAtABoundFromThePriors) {
+  const Unit unit = ReadUnit(kRoot + "/datasets/paper-rig");
+  Parameters params = LoadParams(kRoot + "/datasets/paper-rig/truth.yaml");
+  params.uncertainty = {{"friction.positive.Fs", 0.1}};
+  params.provenance_yaml = "{refine: {status: converged, at_bound: [\"friction.negative.Fd\"]}}";
+  const std::string html = UnitReportHtml(params, unit, ReportOptions{});
+  const auto row_of = [&html](const std::string& path) {
+    const std::size_t at = html.find("<td class=l>" + path + "</td>");
+    return at == std::string::npos ? std::string() : html.substr(at, html.find("</tr>", at) - at);
+  };
+  EXPECT_NE(row_of("friction.positive.Fs").find(">fitted<"), std::string::npos);
+  EXPECT_NE(row_of("friction.negative.Fd").find("fitted, at a bound (no standard error)"),
+            std::string::npos);
+  EXPECT_NE(row_of("friction.negative.Fs").find("prior / given"), std::string::npos);
+  // Provenance that is not ours (no such list, or not YAML at all) marks none.
+  params.provenance_yaml = "{by: hand";
+  EXPECT_EQ(UnitReportHtml(params, unit, ReportOptions{}).find("at a bound"), std::string::npos);
+}
+
 TEST(ReportTest, LongRunsAreDecimatedKeepingExtremes) {
   const Unit unit = ReadUnit(kRoot + "/datasets/paper-rig");
   const Parameters params = LoadParams(kRoot + "/datasets/paper-rig/truth.yaml");
