@@ -9,6 +9,7 @@
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/parameter_table.h"
+#include "refine_covariance.h"
 #include "refine_friction_screen.h"
 #include "refine_residual.h"
 #include "refine_solve.h"
@@ -327,6 +328,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   }
   const Parameters conditioned = WithRigConditions(start, unit);
   for (FittedCoefficient& p : r.coefficients) GetParameter(conditioned, p.path, &p.start);
+  if (r.has_values() && options.start_disagreement_errors) WidenByStartDisagreement(start, &r);
   if (r.has_values()) {
     r.params.provenance_yaml = AppendProvenance(r.params.provenance_yaml, r, spec);
   }

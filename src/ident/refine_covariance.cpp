@@ -102,4 +102,28 @@ void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const Refine
   }
 }
 
+void WidenByStartDisagreement(const Parameters& start, RefineResult* r) {
+  const bool with_covariance =
+      r->covariance.rows() == static_cast<Eigen::Index>(r->coefficients.size());
+  for (std::size_t i = 0; i < r->coefficients.size(); ++i) {
+    FittedCoefficient& c = r->coefficients[i];
+    if (c.at_bound || !c.determined() || !(c.standard_error > 0)) continue;
+    const auto start_error = start.uncertainty.find(c.path);
+    if (start_error == start.uncertainty.end()) continue;
+    const double difference = c.value - c.start;
+    const double chi2 =
+        difference * difference /
+        (c.standard_error * c.standard_error + start_error->second * start_error->second);
+    if (!(chi2 > 1.0)) continue;
+    const double scale = std::sqrt(chi2);
+    c.standard_error *= scale;
+    r->params.uncertainty[c.path] = c.standard_error;
+    if (with_covariance) {
+      const auto k = static_cast<Eigen::Index>(i);
+      r->covariance.row(k) *= scale;
+      r->covariance.col(k) *= scale;
+    }
+  }
+}
+
 }  // namespace pneumaid::refine_internal

@@ -72,4 +72,16 @@ Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const Paramet
 void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const RefineOptions& options,
                RefineResult* r);
 
+// Where the refined value of a coefficient and the start's (with its
+// standard error in start.uncertainty: a component fit, an experiment of its
+// own for the valve and the tube) disagree by more than their errors allow,
+// chi2 = (value - start)^2 / (se^2 + se_start^2) > 1, the refined error is
+// scaled by sqrt(chi2): the Particle Data Group's scale factor for
+// measurements that disagree. A model error common to all runs (q_max 0.1 %
+// off with z 3-8 on the sweep) is invisible to the misfit's scale and to the
+// run clusters, but not to another experiment. The covariance's row and
+// column scale with it (correlations kept). Coefficients at a bound, held,
+// or without a start error are left as they are.
+void WidenByStartDisagreement(const Parameters& start, RefineResult* r);
+
 }  // namespace pneumaid::refine_internal

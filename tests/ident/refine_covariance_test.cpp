@@ -188,5 +188,41 @@ TEST(RunClusteredErrorsTest, ACoefficientAtABoundHasNoStandardError) {
   EXPECT_NE(r.CoefficientReport().find("at a bound: no standard error"), std::string::npos);
 }
 
+// Two experiments that disagree: the refined value 10 +- 0.1 against the
+// component fit's 9 +- 0.2 is chi2 = 1 / 0.05 = 20, so the refined error
+// grows by sqrt(20) (the PDG scale factor), its covariance row and column
+// with it. A coefficient within its errors of the start, one at a bound and
+// one the start carries no error for are left as they are.
+TEST(StartDisagreementTest, DisagreeingExperimentsWidenTheRefinedError) {
+  RefineResult r;
+  Parameters start;
+  const char* paths[] = {"a", "b", "c", "d"};
+  const double values[] = {10.0, 5.05, 3.0, 2.0}, starts[] = {9.0, 5.0, 1.0, 1.0};
+  for (int i = 0; i < 4; ++i) {
+    FittedCoefficient c;
+    c.path = paths[i];
+    c.value = values[i];
+    c.start = starts[i];
+    c.standard_error = 0.1;
+    r.coefficients.push_back(c);
+    r.params.uncertainty[paths[i]] = 0.1;
+  }
+  r.coefficients[2].at_bound = true;
+  start.uncertainty = {{"a", 0.2}, {"b", 0.2}, {"c", 0.2}};  // none for "d"
+  r.covariance = Eigen::MatrixXd::Constant(4, 4, 0.005);
+  r.covariance.diagonal().setConstant(0.01);
+  WidenByStartDisagreement(start, &r);
+  EXPECT_NEAR(r.coefficients[0].standard_error, 0.1 * std::sqrt(20.0), 1e-12);
+  EXPECT_NEAR(r.params.uncertainty.at("a"), 0.1 * std::sqrt(20.0), 1e-12);
+  EXPECT_NEAR(r.covariance(0, 0), 0.01 * 20.0, 1e-12);
+  EXPECT_NEAR(r.covariance(0, 1), 0.005 * std::sqrt(20.0), 1e-12);
+  EXPECT_NEAR(r.covariance(1, 0), 0.005 * std::sqrt(20.0), 1e-12);
+  for (int i = 1; i < 4; ++i) {
+    EXPECT_EQ(r.coefficients[i].standard_error, 0.1) << paths[i];
+    EXPECT_EQ(r.covariance(i, i), 0.01) << paths[i];
+  }
+  EXPECT_EQ(r.covariance(1, 2), 0.005);
+}
+
 }  // namespace
 }  // namespace pneumaid::refine_internal

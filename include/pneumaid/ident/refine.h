@@ -99,6 +99,13 @@ struct RefineOptions {
   // per run, disagree about it) where that is larger than the misfit-scaled
   // Gauss-Newton error (refine_covariance.h).
   bool run_clustered_errors = true;
+  // Standard errors widened where the start's own estimate disagrees: a
+  // coefficient the start carries with an uncertainty (a component fit: the
+  // valve staircase, the tube tests, the friction replay) and the refined
+  // value differ by more than their errors allow; the refined error is
+  // scaled by sqrt(chi2) of that difference (refine_covariance.h). A bias
+  // common to all runs shows there and nowhere else.
+  bool start_disagreement_errors = true;
   // A weak prior ties each free parameter to its start (a MAP fit): sigma
   // is the larger of start_prior_errors of its standard errors from the
   // start's uncertainty and start_prior_fraction of its value, or, without
