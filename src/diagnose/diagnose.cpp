@@ -59,6 +59,9 @@ Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec&
   options.rescue_starts = 0;
   options.screened_alternatives = 0;  // as the rescue starts: one candidate fit each, for speed
   options.start_prior = false;
+  // The starts here are refinements of the same runs: no experiment of their
+  // own to disagree with.
+  options.start_disagreement_errors = false;
   const RefineResult r = Refine(start, unit, spec, options);
   out.fit = r;
   if (!r.has_values()) {

@@ -236,7 +236,8 @@ bool FrictionFitOptions::IsValid(std::string* error) const {
   if (!(max_stuck_acceleration_m_per_s2 > 0))
     return fail("max_stuck_acceleration_m_per_s2 must be > 0");
   if (!(max_slide_s > 0)) return fail("max_slide_s must be > 0");
-  if (!(breakaway_timing_per_s >= 0)) return fail("breakaway_timing_per_s must be >= 0");
+  if (!(breakaway_timing_per_s >= 0) || !std::isfinite(breakaway_timing_per_s))
+    return fail("breakaway_timing_per_s must be finite and >= 0");
   return true;
 }
 

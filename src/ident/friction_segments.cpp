@@ -361,10 +361,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
   return data;
 }
 
-// Median over the slides of `direction` of the force on the last sample
-// before the rod has covered a quarter of the segment's travel: about where
-// it broke away, a starting point for Fs; without three such slides, the
-// median breakaway force at the stroke ends.
+// Median over the slides of `direction` of the force where the rod left its
+// rest (BreakawaySample), a starting point for Fs; without three such
+// slides, the median breakaway force at the stroke ends.
 double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
   std::vector<double> forces;
   for (const Segment& s : data.segments) {

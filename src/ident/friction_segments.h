@@ -63,8 +63,10 @@ struct Segment {
   // The force magnitude at the slide's breakaway (the last sample at rest).
   double breakaway_force_N = 0;
   // 1 / (expected residual std) per sample of the segment: the position
-  // noise, and the drift that the force's noise integrated twice adds with
-  // the distance from the nearest exactly known state (stuck, v = 0).
+  // noise, the drift that the force's noise integrated twice adds with the
+  // distance from the nearest exactly known state (stuck, v = 0), and in a
+  // forward replay the velocity error of the breakaway's timing times the
+  // time since (FrictionFitOptions::breakaway_timing_per_s).
   std::vector<double> weight;
 };
 

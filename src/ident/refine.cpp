@@ -1,5 +1,7 @@
 #include "pneumaid/ident/refine.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -41,27 +43,59 @@ ValidationReport HeldOut(const Parameters& params, const Unit& unit,
   return ValidateUnit(params, unit, v);
 }
 
+// The provenance as a YAML mapping: what the start carried (text that is not
+// a mapping is kept under `given`), or an empty one.
+YAML::Node ProvenanceMap(const std::string& provenance) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(provenance);
+  } catch (const YAML::Exception&) {
+    YAML::Node kept(YAML::NodeType::Map);
+    kept["given"] = provenance;
+    return kept;
+  }
+  if (root.IsMap()) return root;
+  YAML::Node kept(YAML::NodeType::Map);
+  if (root.IsDefined() && !root.IsNull()) kept["given"] = root;
+  return kept;
+}
+
+// Whether the set was already refined: its standard errors then come from
+// a fit of the same runs, not from the component fits' own experiments.
+bool RefinedBefore(const Parameters& start) {
+  return ProvenanceMap(start.provenance_yaml)["refine"].IsDefined();
+}
+
+// The start's provenance with this refinement's entry `refine` (replacing
+// any earlier one: a mapping has one key of a name), in flow style.
 std::string AppendProvenance(const std::string& provenance, const RefineResult& r,
                              const FitSpec& spec) {
-  std::ostringstream entry;
-  entry << "refine: {spec: \"" << spec.source << "\", cost_before: " << r.initial_cost
-        << ", cost_after: " << r.final_cost << ", iterations: " << r.iterations
-        << ", stages: " << r.stages << ", starts: " << r.starts
-        << ", experiments: " << r.fitted.size()
-        << ", initial_pressures: " << (spec.fit_initial_pressures ? "fit" : "logged")
-        << ", status: " << ToString(r.status) << ", reduced_chi_square: " << r.reduced_chi_square
-        << ", acceptable_reduced_chi_square: " << r.acceptable_reduced_chi_square
-        << ", converged: " << (r.status == FitStatus::kConverged ? "true" : "false");
+  YAML::Node entry(YAML::NodeType::Map);
+  entry["spec"] = spec.source;
+  entry["cost_before"] = r.initial_cost;
+  entry["cost_after"] = r.final_cost;
+  entry["iterations"] = r.iterations;
+  entry["stages"] = r.stages;
+  entry["starts"] = r.starts;
+  entry["experiments"] = r.fitted.size();
+  entry["initial_pressures"] = spec.fit_initial_pressures ? "fit" : "logged";
+  entry["status"] = ToString(r.status);
+  entry["reduced_chi_square"] = r.reduced_chi_square;
+  entry["acceptable_reduced_chi_square"] = r.acceptable_reduced_chi_square;
+  entry["converged"] = r.status == FitStatus::kConverged;
   // Fitted, but on a bound of its range: no standard error, so no entry in
   // `uncertainty` (a reader would otherwise take it for the prior's).
-  std::string at_bound;
+  YAML::Node at_bound(YAML::NodeType::Sequence);
   for (const FittedCoefficient& c : r.coefficients)
-    if (c.at_bound) at_bound += (at_bound.empty() ? "" : ", ") + std::string("\"") + c.path + "\"";
-  entry << ", at_bound: [" << at_bound << "]}";
-  const std::size_t close = provenance.rfind('}');
-  if (provenance.empty() || close == std::string::npos) return "{" + entry.str() + "}";
-  const bool empty = provenance.find_first_not_of("{} \n") == std::string::npos;
-  return provenance.substr(0, close) + (empty ? "" : ", ") + entry.str() + "}";
+    if (c.at_bound) at_bound.push_back(c.path);
+  entry["at_bound"] = at_bound;
+  YAML::Node root = ProvenanceMap(provenance);
+  root["refine"] = entry;
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out << root;
+  return out.c_str();
 }
 
 // FitStage::friction_replay: the identification's friction fit on the
@@ -328,7 +362,10 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   }
   const Parameters conditioned = WithRigConditions(start, unit);
   for (FittedCoefficient& p : r.coefficients) GetParameter(conditioned, p.path, &p.start);
-  if (r.has_values() && options.start_disagreement_errors) WidenByStartDisagreement(start, &r);
+  // Only against component fits: a start refined before on these runs is no
+  // experiment of its own.
+  if (r.has_values() && options.start_disagreement_errors && !RefinedBefore(start))
+    WidenByStartDisagreement(start, &r);
   if (r.has_values()) {
     r.params.provenance_yaml = AppendProvenance(r.params.provenance_yaml, r, spec);
   }

@@ -76,8 +76,11 @@ TEST(ReportTest, TheParameterTableTellsACoefficientAtABoundFromThePriors) {
             std::string::npos);
   EXPECT_NE(row_of("friction.negative.Fs").find("prior / given"), std::string::npos);
   // Provenance that is not ours (no such list, or not YAML at all) marks none.
-  params.provenance_yaml = "{by: hand";
-  EXPECT_EQ(UnitReportHtml(params, unit, ReportOptions{}).find("at a bound"), std::string::npos);
+  for (const char* other : {"{by: hand", "{by: hand, refine: {status: converged}}", "[1, 2]"}) {
+    params.provenance_yaml = other;
+    EXPECT_EQ(UnitReportHtml(params, unit, ReportOptions{}).find("at a bound"), std::string::npos)
+        << other;
+  }
 }
 
 TEST(ReportTest, LongRunsAreDecimatedKeepingExtremes) {

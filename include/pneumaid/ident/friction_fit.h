@@ -81,9 +81,10 @@ struct FrictionFitOptions {
   // expand. A forward replay then carries the acceleration after breakaway
   // x that time as a velocity error, which its weights include. On
   // noise-free rig data a heavy rod's replays at the true coefficients are
-  // off by the equivalent of ~60 /s; 125 /s (0.5 ms at 500 Hz, 5 us at
-  // 5 kHz) gave the sweep's component fits the most coefficients within
-  // tolerance. 0: no such error.
+  // off by the equivalent of ~60 /s; 125 /s is twice that (0.5 ms at
+  // 500 Hz, 5 us at 5 kHz: the rig's smooth stick moves the escape too). On
+  // the sweep's component fits 62 to 250 /s gave 202 to 207 coefficients
+  // within tolerance of 320 (0: 184). 0: no such error.
   double breakaway_timing_per_s = 125.0;
   // RK4 substeps per sample interval while sliding.
   int substeps = 8;
