@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iostream>
 #include <stdexcept>
@@ -24,24 +25,22 @@ Unit SyntheticStrokes(const Parameters& truth, std::uint64_t seed, int cycles = 
                                    "friction_fit_" + std::to_string(seed));
 }
 
-// The tolerances: Fs, Fd 5 % or 0.1 N; b 15 % or 0.5 N s/m; vs 25 %
-// or 1 mm/s.
+// The tolerances, per coefficient in the order Fs, Fd, b, vs: 5 % or
+// 0.1 N; 5 % or 0.1 N; 15 % or 0.5 N s/m; 25 % or 1 mm/s.
+const char* const kNames[] = {"Fs", "Fd", "b", "vs"};
+std::array<double, 4> Values(const StribeckParams& p) {
+  return {p.static_force_N, p.dynamic_force_N, p.viscous_N_s_per_m, p.stribeck_velocity_m_per_s};
+}
+double Tolerance(int i, double truth) {
+  const double fraction[] = {0.05, 0.05, 0.15, 0.25}, floor[] = {0.1, 0.1, 0.5, 1e-3};
+  return std::max(fraction[i] * std::fabs(truth), floor[i]);
+}
+
 void ExpectWithinTolerance(const StribeckParams& fit, const StribeckParams& truth,
                            const char* direction) {
-  const auto tolerance = [](double value, double fraction, double floor) {
-    return std::max(fraction * std::fabs(value), floor);
-  };
-  EXPECT_NEAR(fit.static_force_N, truth.static_force_N, tolerance(truth.static_force_N, 0.05, 0.1))
-      << direction;
-  EXPECT_NEAR(fit.dynamic_force_N, truth.dynamic_force_N,
-              tolerance(truth.dynamic_force_N, 0.05, 0.1))
-      << direction;
-  EXPECT_NEAR(fit.viscous_N_s_per_m, truth.viscous_N_s_per_m,
-              tolerance(truth.viscous_N_s_per_m, 0.15, 0.5))
-      << direction;
-  EXPECT_NEAR(fit.stribeck_velocity_m_per_s, truth.stribeck_velocity_m_per_s,
-              tolerance(truth.stribeck_velocity_m_per_s, 0.25, 1e-3))
-      << direction;
+  const auto values = Values(fit), real = Values(truth);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_NEAR(values[i], real[i], Tolerance(i, real[i])) << direction << " " << kNames[i];
 }
 
 using testing::ThirtyPercentOff;
@@ -215,23 +214,17 @@ void ExpectWithinToleranceOrHeld(const FrictionFitResult& result, const char* di
                                  const std::vector<std::string>& fitted) {
   const StribeckParams& params =
       std::string(direction) == "positive" ? result.positive.params : result.negative.params;
-  const double values[] = {params.static_force_N, params.dynamic_force_N, params.viscous_N_s_per_m,
-                           params.stribeck_velocity_m_per_s};
-  const double real[] = {truth.static_force_N, truth.dynamic_force_N, truth.viscous_N_s_per_m,
-                         truth.stribeck_velocity_m_per_s};
-  const double fraction[] = {0.05, 0.05, 0.15, 0.25}, floor[] = {0.1, 0.1, 0.5, 1e-3};
-  const char* names[] = {"Fs", "Fd", "b", "vs"};
+  const auto values = Values(params), real = Values(truth);
   for (int i = 0; i < 4; ++i) {
-    const FittedCoefficient& c = Coefficient(result, direction, names[i]);
+    const FittedCoefficient& c = Coefficient(result, direction, kNames[i]);
     EXPECT_EQ(c.value, values[i]);
     const bool held = !c.determined();
-    EXPECT_EQ(held, c.standard_error == 0) << direction << " " << names[i];
-    if (std::find(fitted.begin(), fitted.end(), names[i]) != fitted.end()) {
-      EXPECT_FALSE(held) << direction << " " << names[i] << ": " << c.held;
+    EXPECT_EQ(held, c.standard_error == 0) << direction << " " << kNames[i];
+    if (std::find(fitted.begin(), fitted.end(), kNames[i]) != fitted.end()) {
+      EXPECT_FALSE(held) << direction << " " << kNames[i] << ": " << c.held;
     }
     if (held) continue;
-    EXPECT_NEAR(values[i], real[i], std::max(fraction[i] * real[i], floor[i]))
-        << direction << " " << names[i];
+    EXPECT_NEAR(values[i], real[i], Tolerance(i, real[i])) << direction << " " << kNames[i];
   }
 }
 
@@ -270,16 +263,10 @@ TEST(FrictionFitTest, ADirectionWithAnUndeterminedVsStillGetsItsSlidingFriction)
 // How many of the eight coefficients are within the tolerances.
 int WithinTolerance(const FrictionFitResult& fit, const FrictionParams& truth) {
   int count = 0;
-  const auto within = [](double value, double real, double fraction, double floor) {
-    return std::fabs(value - real) <= std::max(fraction * std::fabs(real), floor);
-  };
   for (int d = 0; d < 2; ++d) {
-    const StribeckParams& f = d == 0 ? fit.positive.params : fit.negative.params;
-    const StribeckParams& t = d == 0 ? truth.positive : truth.negative;
-    count += within(f.static_force_N, t.static_force_N, 0.05, 0.1) +
-             within(f.dynamic_force_N, t.dynamic_force_N, 0.05, 0.1) +
-             within(f.viscous_N_s_per_m, t.viscous_N_s_per_m, 0.15, 0.5) +
-             within(f.stribeck_velocity_m_per_s, t.stribeck_velocity_m_per_s, 0.25, 1e-3);
+    const auto values = Values(d == 0 ? fit.positive.params : fit.negative.params);
+    const auto real = Values(d == 0 ? truth.positive : truth.negative);
+    for (int i = 0; i < 4; ++i) count += std::fabs(values[i] - real[i]) <= Tolerance(i, real[i]);
   }
   return count;
 }
@@ -311,6 +298,41 @@ TEST(FrictionFitTest, TheStartScreenFindsTheBasinOfALightRodThatSticksAndSlips) 
   EXPECT_EQ(WithinTolerance(fit, truth.friction), 8);
   ExpectWithinToleranceOrHeld(fit, "positive", truth.friction.positive, {"Fs", "Fd", "b", "vs"});
   ExpectWithinToleranceOrHeld(fit, "negative", truth.friction.negative, {"Fs", "Fd", "b", "vs"});
+}
+
+// A heavy vertical rod with a strong Stribeck drop, logged at 500 Hz: each
+// stroke breaks away from rest and slides for 0.1 s. A forward replay is
+// then off by the velocity error of a slightly misplaced escape (0.2 mm at
+// the true coefficients on noise-free logs), which weights for the force's
+// noise alone read as friction (on the sweep's unit of this kind: b 25 N s/m
+// and Fd 0 for 12.2 and 1.1). With the escape's timing error in the weights
+// the force balance of the slides carries Fd and b.
+TEST(FrictionFitTest, AHeavyRodLoggedAt500HzGetsItsSlidingFriction) {
+  Parameters truth;  // vertical
+  truth.cylinder.load_mass_kg = 1.15;
+  truth.friction.positive = {19.9, 1.12, 12.2, 0.0045};
+  truth.friction.negative = {10.7, 0.67, 7.3, 0.0022};
+  const Unit unit = MismatchedStrokes(truth, 3, 500, {0.5, 0.7, 0.9}, 2, 0.005);
+  FrictionFitOptions untimed;
+  untimed.breakaway_timing_per_s = 0;
+  const FrictionFitResult plain = FitFriction(unit, FrictionParams{}, untimed);
+  std::cout << plain.BriefReport();
+  EXPECT_GT(std::fabs(plain.positive.params.viscous_N_s_per_m - 12.2), Tolerance(2, 12.2));
+  const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
+  std::cout << fit.BriefReport();
+  ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
+  // vs is not checked: it trades off with Fs at -0.995 in both directions
+  // here (the slides leave the Stribeck region within a sample or two), and
+  // the refinement through the simulator is what places it.
+  for (const char* direction : {"positive", "negative"}) {
+    const auto real = Values(std::string(direction) == "positive" ? truth.friction.positive
+                                                                  : truth.friction.negative);
+    for (int i = 0; i < 3; ++i) {  // Fs, Fd, b
+      const FittedCoefficient& c = Coefficient(fit, direction, kNames[i]);
+      EXPECT_TRUE(c.determined()) << direction << " " << kNames[i];
+      EXPECT_NEAR(c.value, real[i], Tolerance(i, real[i])) << direction << " " << kNames[i];
+    }
+  }
 }
 
 TEST(FrictionFitTest, InvalidOptionsAreNamed) {
