@@ -132,15 +132,12 @@ double UniformPeriod(const std::vector<double>& t) {
 void SetWeights(double sigma_x_m, double drift_m, double escape_error_m_per_s, Segment* s) {
   s->weight.assign(s->end - s->begin, 1.0 / sigma_x_m);
   for (std::size_t i = s->begin; i < s->end; ++i) {
+    const bool backward = s->two_sided && i > s->split;
     double n = i > s->slide_begin ? static_cast<double>(i - s->slide_begin) : 0.0;
-    if (s->two_sided && i > s->split) {
-      n = s->arrest > i ? static_cast<double>(s->arrest - i) : 0.0;
-    }
-    double variance = sigma_x_m * sigma_x_m + drift_m * drift_m * n * n * n / 3.0;
-    if (!(s->two_sided && i > s->split)) {
-      const double escape_m = escape_error_m_per_s * n * s->period_s;
-      variance += escape_m * escape_m;
-    }
+    if (backward) n = s->arrest > i ? static_cast<double>(s->arrest - i) : 0.0;
+    const double escape_m = backward ? 0.0 : escape_error_m_per_s * n * s->period_s;
+    const double variance =
+        sigma_x_m * sigma_x_m + drift_m * drift_m * n * n * n / 3.0 + escape_m * escape_m;
     s->weight[i - s->begin] = 1.0 / std::sqrt(variance);
   }
 }

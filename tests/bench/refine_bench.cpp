@@ -9,6 +9,7 @@
 // so it times the refinement's code alone.
 #include <benchmark/benchmark.h>
 
+#include "../ident/friction_test_util.h"
 #include "../ident/refine_test_util.h"
 #include "pneumaid/ident/identify.h"
 #include "pneumaid/ident/refine.h"
@@ -33,12 +34,7 @@ const Setup& Shared() {
     s.start = Identify(s.unit, Parameters{}, IdentifyOptions{}, &report);
     s.spec = LoadFitSpec(std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml");
     s.fixed_start = Parameters{};
-    for (StribeckParams* f : {&s.fixed_start.friction.positive, &s.fixed_start.friction.negative}) {
-      f->static_force_N *= 1.1;
-      f->dynamic_force_N *= 0.9;
-      f->viscous_N_s_per_m *= 1.1;
-      f->stribeck_velocity_m_per_s *= 0.9;
-    }
+    s.fixed_start.friction = testing::FractionOff(s.fixed_start.friction, 0.1);
     s.fixed_start.pipeline.delta_per_s *= 1.05;
     for (KvpBranchParams* b : {&s.fixed_start.valve.increasing, &s.fixed_start.valve.decreasing})
       b->q_max_kg_per_s *= 1.02;

@@ -20,17 +20,22 @@ inline Protocol StrokeProtocol(int cycles) {
   return protocol;
 }
 
-// A poor prior: every coefficient 30 % off the truth, in the direction that
-// makes breakaway later and sliding friction different.
-inline FrictionParams ThirtyPercentOff(const FrictionParams& truth) {
-  FrictionParams prior = truth;
-  for (StribeckParams* p : {&prior.positive, &prior.negative}) {
-    p->static_force_N *= 1.3;
-    p->dynamic_force_N *= 0.7;
-    p->viscous_N_s_per_m *= 1.3;
-    p->stribeck_velocity_m_per_s *= 0.7;
+// Every coefficient `fraction` off the truth, in the direction that makes
+// breakaway later and sliding friction different.
+inline FrictionParams FractionOff(const FrictionParams& truth, double fraction) {
+  FrictionParams off = truth;
+  for (StribeckParams* p : {&off.positive, &off.negative}) {
+    p->static_force_N *= 1 + fraction;
+    p->dynamic_force_N *= 1 - fraction;
+    p->viscous_N_s_per_m *= 1 + fraction;
+    p->stribeck_velocity_m_per_s *= 1 - fraction;
   }
-  return prior;
+  return off;
+}
+
+// A poor prior: every coefficient 30 % off the truth.
+inline FrictionParams ThirtyPercentOff(const FrictionParams& truth) {
+  return FractionOff(truth, 0.3);
 }
 
 }  // namespace pneumaid::testing
