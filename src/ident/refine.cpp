@@ -20,8 +20,8 @@
 // Refinement's orchestration: stages (friction replay, windows, parameter
 // subsets) in order; the order of attempts (the fit from the given start;
 // when it is not explained or leaves friction at a bound, the friction
-// screen and a fit from its start; when still not explained, a robust refit
-// and then the rescue starts; the Better one kept at each step); the
+// screen and a fit from its start; when still not explained, a robust refit,
+// a windowed refit and then the rescue starts; the Better one kept at each step); the
 // held-out validation before and after, provenance.
 // Its parts: refine_parameters (bounds map, multistart and trust-box points,
 // the prior toward the start), refine_runs (runs and windows),
@@ -235,7 +235,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   StagedFit fit = FitStages(start, unit, spec, stages, options);
   const bool given_has_values = fit.result.has_values();
   const Parameters given_before_last = fit.before_last;
-  std::string screen_report, robust_report;
+  std::string screen_report, robust_report, windowed_report;
   int screened_candidates = 0;
   // Keeps `candidate` when it is Better; the iterations add up either way.
   const auto keep_better = [&fit](StagedFit&& candidate) {
@@ -295,21 +295,36 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       }
     }
   }
+  // One more fit from the screened start (the given one when the screen
+  // moved nothing) through `fit_stages`, kept when Better; its one-line report.
+  const auto refit = [&](const char* what, const std::vector<FitStage>& fit_stages,
+                         bool robust_runs) {
+    const double before = fit.result.reduced_chi_square;
+    StagedFit candidate = FitStages(screened_start, unit, spec, fit_stages, options, robust_runs);
+    candidate.from_screened_start = screened;
+    const double after = candidate.result.reduced_chi_square;
+    const bool kept = keep_better(std::move(candidate));
+    char line[200];
+    std::snprintf(line, sizeof(line), "%s: median reduced chi-square %.3g against %.3g, %s", what,
+                  after, before, kept ? "kept" : "not kept");
+    return std::string(line);
+  };
   if (!explained() && options.robust_refit) {
     // Still not explained: a run the model cannot follow may be dragging the
-    // others. The screened start (the given one when the screen moved
-    // nothing) again, each run through a Cauchy loss.
-    const double before = fit.result.reduced_chi_square;
-    StagedFit robust = FitStages(screened_start, unit, spec, stages, options, true);
-    robust.from_screened_start = screened;
-    const double after = robust.result.reduced_chi_square;
-    const bool kept = keep_better(std::move(robust));
-    char line[200];
-    std::snprintf(line, sizeof(line),
-                  "robust refit (each run through a Cauchy loss): median reduced chi-square %.3g "
-                  "against %.3g, %s",
-                  after, before, kept ? "kept" : "not kept");
-    robust_report = line;
+    // others. Each run through a Cauchy loss.
+    robust_report = refit("robust refit (each run through a Cauchy loss)", stages, true);
+  }
+  if (!explained() && options.windowed_refit && !stages.back().windows) {
+    // Still not explained: the last stage first by multiple shooting.
+    // Restarted at every stuck phase, a slip at another instant cannot carry
+    // into the rest of the run, so a chaotic stick-slip no longer makes the
+    // cost rugged around the optimum; the whole runs are fitted after.
+    std::vector<FitStage> windowed = stages;
+    FitStage shooting = stages.back();
+    shooting.windows = true;
+    windowed.insert(windowed.end() - 1, shooting);
+    windowed_report =
+        refit("windowed refit (the last stage by multiple shooting first)", windowed, false);
   }
   RefineResult& r = fit.result;
   if (!explained() && r.has_values() && options.rescue_starts > 0) {
@@ -332,7 +347,10 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     if (Better(rescue, r)) {
       rescue.replay_report = r.replay_report;
       r = rescue;
-      if (!robust_report.empty()) robust_report += "; a rescue start then ended lower";
+      if (!windowed_report.empty())
+        windowed_report += "; a rescue start then ended lower";
+      else if (!robust_report.empty())
+        robust_report += "; a rescue start then ended lower";
       if (fit.from_screened_start) screen_report += "; a rescue start then ended lower";
     }
     r.rescue_starts = tried;
@@ -357,6 +375,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   r.screen_report = screen_report;
   r.screened_candidates = screened_candidates;
   r.robust_report = robust_report;
+  r.windowed_report = windowed_report;
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
     r.fitted[k].before = before[k].before;
   }
@@ -410,6 +429,7 @@ std::string RefineResult::BriefReport() const {
   }
   if (!screen_report.empty()) out << "  " << screen_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
+  if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (estimated_starts > 0) {
     std::snprintf(line, sizeof(line),

@@ -22,10 +22,7 @@ namespace {
 
 const std::string& kDefaultSpec = testing::kDefaultFitSpec;
 
-struct ScreenCase {
-  Parameters truth, start;
-  Unit unit;
-};
+using ScreenCase = testing::RefineCase;
 
 // A heavy (1.4 kg) horizontal cylinder with a strong Stribeck drop, smooth
 // stick; the start has each direction's Fs at 0.45 and vs at 2.2 of the
@@ -99,18 +96,19 @@ TEST(RefineFrictionScreenTest, TheNextBestCandidatesAreOrderedAndDistinct) {
   }
 }
 
-// The screen is what finds the basin: without it the same start ends in
-// another one, at a higher cost, with the positive direction's sliding
-// friction off (Fd 17 N and b at its bound for 8.9 N and 14.4 N s/m; the
-// three are then reported as poorly separable, and the verdict, a median
-// over runs, passes: the "converged with wrong friction" case that
-// the screen removes).
+// The screen is what finds the basin among the fits that go before the
+// windowed refit: without it (and without the windowed refit) the same start
+// ends in another basin, at a higher cost, with the positive direction's
+// sliding friction off. The windowed refit (multiple shooting first, the
+// fallback after the robust refit) finds the basin from the same start on
+// its own.
 TEST(RefineFrictionScreenTest, WithoutTheScreenTheSameStartEndsInAnotherBasin) {
   const ScreenCase& c = HeavyUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   const RefineResult screened = Refine(c.start, c.unit, spec, RefineOptions{});
   RefineOptions options;
   options.screen_friction_starts = false;
+  options.windowed_refit = false;
   const RefineResult result = Refine(c.start, c.unit, spec, options);
   std::cout << result.BriefReport();
   EXPECT_TRUE(result.screen_report.empty());
@@ -118,6 +116,13 @@ TEST(RefineFrictionScreenTest, WithoutTheScreenTheSameStartEndsInAnotherBasin) {
   EXPECT_GT(std::fabs(result.params.friction.positive.dynamic_force_N -
                       c.truth.friction.positive.dynamic_force_N),
             0.05 * c.truth.friction.positive.dynamic_force_N);
+
+  options.windowed_refit = true;
+  const RefineResult windowed = Refine(c.start, c.unit, spec, options);
+  std::cout << windowed.BriefReport();
+  EXPECT_EQ(windowed.status, FitStatus::kConverged) << windowed.reason;
+  EXPECT_NE(windowed.windowed_report.find(", kept"), std::string::npos);
+  testing::ExpectFrictionWithinTolerance(windowed.params, c.truth);
 }
 
 // A start that already explains the runs is left as it is (one evaluation,

@@ -47,6 +47,12 @@ inline Unit MismatchedStrokes(const Parameters& truth, std::uint64_t seed, const
           .string());
 }
 
+// A refinement test's truth, start and unit.
+struct RefineCase {
+  Parameters truth, start;
+  Unit unit;
+};
+
 inline double ParameterValue(const Parameters& p, const std::string& path) {
   double value = NAN;
   EXPECT_TRUE(GetParameter(p, path, &value)) << path;

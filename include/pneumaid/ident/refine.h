@@ -70,6 +70,15 @@ struct RefineOptions {
   // cannot follow (a chaotic stick-slip) then no longer drags the runs it can
   // follow into another basin. The lower median of the fits is kept.
   bool robust_refit = true;
+  // When the robust refit does not explain the runs either: one more fit
+  // from the same start, with the last stage run first by multiple shooting
+  // (FitStage::windows: every run restarted from its logged state at each
+  // stuck phase), then as given. On a light rod logged at a low rate the
+  // stick-slip sequence changes with small moves of friction, so whole runs
+  // are a rugged cost even next to the optimum; windows are not. Not first:
+  // where whole runs already find the basin, the windowed stage can lead
+  // elsewhere (docs/refinement.md). The lower median is kept.
+  bool windowed_refit = true;
   // When the verdict still fails (after the screen and the robust refit
   // below): this many more
   // starts of the last stage, drawn (Latin hypercube) from a trust box around
@@ -182,6 +191,9 @@ struct RefineResult : FitResult {
   // What the robust refit (RefineOptions::robust_refit) ended at and whether
   // it was kept (empty when it did not run).
   std::string robust_report;
+  // What the windowed refit (RefineOptions::windowed_refit) ended at and
+  // whether it was kept (empty when it did not run).
+  std::string windowed_report;
   // Held-out experiments, validated with the start and the refined set.
   ValidationReport held_out_before, held_out_after;
 
