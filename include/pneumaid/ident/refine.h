@@ -111,9 +111,11 @@ struct RefineOptions {
   // Standard errors widened where the start's own estimate disagrees: a
   // coefficient the start carries with an uncertainty (a component fit: the
   // valve staircase, the tube tests, the friction replay) and the refined
-  // value differ by more than their errors allow; the refined error is
-  // scaled by sqrt(chi2) of that difference (refine_covariance.h). A bias
-  // common to all runs shows there and nowhere else.
+  // value differ by more than their errors allow; the refined error grows
+  // by the between-method variance against an experiment of its own (valve,
+  // tube), by sqrt(chi2) of the difference against the friction replay
+  // (refine_covariance.h). A bias common to all runs shows there and nowhere
+  // else.
   bool start_disagreement_errors = true;
   // A weak prior ties each free parameter to its start (a MAP fit): sigma
   // is the larger of start_prior_errors of its standard errors from the
