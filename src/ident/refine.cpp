@@ -8,8 +8,10 @@
 #include <cstdio>
 #include <sstream>
 
+#include "../io/provenance_map.h"
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/provenance.h"
 #include "pneumaid/model/parameter_table.h"
 #include "refine_covariance.h"
 #include "refine_friction_screen.h"
@@ -43,27 +45,10 @@ ValidationReport HeldOut(const Parameters& params, const Unit& unit,
   return ValidateUnit(params, unit, v);
 }
 
-// The provenance as a YAML mapping: what the start carried (text that is not
-// a mapping is kept under `given`), or an empty one.
-YAML::Node ProvenanceMap(const std::string& provenance) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(provenance);
-  } catch (const YAML::Exception&) {
-    YAML::Node kept(YAML::NodeType::Map);
-    kept["given"] = provenance;
-    return kept;
-  }
-  if (root.IsMap()) return root;
-  YAML::Node kept(YAML::NodeType::Map);
-  if (root.IsDefined() && !root.IsNull()) kept["given"] = root;
-  return kept;
-}
-
 // Whether the set was already refined: its standard errors then come from
 // a fit of the same runs, not from the component fits' own experiments.
 bool RefinedBefore(const Parameters& start) {
-  return ProvenanceMap(start.provenance_yaml)["refine"].IsDefined();
+  return HasProvenanceEntry(start.provenance_yaml, "refine");
 }
 
 // The start's provenance with this refinement's entry `refine` (replacing
@@ -89,13 +74,7 @@ std::string AppendProvenance(const std::string& provenance, const RefineResult& 
   for (const FittedCoefficient& c : r.coefficients)
     if (c.at_bound) at_bound.push_back(c.path);
   entry["at_bound"] = at_bound;
-  YAML::Node root = ProvenanceMap(provenance);
-  root["refine"] = entry;
-  YAML::Emitter out;
-  out.SetMapFormat(YAML::Flow);
-  out.SetSeqFormat(YAML::Flow);
-  out << root;
-  return out.c_str();
+  return WithProvenanceEntry(provenance, "refine", entry);
 }
 
 // FitStage::friction_replay: the identification's friction fit on the

@@ -1,11 +1,11 @@
 #include "report_sections.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <set>
+#include <vector>
 
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
+#include "pneumaid/io/provenance.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -32,15 +32,9 @@ void CheckOptions(const ReportOptions& options) {
 // set's provenance (refine.at_bound): fitted, but without a standard error,
 // so without an `uncertainty` entry. Empty when the provenance has none.
 std::set<std::string> AtBound(const Parameters& params) {
-  std::set<std::string> paths;
-  try {
-    const YAML::Node list = YAML::Load(params.provenance_yaml)["refine"]["at_bound"];
-    if (list.IsSequence())
-      for (const YAML::Node& path : list) paths.insert(path.as<std::string>());
-  } catch (const YAML::Exception&) {
-    // Free-form provenance written by someone else: no such list.
-  }
-  return paths;
+  const std::vector<std::string> paths =
+      ProvenanceList(params.provenance_yaml, "refine", "at_bound");
+  return {paths.begin(), paths.end()};
 }
 
 std::string ParameterTable(const Parameters& params) {

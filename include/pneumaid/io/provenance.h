@@ -1,0 +1,21 @@
+// A parameter set's provenance (params-v1 `provenance`, docs/params-format.md):
+// a mapping to which each tool that produced the set adds its entry
+// (`identify`, `refine`, ...). Text that is not a mapping is read as one
+// entry `given`. The one home for reading it and adding to it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace pneumaid {
+
+// Whether the provenance has a top-level entry `key` (`refine`: the set was
+// refined).
+bool HasProvenanceEntry(const std::string& provenance, const std::string& key);
+
+// The strings of the sequence `key`.`field` (`refine`.`at_bound`), empty
+// when there is none.
+std::vector<std::string> ProvenanceList(const std::string& provenance, const std::string& key,
+                                        const std::string& field);
+
+}  // namespace pneumaid

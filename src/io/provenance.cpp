@@ -1,0 +1,52 @@
+#include "pneumaid/io/provenance.h"
+
+#include "provenance_map.h"
+
+namespace pneumaid {
+
+YAML::Node ProvenanceMap(const std::string& provenance) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(provenance);
+  } catch (const YAML::Exception&) {
+    YAML::Node kept(YAML::NodeType::Map);
+    kept["given"] = provenance;
+    return kept;
+  }
+  if (root.IsMap()) return root;
+  YAML::Node kept(YAML::NodeType::Map);
+  if (root.IsDefined() && !root.IsNull()) kept["given"] = root;
+  return kept;
+}
+
+std::string WithProvenanceEntry(const std::string& provenance, const std::string& key,
+                                const YAML::Node& entry) {
+  YAML::Node root = ProvenanceMap(provenance);
+  root[key] = entry;
+  YAML::Emitter out;
+  out.SetMapFormat(YAML::Flow);
+  out.SetSeqFormat(YAML::Flow);
+  out << root;
+  return out.c_str();
+}
+
+bool HasProvenanceEntry(const std::string& provenance, const std::string& key) {
+  return ProvenanceMap(provenance)[key].IsDefined();
+}
+
+std::vector<std::string> ProvenanceList(const std::string& provenance, const std::string& key,
+                                        const std::string& field) {
+  std::vector<std::string> items;
+  // Not const: a const node's missing key is an invalid node, which throws
+  // when asked anything; a mutable node's is an undefined one.
+  YAML::Node entry = ProvenanceMap(provenance)[key];
+  if (!entry.IsMap()) return items;
+  YAML::Node list = entry[field];
+  if (!list.IsSequence()) return items;
+  for (const YAML::Node& item : list) {
+    if (item.IsScalar()) items.push_back(item.Scalar());
+  }
+  return items;
+}
+
+}  // namespace pneumaid

@@ -1,0 +1,21 @@
+// Provenance (pneumaid/io/provenance.h) as a yaml-cpp mapping, for the
+// library's writers of an entry.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+
+namespace pneumaid {
+
+// The provenance as a YAML mapping: what it carried (text that is not a
+// mapping is kept under `given`), or an empty one.
+YAML::Node ProvenanceMap(const std::string& provenance);
+
+// `provenance` with the entry `key` set to `entry` (replacing any earlier
+// one: a mapping has one key of a name), emitted in flow style (values
+// quoted by the emitter where they need it).
+std::string WithProvenanceEntry(const std::string& provenance, const std::string& key,
+                                const YAML::Node& entry);
+
+}  // namespace pneumaid
