@@ -9,10 +9,13 @@
 // so it times the refinement's code alone.
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
+
 #include "../ident/friction_test_util.h"
 #include "../ident/refine_test_util.h"
 #include "pneumaid/ident/identify.h"
 #include "pneumaid/ident/refine.h"
+#include "pneumaid/io/rig_writer.h"
 
 namespace pneumaid {
 namespace {
@@ -27,9 +30,12 @@ struct Setup {
 const Setup& Shared() {
   static const Setup setup = [] {
     Setup s;
-    s.unit = testing::WriteAndRead(
-        Synthesize(Parameters{}, testing::RefinementProtocol(testing::TenLevels(), true), 7, "R"),
-        std::string(PNEUMAID_BINARY_DIR) + "/refine_bench_unit");
+    const std::string dir = std::string(PNEUMAID_BINARY_DIR) + "/refine_bench_unit";
+    std::filesystem::remove_all(dir);
+    WriteDirectoryAtomically(
+        dir, UnitFiles(Synthesize(
+                 Parameters{}, testing::RefinementProtocol(testing::TenLevels(), true), 7, "R")));
+    s.unit = ReadUnit(dir);
     IdentifyReport report;
     s.start = Identify(s.unit, Parameters{}, IdentifyOptions{}, &report);
     s.spec = LoadFitSpec(std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml");

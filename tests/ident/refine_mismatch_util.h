@@ -4,13 +4,13 @@
 #pragma once
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <string>
 
+#include "../synth/synth_test_util.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
 #include "refine_test_util.h"
@@ -32,19 +32,14 @@ inline Parameters HeavyHorizontalTruth() {
 
 // One stroke cycle at 0.5, 0.7 and 0.9 V, written with model mismatch:
 // smooth stick (creep below 0.1 mm/s), the rig integrated at rtol 1e-8;
-// synthetic, from `truth` and `seed`, into the test's temporary `dir` (one
-// per process: ctest runs each test of a file as its own process, in
-// parallel, and two writing one directory collide).
+// synthetic, from `truth` and `seed`, through the test's temporary `dir`.
 inline Unit MismatchedStrokes(const Parameters& truth, std::uint64_t seed, const std::string& id,
                               const std::string& dir) {
   Protocol protocol = RefinementProtocol({0.5, 0.7, 0.9}, false);
   protocol.mismatch.regularized_friction = true;
   protocol.mismatch.stick_velocity_m_per_s = 1e-4;
   protocol.mismatch.relative_tolerance = 1e-8;
-  return WriteAndRead(
-      Synthesize(truth, protocol, seed, id),
-      (std::filesystem::path(::testing::TempDir()) / (dir + "-" + std::to_string(::getpid())))
-          .string());
+  return WriteAndReadUnit(Synthesize(truth, protocol, seed, id), dir);
 }
 
 // A refinement test's truth, start and unit.

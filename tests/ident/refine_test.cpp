@@ -4,11 +4,11 @@
 #include "pneumaid/ident/refine.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 
+#include "../synth/synth_test_util.h"
 #include "pneumaid/ident/identify.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
@@ -21,13 +21,6 @@ namespace {
 const std::string& kDefaultSpec = testing::kDefaultFitSpec;
 const std::string kFromScratchSpec =
     std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-from-scratch.yaml";
-
-// One directory per process: ctest runs each test of this file as its own
-// process, in parallel, and two writing one directory collide.
-std::string UnitDir(const std::string& name) {
-  return (std::filesystem::path(::testing::TempDir()) / (name + "-" + std::to_string(::getpid())))
-      .string();
-}
 
 // The issue's tolerances: Fs, Fd 5 % or 0.1 N; b 15 % or 0.5 N s/m; vs 25 %
 // or 1 mm/s; delta and q_max 5 %.
@@ -86,9 +79,9 @@ void ExpectHonestErrors(const RefineResult& result, const Parameters& truth, con
 // 30 % off the truth on all ten parameters of fit-from-scratch.yaml.
 TEST(RefineTest, RecoversTenParametersFromTrajectoriesAloneStartingThirtyPercentOff) {
   const Parameters truth;
-  const Unit unit = testing::WriteAndRead(
+  const Unit unit = testing::WriteAndReadUnit(
       Synthesize(truth, testing::RefinementProtocol({0.6, 0.8, 1.0}, false), 31, "R"),
-      UnitDir("refine_from_scratch"));
+      "refine_from_scratch");
   const FitSpec spec = LoadFitSpec(kFromScratchSpec);
   Parameters start = truth;
   for (size_t j = 0; j < spec.parameters.size(); ++j) {
@@ -106,9 +99,9 @@ TEST(RefineTest, RecoversTenParametersFromTrajectoriesAloneStartingThirtyPercent
 // held-out position error.
 TEST(RefineTest, RecoversTheTenDefaultParametersFromTheComponentFits) {
   const Parameters truth;
-  const Unit unit = testing::WriteAndRead(
+  const Unit unit = testing::WriteAndReadUnit(
       Synthesize(truth, testing::RefinementProtocol({0.6, 0.8, 1.0}, true), 31, "R"),
-      UnitDir("refine_recovery"));
+      "refine_recovery");
   IdentifyReport report;
   const Parameters start = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
@@ -146,9 +139,9 @@ TEST(RefineTest, TheDefaultRefinementRecoversAHorizontalCylindersFriction) {
       LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
   truth.friction.positive = {8.0, 1.5, 4.0, 0.015};
   truth.friction.negative = {12.0, 3.0, 7.0, 0.008};
-  const Unit unit = testing::WriteAndRead(
+  const Unit unit = testing::WriteAndReadUnit(
       Synthesize(truth, testing::RefinementProtocol({0.45, 0.6, 0.8, 1.0}, true), 22, "H"),
-      UnitDir("refine_horizontal"));
+      "refine_horizontal");
   IdentifyReport report;
   const Parameters identified = Identify(unit, truth, IdentifyOptions{}, &report);
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
@@ -182,7 +175,7 @@ TEST(RefineTest, FromBiasedComponentFitsItSaysWhenTheRunsAreNotExplained) {
   for (const char* flow : {"q", "q_out", "q1", "q2"}) protocol.sensors[flow].declared = false;
   protocol.sensors["x"].sigma = 50e-6;
   const Unit unit =
-      testing::WriteAndRead(Synthesize(truth, protocol, 32, "B"), UnitDir("refine_biased"));
+      testing::WriteAndReadUnit(Synthesize(truth, protocol, 32, "B"), "refine_biased");
   IdentifyReport report;
   const Parameters identified = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
   const RefineResult result = Refine(identified, unit, LoadFitSpec(kDefaultSpec), RefineOptions{});
@@ -226,9 +219,8 @@ TEST(RefineTest, FromBiasedComponentFitsItSaysWhenTheRunsAreNotExplained) {
 // same refinement ends far above and says the model does not explain them.
 TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
   const Parameters truth;
-  const Unit unit = testing::WriteAndRead(
-      Synthesize(truth, testing::RefinementProtocol({0.7, 1.0}, false), 35, "V"),
-      UnitDir("refine_verdict"));
+  const Unit unit = testing::WriteAndReadUnit(
+      Synthesize(truth, testing::RefinementProtocol({0.7, 1.0}, false), 35, "V"), "refine_verdict");
   RefineOptions options;
   options.rescue_starts = 2;
   const RefineResult explained = Refine(truth, unit, LoadFitSpec(kDefaultSpec), options);
@@ -241,9 +233,9 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
   EXPECT_LT(at_truth.reduced_chi_square, 3.0);
   Parameters leaky = truth;
   leaky.effects["cross_leakage"] = {{"c", 2e-11}};  // 8e-6 kg/s at 4 bar: 9 % of q_max
-  const Unit leaking = testing::WriteAndRead(
+  const Unit leaking = testing::WriteAndReadUnit(
       Synthesize(leaky, testing::RefinementProtocol({0.7, 1.0}, false), 35, "L"),
-      UnitDir("refine_verdict_leak"));
+      "refine_verdict_leak");
   const RefineResult missing = Refine(truth, leaking, LoadFitSpec(kDefaultSpec), options);
   std::cout << missing.BriefReport();
   EXPECT_EQ(missing.status, FitStatus::kNotExplained);
@@ -256,9 +248,9 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
 class RefineSpecTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    unit_ = new Unit(testing::WriteAndRead(
+    unit_ = new Unit(testing::WriteAndReadUnit(
         Synthesize(Parameters{}, testing::RefinementProtocol({1.0}, false), 33, "S"),
-        UnitDir("refine_spec")));
+        "refine_spec"));
   }
   static void TearDownTestSuite() { delete unit_; }
 

@@ -29,11 +29,4 @@ inline std::vector<double> TenLevels() {
   return {0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95, 1.0};
 }
 
-inline Unit WriteAndRead(const SyntheticUnit& synthetic, const std::string& dir) {
-  std::filesystem::remove_all(dir);
-  WriteDirectoryAtomically(dir, UnitFiles(synthetic));
-  Unit unit = ReadUnit(dir);
-  return unit;
-}
-
 }  // namespace pneumaid::testing

@@ -8,6 +8,7 @@
 
 #include <iostream>
 
+#include "../synth/synth_test_util.h"
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
 #include "refine_mismatch_util.h"
@@ -35,10 +36,8 @@ const testing::RefineCase& LightRodAt500Hz() {
     protocol.sensors["x"].quantization = 1e-5;
     protocol.mismatch.regularized_friction = false;
     protocol.mismatch.relative_tolerance = 1e-8;
-    w.unit = testing::WriteAndRead(Synthesize(w.truth, protocol, 15, "W"),
-                                   (std::filesystem::path(::testing::TempDir()) /
-                                    ("refine_windowed_light-" + std::to_string(::getpid())))
-                                       .string());
+    w.unit =
+        testing::WriteAndReadUnit(Synthesize(w.truth, protocol, 15, "W"), "refine_windowed_light");
     w.start = w.truth;
     w.start.friction.positive.stribeck_velocity_m_per_s *= 1.18;
     w.start.friction.negative.dynamic_force_N *= 1.4;

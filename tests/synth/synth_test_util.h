@@ -1,8 +1,12 @@
 // Writes a synthetic unit to a fresh temporary directory and reads it back
-// through the rig-data reader, as a user's unit would be read.
+// through the rig-data reader, as a user's unit would be read. The
+// directory is `name` plus the process id (ctest runs each test of a file as
+// its own process, in parallel, and two writing one directory collide) and
+// is removed once read: a Unit holds its logs in memory.
 #pragma once
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <string>
@@ -13,7 +17,8 @@
 namespace pneumaid::testing {
 
 inline Unit WriteAndReadUnit(const SyntheticUnit& unit, const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::path(::testing::TempDir()) / name;
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / (name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   WriteDirectoryAtomically(dir.string(), UnitFiles(unit));
   Unit read = ReadUnit(dir.string());
