@@ -124,6 +124,7 @@ struct StagedFit {
   Parameters before_last;              // what the last stage started from
   std::vector<ExperimentCost> before;  // the first fitted stage's costs at its start
   double cost_before = 0;
+  bool first_fit_windowed = false;   // `before` and `cost_before` are windows'
   bool from_screened_start = false;  // else from the caller's start
 };
 
@@ -150,6 +151,7 @@ StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spe
     if (first_fit) {
       out.before = r.fitted;
       out.cost_before = r.initial_cost;
+      out.first_fit_windowed = stages[k].windows;
       first_fit = false;
     }
     if (!r.has_values()) {
@@ -215,6 +217,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const bool given_has_values = fit.result.has_values();
   const Parameters given_before_last = fit.before_last;
   std::string screen_report, robust_report, windowed_report;
+  std::string* kept_report = nullptr;  // the report of the later attempt kept, if any
   int screened_candidates = 0;
   // Keeps `candidate` when it is Better; the iterations add up either way.
   const auto keep_better = [&fit](StagedFit&& candidate) {
@@ -251,7 +254,9 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       screened = true;
       StagedFit from_screened = FitStages(screened_start, unit, spec, stages, options);
       from_screened.from_screened_start = true;
-      if (!keep_better(std::move(from_screened))) {
+      if (keep_better(std::move(from_screened))) {
+        kept_report = &screen_report;
+      } else {
         screen_report += "; not kept: the fit from the given start ends lower";
       }
       // Not explained from the best candidate either: the next-best ones.
@@ -262,6 +267,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
         StagedFit from_alternative = FitStages(alternative, unit, spec, stages, options);
         from_alternative.from_screened_start = true;
         if (keep_better(std::move(from_alternative))) {
+          kept_report = &screen_report;
           kept = tried;
           screened_start = std::move(alternative);
         }
@@ -277,21 +283,22 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   // One more fit from the screened start (the given one when the screen
   // moved nothing) through `fit_stages`, kept when Better; its one-line report.
   const auto refit = [&](const char* what, const std::vector<FitStage>& fit_stages,
-                         bool robust_runs) {
+                         bool robust_runs, std::string* report) {
     const double before = fit.result.reduced_chi_square;
     StagedFit candidate = FitStages(screened_start, unit, spec, fit_stages, options, robust_runs);
     candidate.from_screened_start = screened;
     const double after = candidate.result.reduced_chi_square;
     const bool kept = keep_better(std::move(candidate));
+    if (kept) kept_report = report;
     char line[200];
     std::snprintf(line, sizeof(line), "%s: median reduced chi-square %.3g against %.3g, %s", what,
                   after, before, kept ? "kept" : "not kept");
-    return std::string(line);
+    *report = line;
   };
   if (!explained() && options.robust_refit) {
     // Still not explained: a run the model cannot follow may be dragging the
     // others. Each run through a Cauchy loss.
-    robust_report = refit("robust refit (each run through a Cauchy loss)", stages, true);
+    refit("robust refit (each run through a Cauchy loss)", stages, true, &robust_report);
   }
   if (!explained() && options.windowed_refit && !stages.back().windows) {
     // Still not explained: the last stage first by multiple shooting.
@@ -302,8 +309,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     FitStage shooting = stages.back();
     shooting.windows = true;
     windowed.insert(windowed.end() - 1, shooting);
-    windowed_report =
-        refit("windowed refit (the last stage by multiple shooting first)", windowed, false);
+    refit("windowed refit (the last stage by multiple shooting first)", windowed, false,
+          &windowed_report);
   }
   RefineResult& r = fit.result;
   if (!explained() && r.has_values() && options.rescue_starts > 0) {
@@ -326,11 +333,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     if (Better(rescue, r)) {
       rescue.replay_report = r.replay_report;
       r = rescue;
-      if (!windowed_report.empty())
-        windowed_report += "; a rescue start then ended lower";
-      else if (!robust_report.empty())
-        robust_report += "; a rescue start then ended lower";
-      if (fit.from_screened_start) screen_report += "; a rescue start then ended lower";
+      if (kept_report != nullptr) *kept_report += "; a rescue start then ended lower";
     }
     r.rescue_starts = tried;
     r.iterations = iterations;
@@ -340,7 +343,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   // A windowed stage's costs are windows': report whole runs, as validated
   // (and at the caller's start when friction was replayed first or the kept
   // fit started elsewhere).
-  if (stages.front().windows || stages.front().friction_replay || fit.from_screened_start) {
+  if (fit.first_fit_windowed || stages.front().friction_replay || fit.from_screened_start) {
     before = WholeRunCosts(start, unit, spec, options);
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;

@@ -111,20 +111,19 @@ void WidenByStartDisagreement(const Parameters& start, RefineResult* r) {
     const auto start_error = start.uncertainty.find(c.path);
     if (start_error == start.uncertainty.end()) continue;
     const double difference = c.value - c.start;
-    const double chi2 =
-        difference * difference /
-        (c.standard_error * c.standard_error + start_error->second * start_error->second);
+    const double se2 = c.standard_error * c.standard_error;
+    const double start2 = start_error->second * start_error->second;
+    const double chi2 = difference * difference / (se2 + start2);
     if (!(chi2 > 1.0)) continue;
-    // An experiment of its own (the valve staircase, the tube tests): the
-    // excess of the difference over both errors is a between-method variance
-    // added to the refined one (DerSimonian-Laird's tau^2). The friction
-    // replay reads the same stroke logs: the scale factor only.
-    const bool independent = c.path.rfind("valve.", 0) == 0 || c.path.rfind("pipeline.", 0) == 0;
+    // An experiment of its own (the valve staircase, the tube tests, any
+    // coefficient but friction): the excess of the difference over both
+    // errors is a between-method variance added to the refined one
+    // (DerSimonian-Laird's tau^2). The friction replay reads the same stroke
+    // logs: the scale factor only.
+    const bool independent = c.path.rfind("friction.", 0) != 0;
     const double scale =
-        independent
-            ? std::sqrt(difference * difference - start_error->second * start_error->second) /
-                  c.standard_error
-            : std::sqrt(chi2);
+        independent ? std::sqrt(1.0 + std::max(0.0, difference * difference - se2 - start2) / se2)
+                    : std::sqrt(chi2);
     c.standard_error *= scale;
     r->params.uncertainty[c.path] = c.standard_error;
     if (with_covariance) {

@@ -193,12 +193,14 @@ TEST(RunClusteredErrorsTest, ACoefficientAtABoundHasNoStandardError) {
 // grows by sqrt(20) (the PDG scale factor), its covariance row and column
 // with it. A coefficient within its errors of the start, one at a bound and
 // one the start carries no error for are left as they are.
-// "a" and "b" stand for friction (the scale factor), "pipeline.delta" for
-// an experiment of its own (the between-method variance).
+// Friction against the replay of the same logs (the scale factor);
+// pipeline.delta against the tube tests, an experiment of its own (the
+// between-method variance).
 TEST(StartDisagreementTest, DisagreeingExperimentsWidenTheRefinedError) {
   RefineResult r;
   Parameters start;
-  const char* paths[] = {"a", "b", "c", "d", "pipeline.delta"};
+  const char* paths[] = {"friction.positive.Fs", "friction.positive.Fd", "friction.positive.b",
+                         "friction.positive.vs", "pipeline.delta"};
   const double values[] = {10.0, 5.05, 3.0, 2.0, 10.0}, starts[] = {9.0, 5.0, 1.0, 1.0, 9.0};
   for (int i = 0; i < 5; ++i) {
     FittedCoefficient c;
@@ -210,13 +212,13 @@ TEST(StartDisagreementTest, DisagreeingExperimentsWidenTheRefinedError) {
     r.params.uncertainty[paths[i]] = 0.1;
   }
   r.coefficients[2].at_bound = true;
-  start.uncertainty = {{"a", 0.2}, {"b", 0.2}, {"c", 0.2}, {"pipeline.delta", 0.2}};
+  start.uncertainty = {{paths[0], 0.2}, {paths[1], 0.2}, {paths[2], 0.2}, {paths[4], 0.2}};
   r.covariance = Eigen::MatrixXd::Constant(5, 5, 0.005);
   r.covariance.diagonal().setConstant(0.01);
   WidenByStartDisagreement(start, &r);
   // chi2 = 1 / (0.01 + 0.04) = 20: scaled by sqrt(20).
   EXPECT_NEAR(r.coefficients[0].standard_error, 0.1 * std::sqrt(20.0), 1e-12);
-  EXPECT_NEAR(r.params.uncertainty.at("a"), 0.1 * std::sqrt(20.0), 1e-12);
+  EXPECT_NEAR(r.params.uncertainty.at(paths[0]), 0.1 * std::sqrt(20.0), 1e-12);
   EXPECT_NEAR(r.covariance(0, 0), 0.01 * 20.0, 1e-12);
   EXPECT_NEAR(r.covariance(0, 1), 0.005 * std::sqrt(20.0), 1e-12);
   EXPECT_NEAR(r.covariance(1, 0), 0.005 * std::sqrt(20.0), 1e-12);
@@ -227,6 +229,7 @@ TEST(StartDisagreementTest, DisagreeingExperimentsWidenTheRefinedError) {
   EXPECT_NEAR(r.params.uncertainty.at("pipeline.delta"), widened, 1e-12);
   EXPECT_NEAR(r.covariance(4, 4), widened * widened, 1e-12);
   EXPECT_NEAR(r.covariance(4, 1), 0.005 * widened / 0.1, 1e-12);
+  EXPECT_NEAR(r.covariance(0, 4), 0.005 * std::sqrt(20.0) * widened / 0.1, 1e-12);
   EXPECT_GT(widened, 0.1 * std::sqrt(20.0));
   for (int i = 1; i < 4; ++i) {
     EXPECT_EQ(r.coefficients[i].standard_error, 0.1) << paths[i];

@@ -72,6 +72,7 @@ TEST(RefineRobustRefitTest, OneRunTheModelCannotFollowDoesNotDragTheOthers) {
 
   RefineOptions plain_options;
   plain_options.robust_refit = false;
+  plain_options.windowed_refit = false;  // the robust refit alone against the plain fit
   const RefineResult plain = Refine(c.truth, c.unit, spec, plain_options);
   std::cout << plain.BriefReport();
   EXPECT_EQ(plain.status, FitStatus::kNotExplained);

@@ -63,7 +63,6 @@ TEST(RefineWindowedRefitTest, ALightRodLoggedAt500HzIsFoundByMultipleShooting) {
   // Without it: the plain, screened, robust and rescue fits all stall.
   const RefineResult without = refine(false);
   EXPECT_EQ(without.status, FitStatus::kNotExplained);
-  EXPECT_TRUE(without.windowed_report.empty());
 }
 
 }  // namespace

@@ -79,8 +79,8 @@ struct RefineOptions {
   // where whole runs already find the basin, the windowed stage can lead
   // elsewhere (docs/refinement.md). The lower median is kept.
   bool windowed_refit = true;
-  // When the verdict still fails (after the screen and the robust refit
-  // below): this many more
+  // When the verdict still fails (after the screen, the robust and the
+  // windowed refit above): this many more
   // starts of the last stage, drawn (Latin hypercube) from a trust box around
   // the given start (the component fits): each free parameter
   // within a factor (1 +- w) of its start value, w the larger of rescue_box
