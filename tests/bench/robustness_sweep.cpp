@@ -8,6 +8,7 @@
 //   robustness_sweep N [--seed S] [--jobs J] [--min-units K] [--keep DIR]
 //                    [--min-units-valve-tube K]
 //                    [--start-prior on|off] [--start identify|truth]
+//                    [--held-out-probe K]
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
@@ -15,6 +16,10 @@
 // --min-units-valve-tube K: the same for K_vp and delta only (what the suite
 // gates on today: docs/identification.md). --start truth: refine from the
 // true parameters instead of identify's (how far starts are the gap).
+// --held-out-probe K: per unit, K friction sets drawn within half the
+// issue's tolerances around the truth (all else true) are validated on the
+// held-out runs: how many pass the held-out rule (is that rule consistent
+// with the tolerances on this unit?).
 #include <unistd.h>
 
 #include <algorithm>
@@ -170,6 +175,19 @@ bool Within(double value, double truth, double fraction, double floor) {
   return std::fabs(value - truth) <= std::max(fraction * std::fabs(truth), floor);
 }
 
+// The friction tolerances: within `fraction` of the truth or
+// `floor` (SI), whichever is larger.
+struct FrictionTolerance {
+  const char* name;
+  double StribeckParams::*member;
+  double fraction, floor;
+};
+const FrictionTolerance kFrictionTolerances[] = {
+    {"Fs", &StribeckParams::static_force_N, 0.05, 0.1},
+    {"Fd", &StribeckParams::dynamic_force_N, 0.05, 0.1},
+    {"b", &StribeckParams::viscous_N_s_per_m, 0.15, 0.5},
+    {"vs", &StribeckParams::stribeck_velocity_m_per_s, 0.25, 1e-3}};
+
 // Per checked coefficient: is `fit` within the tolerance of `t`?
 std::map<std::string, bool> Check(const Parameters& fit, const Parameters& t, double step_V) {
   std::map<std::string, bool> ok;
@@ -179,14 +197,51 @@ std::map<std::string, bool> Check(const Parameters& fit, const Parameters& t, do
   for (const auto& [prefix, f, real] :
        {std::make_tuple("pos.", &fit.friction.positive, &t.friction.positive),
         std::make_tuple("neg.", &fit.friction.negative, &t.friction.negative)}) {
-    const std::string p = prefix;
-    ok[p + "Fs"] = Within(f->static_force_N, real->static_force_N, 0.05, 0.1);
-    ok[p + "Fd"] = Within(f->dynamic_force_N, real->dynamic_force_N, 0.05, 0.1);
-    ok[p + "b"] = Within(f->viscous_N_s_per_m, real->viscous_N_s_per_m, 0.15, 0.5);
-    ok[p + "vs"] =
-        Within(f->stribeck_velocity_m_per_s, real->stribeck_velocity_m_per_s, 0.25, 1e-3);
+    for (const FrictionTolerance& c : kFrictionTolerances)
+      ok[std::string(prefix) + c.name] = Within(f->*c.member, real->*c.member, c.fraction, c.floor);
   }
   return ok;
+}
+
+// The held-out rule: every validation run's x RMSE with `fit` at
+// most twice the truth's plus 0.05 mm. The worst run (by its share of its
+// limit) into worst_mm and limit_mm.
+bool HeldOutRule(const ValidationReport& at_truth, const ValidationReport& at_fit, double* worst_mm,
+                 double* limit_mm) {
+  bool ok = true;
+  for (std::size_t k = 0; k < at_fit.experiments.size(); ++k) {
+    const double got = at_fit.experiments[k].channels.at("x").rmse;
+    const double limit = 2 * at_truth.experiments[k].channels.at("x").rmse + 0.05e-3;
+    if (k == 0 || got / limit > *worst_mm / std::max(*limit_mm, 1e-12)) {
+      *worst_mm = got * 1e3;
+      *limit_mm = limit * 1e3;
+    }
+    ok = ok && got <= limit;
+  }
+  return ok;
+}
+
+// How consistent the held-out rule is with the coefficient tolerances:
+// `sets` friction sets, each coefficient drawn uniformly within
+// `fraction` of its tolerance around the truth (everything else true),
+// validated on the held-out runs; how many pass the rule.
+int HeldOutProbe(const Parameters& truth, const Unit& unit, const ValidationOptions& v,
+                 const ValidationReport& at_truth, int sets, double fraction, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  int pass = 0;
+  for (int s = 0; s < sets; ++s) {
+    Parameters p = truth;
+    for (StribeckParams* f : {&p.friction.positive, &p.friction.negative}) {
+      for (const FrictionTolerance& c : kFrictionTolerances) {
+        const double t = f->*c.member, w = fraction * std::max(c.fraction * t, c.floor);
+        f->*c.member = std::max(c.member == &StribeckParams::stribeck_velocity_m_per_s ? 1e-4 : 0.0,
+                                Uniform(&rng, t - w, t + w));
+      }
+    }
+    double worst = 0, limit = 0;
+    pass += HeldOutRule(at_truth, ValidateUnit(p, unit, v), &worst, &limit);
+  }
+  return pass;
 }
 
 struct UnitResult {
@@ -197,13 +252,14 @@ struct UnitResult {
   double chi_square = NAN, truth_chi_square = NAN, identify_s = 0, refine_s = 0;
   double held_out_mm = 0, held_out_limit_mm = 0;  // worst validation run, and its limit
   bool held_out_ok = false;
+  int probe_pass = -1;  // --held-out-probe: friction sets that pass the rule
   int errors_checked = 0, errors_within_3 = 0;
   std::string outside_3;  // the refined coefficients farther than 3 SE: path (z)
   std::string failure;
 };
 
 UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& scratch, bool keep,
-                   const RefineOptions& refine_options, bool start_truth) {
+                   const RefineOptions& refine_options, bool start_truth, int probe_sets) {
   UnitResult out;
   char id[32];
   std::snprintf(id, sizeof(id), "sweep-%02d", index);
@@ -256,15 +312,9 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     for (const auto& e : unit.experiments)
       if (e.entry.kind == ExperimentKind::kValidation) v.experiment_ids.push_back(e.entry.id);
     const ValidationReport at_truth = ValidateUnit(t, unit, v), at_fit = ValidateUnit(fit, unit, v);
-    out.held_out_ok = true;
-    for (std::size_t k = 0; k < at_fit.experiments.size(); ++k) {
-      const double got = at_fit.experiments[k].channels.at("x").rmse;
-      const double limit = 2 * at_truth.experiments[k].channels.at("x").rmse + 0.05e-3;
-      if (got / limit > out.held_out_mm / std::max(out.held_out_limit_mm, 1e-12) || k == 0) {
-        out.held_out_mm = got * 1e3;
-        out.held_out_limit_mm = limit * 1e3;
-      }
-      out.held_out_ok = out.held_out_ok && got <= limit;
+    out.held_out_ok = HeldOutRule(at_truth, at_fit, &out.held_out_mm, &out.held_out_limit_mm);
+    if (probe_sets > 0) {
+      out.probe_pass = HeldOutProbe(t, unit, v, at_truth, probe_sets, 0.5, seed + index);
     }
     if (!keep) std::filesystem::remove_all(dir);
   } catch (const std::exception& e) {
@@ -287,12 +337,12 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K] "
                  "[--min-units-valve-tube K] [--keep DIR] [--start-prior on|off] "
-                 "[--start identify|truth]\n";
+                 "[--start identify|truth] [--held-out-probe K]\n";
     return 2;
   }
   const int n = std::atoi(argv[1]);
   std::uint64_t seed = 12;
-  int jobs = 1, min_units = -1, min_units_valve_tube = -1;
+  int jobs = 1, min_units = -1, min_units_valve_tube = -1, probe_sets = 0;
   std::string keep;  // --keep DIR: the units are written there and kept
   RefineOptions refine_options;
   bool start_truth = false;
@@ -310,6 +360,8 @@ int main(int argc, char** argv) {
       min_units = std::atoi(argv[i + 1]);
     else if (flag == "--min-units-valve-tube")
       min_units_valve_tube = std::atoi(argv[i + 1]);
+    else if (flag == "--held-out-probe")
+      probe_sets = std::atoi(argv[i + 1]);
     else if (flag == "--keep")
       keep = argv[i + 1];
     else if (flag == "--start" && (value == "identify" || value == "truth"))
@@ -324,8 +376,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (n < 1 || jobs < 1) {
-    std::cerr << "N and --jobs must be >= 1\n";
+  if (n < 1 || jobs < 1 || probe_sets < 0) {
+    std::cerr << "N and --jobs must be >= 1, --held-out-probe >= 0\n";
     return 2;
   }
   const std::filesystem::path scratch = keep.empty()
@@ -339,7 +391,8 @@ int main(int argc, char** argv) {
   for (int w = 0; w < jobs; ++w) {
     workers.emplace_back([&] {
       for (int k = next++; k < n; k = next++) {
-        results[k] = RunUnit(seed, k, scratch, !keep.empty(), refine_options, start_truth);
+        results[k] =
+            RunUnit(seed, k, scratch, !keep.empty(), refine_options, start_truth, probe_sets);
         const UnitResult& r = results[k];
         std::lock_guard<std::mutex> lock(print);
         std::printf("%s: %s\n", r.id.c_str(), r.summary.c_str());
@@ -363,6 +416,10 @@ int main(int argc, char** argv) {
             r.held_out_limit_mm, r.held_out_ok ? "" : " MISSED", r.errors_within_3,
             r.errors_checked, r.identify_s, r.refine_s);
         if (!r.outside_3.empty()) std::printf("  outside 3 SE (z):%s\n", r.outside_3.c_str());
+        if (r.probe_pass >= 0) {
+          std::printf("  held-out probe: %d/%d friction sets within half the tolerances pass\n",
+                      r.probe_pass, probe_sets);
+        }
         std::fflush(stdout);
       }
     });
@@ -398,6 +455,19 @@ int main(int argc, char** argv) {
     refine.push_back(r.refine_s);
   }
   std::printf("  held-out x RMSE <= 2 x truth's + 0.05 mm: %d/%d\n", held, n);
+  if (probe_sets > 0) {
+    int pass = 0, most = 0, few = 0;
+    for (const auto& r : results) {
+      if (!r.failure.empty()) continue;
+      pass += r.probe_pass;
+      most += 10 * r.probe_pass >= 9 * probe_sets;
+      few += 10 * r.probe_pass <= 2 * probe_sets;
+    }
+    std::printf(
+        "  held-out probe (friction within half the tolerances, all else true): %d/%d sets pass; "
+        "units where at least 90 %% pass: %d, at most 20 %%: %d\n",
+        pass, n * probe_sets, most, few);
+  }
   std::printf("  refined coefficients within 3 standard errors: %d/%d (%.0f %%)\n", within, checked,
               checked ? 100.0 * within / checked : 0.0);
   std::printf("  refinement verdict 'explained': %d/%d\n", explained, n);
