@@ -4,8 +4,10 @@
 # by pneumaid's synthetic rig from the seed), each identified, refined and
 # validated; prints per coefficient the share within tolerance.
 #   scripts/sweep.sh N [--seed S] [--jobs J] [--min-units K] [--keep DIR]
+#                      [--start identify|truth] [--held-out-probe K] ...
+# (every flag of tests/bench/robustness_sweep.cpp, passed through)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-[ $# -ge 1 ] || { echo "usage: scripts/sweep.sh N [--seed S] [--jobs J] [--min-units K] [--keep DIR]" >&2; exit 2; }
+[ $# -ge 1 ] || { echo "usage: scripts/sweep.sh N [--seed S] [--jobs J] [--min-units K] [--keep DIR] [--start identify|truth] [--held-out-probe K]" >&2; exit 2; }
 scripts/setup.sh >/dev/null
 exec build/tests/bench/robustness_sweep "$@"
