@@ -21,9 +21,14 @@ inline Unit WriteAndReadUnit(const SyntheticUnit& unit, const std::string& name)
       std::filesystem::path(::testing::TempDir()) / (name + "-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   WriteDirectoryAtomically(dir.string(), UnitFiles(unit));
-  Unit read = ReadUnit(dir.string());
-  std::filesystem::remove_all(dir);
-  return read;
+  try {
+    Unit read = ReadUnit(dir.string());
+    std::filesystem::remove_all(dir);
+    return read;
+  } catch (...) {
+    std::filesystem::remove_all(dir);  // a unit that does not read leaves nothing behind
+    throw;
+  }
 }
 
 }  // namespace pneumaid::testing
