@@ -77,16 +77,17 @@ void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const Refine
 // own for the valve and the tube) disagree by more than their errors allow,
 // chi2 = (value - start)^2 / (se^2 + se_start^2) > 1, the refined error is
 // widened. Against an experiment of its own (valve.* from the staircase,
-// pipeline.* from the tube tests: any coefficient but friction) the excess of the squared difference over
-// both variances, tau^2 = d^2 - se^2 - se_start^2, is a between-method
-// variance (DerSimonian and Laird's random effects) added to the refined
-// one: se' = sqrt(d^2 - se_start^2). Against the friction replay, which
-// reads the same stroke logs through another model, only the Particle Data
-// Group's scale factor sqrt(chi2) (never larger). A model error common to
-// all runs is invisible to the misfit's scale and to the run clusters, but
-// not to another experiment. The covariance's row and
-// column scale with it (correlations kept). Coefficients at a bound, held,
-// or without a start error are left as they are.
+// pipeline.* from the tube tests: any coefficient but friction) the excess
+// of the squared difference over both variances, tau^2 = d^2 - se^2 -
+// se_start^2, is a between-method variance (DerSimonian and Laird's random
+// effects) added to the refined one: se' = sqrt(d^2 - se_start^2). Against
+// the friction replay, which reads the same stroke logs through another
+// model, only the Particle Data Group's scale factor sqrt(chi2) (never
+// larger). A model error common to all runs is invisible to the misfit's
+// scale and to the run clusters, but not to another experiment. The
+// covariance's row and column scale with it (correlations kept).
+// Coefficients at a bound, held, or without a start error are left as they
+// are.
 void WidenByStartDisagreement(const Parameters& start, RefineResult* r);
 
 }  // namespace pneumaid::refine_internal

@@ -176,17 +176,17 @@ bool Within(double value, double truth, double fraction, double floor) {
 }
 
 // The friction tolerances: within `fraction` of the truth or
-// `floor` (SI), whichever is larger.
+// `floor` (SI), whichever is larger; `lowest`, the smallest physical value.
 struct FrictionTolerance {
   const char* name;
   double StribeckParams::*member;
-  double fraction, floor;
+  double fraction, floor, lowest;
 };
 const FrictionTolerance kFrictionTolerances[] = {
-    {"Fs", &StribeckParams::static_force_N, 0.05, 0.1},
-    {"Fd", &StribeckParams::dynamic_force_N, 0.05, 0.1},
-    {"b", &StribeckParams::viscous_N_s_per_m, 0.15, 0.5},
-    {"vs", &StribeckParams::stribeck_velocity_m_per_s, 0.25, 1e-3}};
+    {"Fs", &StribeckParams::static_force_N, 0.05, 0.1, 0},
+    {"Fd", &StribeckParams::dynamic_force_N, 0.05, 0.1, 0},
+    {"b", &StribeckParams::viscous_N_s_per_m, 0.15, 0.5, 0},
+    {"vs", &StribeckParams::stribeck_velocity_m_per_s, 0.25, 1e-3, 1e-4}};
 
 // Per checked coefficient: is `fit` within the tolerance of `t`?
 std::map<std::string, bool> Check(const Parameters& fit, const Parameters& t, double step_V) {
@@ -234,8 +234,7 @@ int HeldOutProbe(const Parameters& truth, const Unit& unit, const ValidationOpti
     for (StribeckParams* f : {&p.friction.positive, &p.friction.negative}) {
       for (const FrictionTolerance& c : kFrictionTolerances) {
         const double t = f->*c.member, w = fraction * std::max(c.fraction * t, c.floor);
-        f->*c.member = std::max(c.member == &StribeckParams::stribeck_velocity_m_per_s ? 1e-4 : 0.0,
-                                Uniform(&rng, t - w, t + w));
+        f->*c.member = std::max(c.lowest, Uniform(&rng, t - w, t + w));
       }
     }
     double worst = 0, limit = 0;
