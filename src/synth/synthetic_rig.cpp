@@ -113,6 +113,35 @@ class RigBuilder {
  private:
   double Period() const { return 1.0 / protocol_.sample_rate_Hz; }
 
+  // The first sample time at or after t, as SampleTimes writes it. A t that
+  // is a sample time to round-off is kept when at or before it (that sample
+  // logs the new value either way), else moved onto it.
+  double SampleClock(double t_s) const {
+    const double rate = protocol_.sample_rate_Hz;
+    const double samples = t_s * rate, nearest = std::round(samples);
+    if (std::fabs(samples - nearest) < 1e-6) return samples <= nearest ? t_s : nearest / rate;
+    return std::ceil(samples) / rate;
+  }
+
+  // The rig's controller changes its output at sample instants only (as it
+  // ends a stroke leg on the next sample): a command time is moved to the
+  // first sample at or after it, so that the logged u changes where the
+  // command did. Knots that land on one sample keep the later value.
+  CommandSignal OnSampleClock(const CommandSignal& command) const {
+    CommandSignal out;
+    out.initial_V = command.initial_V;
+    for (std::size_t i = 0; i < command.time_s.size(); ++i) {
+      const double t = SampleClock(command.time_s[i]);
+      if (!out.time_s.empty() && t <= out.time_s.back()) {
+        out.value_V.back() = command.value_V[i];
+        continue;
+      }
+      out.time_s.push_back(t);
+      out.value_V.push_back(command.value_V[i]);
+    }
+    return out;
+  }
+
   SensorModel Sensor(const std::string& name) const {
     const auto found = protocol_.sensors.find(name);
     return found == protocol_.sensors.end() ? SensorModel{} : found->second;
@@ -305,7 +334,7 @@ class RigBuilder {
   Trajectory RunLegs(const std::vector<double>& levels, CommandSignal* command) const {
     const double half = 0.5 * truth_.cylinder.stroke_m;
     const double limit = half - protocol_.stroke_margin_m;
-    std::vector<std::pair<double, double>> knots = {{0.05, levels.front()}};
+    std::vector<std::pair<double, double>> knots = {{SampleClock(0.05), levels.front()}};
     for (std::size_t leg = 0; leg < levels.size(); ++leg) {
       const double start = knots.back().first;
       const double horizon = start + protocol_.stroke_max_leg_s;
@@ -329,7 +358,7 @@ class RigBuilder {
   RigLog ActuatorRun(const Manifest& manifest, const std::string& id, ExperimentKind kind,
                      const ActuatorCommand& spec, std::size_t index) const {
     std::uint64_t rng = StreamSeed(seed_, index);
-    CommandSignal command = spec.fixed;
+    CommandSignal command = OnSampleClock(spec.fixed);
     const Trajectory run = spec.leg_levels_V.empty() ? Run(command, spec.duration_s)
                                                      : RunLegs(spec.leg_levels_V, &command);
     const double half = 0.5 * truth_.cylinder.stroke_m;
