@@ -14,6 +14,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
+#include "provenance_map.h"
 #include "yaml_reader.h"
 
 namespace pneumaid {
@@ -329,8 +330,10 @@ std::string ParamsToYaml(const Parameters& params) {
   YAML::Node uncertainty = params.uncertainty.empty() ? FlowMap() : YAML::Node(YAML::NodeType::Map);
   for (const auto& [path, value] : params.uncertainty) uncertainty[path] = Scalar(value);
   root["uncertainty"] = uncertainty;
-  YAML::Node provenance = YAML::Load(params.provenance_yaml);
-  root["provenance"] = provenance.IsMap() ? provenance : FlowMap();
+  // A set built in code may carry any text: what is not a mapping (or not
+  // YAML at all) is kept under `given`, as every writer of an entry does.
+  YAML::Node provenance = ProvenanceMap(params.provenance_yaml);
+  root["provenance"] = provenance.size() == 0 ? FlowMap() : provenance;
   YAML::Emitter emitter;
   emitter << root;
   return std::string(emitter.c_str()) + "\n";

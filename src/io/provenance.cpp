@@ -1,5 +1,7 @@
 #include "pneumaid/io/provenance.h"
 
+#include <stdexcept>
+
 #include "provenance_map.h"
 
 namespace pneumaid {
@@ -27,6 +29,8 @@ std::string WithProvenanceEntry(const std::string& provenance, const std::string
   out.SetMapFormat(YAML::Flow);
   out.SetSeqFormat(YAML::Flow);
   out << root;
+  // yaml-cpp reports an emitter error in its state, not by throwing.
+  if (!out.good()) throw std::logic_error("provenance entry " + key + ": " + out.GetLastError());
   return out.c_str();
 }
 

@@ -50,6 +50,28 @@ TEST(ParamsYamlTest, RoundTripIsExact) {
   EXPECT_NE(ParamsToYaml(back).find("seed paper, Section 3"), std::string::npos);
 }
 
+// A set built in code may carry provenance that is free text, or not YAML at
+// all: it is written under `given` (it used to be dropped, or to throw
+// yaml-cpp's parser error out of SaveParams), and what the loader reads back
+// is a mapping again.
+TEST(ParamsYamlTest, ProvenanceThatIsNotAMappingIsWrittenUnderGiven) {
+  Parameters p = LoadParams(kConfigs + "paper.yaml");
+  for (const std::string text : {"measured on rig 3", "[unbalanced", "{a: 1}", ""}) {
+    p.provenance_yaml = text;
+    std::string yaml;
+    ASSERT_NO_THROW(yaml = ParamsToYaml(p)) << text;
+    const Parameters back = ParamsFromYaml(yaml, "provenance");
+    if (text == "{a: 1}") {
+      EXPECT_EQ(back.provenance_yaml, "{a: 1}");
+    } else if (text.empty()) {
+      EXPECT_NE(yaml.find("provenance: {}"), std::string::npos);
+    } else {
+      EXPECT_NE(back.provenance_yaml.find("given"), std::string::npos) << back.provenance_yaml;
+      EXPECT_NE(back.provenance_yaml.find(text), std::string::npos) << back.provenance_yaml;
+    }
+  }
+}
+
 struct BadCase {
   const char* name;
   const char* find;     // text in paper.yaml to replace
