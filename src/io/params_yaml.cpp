@@ -9,6 +9,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
@@ -336,6 +337,8 @@ std::string ParamsToYaml(const Parameters& params) {
   root["provenance"] = provenance.size() == 0 ? FlowMap() : provenance;
   YAML::Emitter emitter;
   emitter << root;
+  // yaml-cpp reports an emitter error in its state, not by throwing.
+  if (!emitter.good()) throw std::logic_error("parameter set: " + emitter.GetLastError());
   return std::string(emitter.c_str()) + "\n";
 }
 

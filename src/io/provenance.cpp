@@ -17,7 +17,11 @@ YAML::Node ProvenanceMap(const std::string& provenance) {
   }
   if (root.IsMap()) return root;
   YAML::Node kept(YAML::NodeType::Map);
-  if (root.IsDefined() && !root.IsNull()) kept["given"] = root;
+  if (root.IsDefined() && !root.IsNull()) {
+    kept["given"] = root;
+  } else if (provenance.find_first_not_of(" \t\r\n") != std::string::npos) {
+    kept["given"] = provenance;  // text YAML reads as null ("~", "null"): kept as written
+  }
   return kept;
 }
 

@@ -113,20 +113,24 @@ class RigBuilder {
  private:
   double Period() const { return 1.0 / protocol_.sample_rate_Hz; }
 
-  // The first sample time at or after t, as SampleTimes writes it. A t that
-  // is a sample time to round-off is kept when at or before it (that sample
-  // logs the new value either way), else moved onto it.
+  // The first sample time at or after t, as SampleTimes writes it. A t within
+  // round-off of a sample time is kept when at or before it (that sample
+  // logs the new value either way; the simulator applies a knot at or before
+  // an output time), else moved onto it.
   double SampleClock(double t_s) const {
     const double rate = protocol_.sample_rate_Hz;
-    const double samples = t_s * rate, nearest = std::round(samples);
-    if (std::fabs(samples - nearest) < 1e-6) return samples <= nearest ? t_s : nearest / rate;
-    return std::ceil(samples) / rate;
+    const double nearest = std::round(t_s * rate);
+    if (std::fabs(t_s * rate - nearest) < 1e-6) {
+      const double sample_s = nearest / rate;
+      return t_s <= sample_s ? t_s : sample_s;
+    }
+    return std::ceil(t_s * rate) / rate;
   }
 
   // The rig's controller changes its output at sample instants only (as it
   // ends a stroke leg on the next sample): a command time is moved to the
   // first sample at or after it, so that the logged u changes where the
-  // command did. Knots that land on one sample keep the later value.
+  // command did. A knot moved onto the sample of an earlier one replaces it.
   CommandSignal OnSampleClock(const CommandSignal& command) const {
     CommandSignal out;
     out.initial_V = command.initial_V;
@@ -337,7 +341,7 @@ class RigBuilder {
     std::vector<std::pair<double, double>> knots = {{SampleClock(0.05), levels.front()}};
     for (std::size_t leg = 0; leg < levels.size(); ++leg) {
       const double start = knots.back().first;
-      const double horizon = start + protocol_.stroke_max_leg_s;
+      const double horizon = SampleClock(start + protocol_.stroke_max_leg_s);
       const Trajectory run = Run(StepCommand(knots), horizon);
       double end = horizon;
       for (std::size_t i = 0; i < run.size(); ++i) {

@@ -56,7 +56,7 @@ TEST(ParamsYamlTest, RoundTripIsExact) {
 // is a mapping again.
 TEST(ParamsYamlTest, ProvenanceThatIsNotAMappingIsWrittenUnderGiven) {
   Parameters p = LoadParams(kConfigs + "paper.yaml");
-  for (const std::string text : {"measured on rig 3", "[unbalanced", "{a: 1}", ""}) {
+  for (const std::string text : {"measured on rig 3", "[unbalanced", "~", "{a: 1}", ""}) {
     p.provenance_yaml = text;
     std::string yaml;
     ASSERT_NO_THROW(yaml = ParamsToYaml(p)) << text;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <numeric>
@@ -100,6 +101,23 @@ TEST(SyntheticRigTest, AtALowRateTheLoggedCommandChangesWhereTheRigsDid) {
     ++replayed;
   }
   EXPECT_EQ(replayed, 3);  // the stroke, the step and the rich profile
+  // The logged command itself: the first leg starts on the first sample after
+  // 0.05 s, and each sample of the profile's ramp logs the ramp's value at
+  // that sample (a knot a round-off after its sample used to be logged one
+  // sample late).
+  const auto& stroke_u = Find(unit, "stroke-070").column("u");
+  const auto first =
+      std::find_if(stroke_u.begin(), stroke_u.end(), [](double u) { return u != 0; });
+  EXPECT_EQ(first - stroke_u.begin(), 13);  // t = 0.052 s
+  const Experiment& profile = Find(unit, "profile-1");
+  int ramp_samples = 0;
+  for (std::size_t i = 0; i < profile.column("t").size(); ++i) {
+    const double t = profile.column("t")[i];
+    if (t < 2.5 - 1e-9 || t > 4.0 - 1e-3) continue;
+    EXPECT_NEAR(profile.column("u")[i], -0.5 + (t - 2.5) / 1.5 * 1.1, 1e-5) << "t = " << t;
+    ++ramp_samples;
+  }
+  EXPECT_EQ(ramp_samples, 375);
 }
 
 TEST(SyntheticRigTest, NoisyRoundTripResidualsMatchTheDeclaredNoise) {
