@@ -199,6 +199,8 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (screened_alternatives < 0) return fail("screened_alternatives must be >= 0");
   if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");
   if (!(misfit_window_s > 0)) return fail("misfit_window_s must be > 0");
+  if (!(clustered_error_block_s >= 0)) return fail("clustered_error_block_s must be >= 0");
+  if (cost_resolution_directions < 0) return fail("cost_resolution_directions must be >= 0");
   if (!(start_prior_errors > 0) || !(start_prior_fraction > 0))
     return fail("start_prior_errors and start_prior_fraction must be > 0");
   if (!(correlation_flag > 0 && correlation_flag < 1)) {

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 namespace pneumaid::refine_internal {
 
@@ -28,6 +29,52 @@ Eigen::VectorXd ParameterScore(const EvaluationCache& at, int m) {
   return score;
 }
 
+std::vector<Eigen::VectorXd> BlockScores(const FitExperiment& e, const EvaluationCache& at, int m,
+                                         double block_s) {
+  const Eigen::Index n = static_cast<Eigen::Index>(e.measured.size());
+  const Eigen::Index channels = static_cast<Eigen::Index>(e.channels.size());
+  if (n < 2 || !(block_s > 0)) return {ParameterScore(at, m)};
+  const double span_s = e.measured.t_s.back() - e.measured.t_s.front();
+  const Eigen::Index length = std::max<Eigen::Index>(
+      1, std::lround(block_s / std::max(span_s / static_cast<double>(n - 1), 1e-12)));
+  const auto a = at.jacobian.leftCols(m);
+  const Eigen::Index k = at.jacobian.cols() - m;
+  Eigen::MatrixXd eliminate;  // A^T B (B^T B)^-1: the start offsets' share of a score
+  if (k > 0) {
+    const auto b = at.jacobian.rightCols(k);
+    const Eigen::MatrixXd cross = a.transpose() * b;
+    const Eigen::MatrixXd start = b.transpose() * b;
+    eliminate = start.ldlt().solve(cross.transpose()).transpose();
+  }
+  std::vector<Eigen::VectorXd> scores;
+  for (Eigen::Index first = 0; first < n; first += length) {
+    // A short last block joins the one before it.
+    Eigen::Index end = std::min(n, first + length);
+    if (2 * (n - end) < length) end = n;
+    Eigen::VectorXd score = Eigen::VectorXd::Zero(m);
+    Eigen::VectorXd start_score = Eigen::VectorXd::Zero(k);
+    for (Eigen::Index c = 0; c < channels; ++c) {
+      const Eigen::Index row = c * n + first, rows = end - first;
+      score += a.middleRows(row, rows).transpose() * at.residuals.segment(row, rows);
+      if (k > 0)
+        start_score += at.jacobian.rightCols(k).middleRows(row, rows).transpose() *
+                       at.residuals.segment(row, rows);
+    }
+    if (first == 0 && at.residuals.size() > channels * n) {
+      // The start priors' rows go with the first block.
+      const Eigen::Index prior = at.residuals.size() - channels * n;
+      score += a.bottomRows(prior).transpose() * at.residuals.tail(prior);
+      if (k > 0)
+        start_score +=
+            at.jacobian.rightCols(k).bottomRows(prior).transpose() * at.residuals.tail(prior);
+    }
+    if (k > 0) score -= eliminate * start_score;
+    scores.push_back(score);
+    if (end == n) break;
+  }
+  return scores;
+}
+
 void ResidualCorrelation::Add(const FitExperiment& e, const Eigen::VectorXd& residuals,
                               double weight) {
   const Eigen::Index n = static_cast<Eigen::Index>(e.measured.size());
@@ -47,7 +94,7 @@ double ResidualCorrelation::Inflation() const {
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
                                     const std::vector<double>& theta, double cost, long residuals,
                                     double correlation_inflation, double cost_resolution,
-                                    const Eigen::MatrixXd& run_meat, int runs) {
+                                    const std::vector<ClusteredMeat>& clusterings) {
   const int m = map.size();
   if (normal.rows() != m) return {};
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normal);
@@ -62,21 +109,58 @@ Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const Paramet
   const double inflation =
       std::max(1.0, 2.0 * cost / dof) * correlation_inflation + 2.0 * cost_resolution * cost;
   Eigen::MatrixXd cov = inflation * theta_cov;
-  if (runs >= 2 && run_meat.rows() == m && run_meat.cols() == m) {
-    // The sandwich holds the noise too (a correct model's scores give about
-    // N^-1 s^2), so it is not added: each parameter's error is widened to the
-    // sandwich's where that is larger, the correlations kept.
-    const Eigen::MatrixXd sandwich = theta_cov * run_meat * theta_cov * (runs / (runs - 1.0));
-    Eigen::VectorXd widen = Eigen::VectorXd::Ones(m);
+  // The sandwich holds the noise too (a correct model's scores give about
+  // N^-1 s^2), so it is not added: each parameter's error is widened to the
+  // largest sandwich's where that is larger, the correlations kept.
+  Eigen::VectorXd widen = Eigen::VectorXd::Ones(m);
+  for (const ClusteredMeat& c : clusterings) {
+    if (c.clusters < 2 || c.meat.rows() != m || c.meat.cols() != m) continue;
+    const double g = c.clusters;
+    const Eigen::MatrixXd sandwich = theta_cov * c.meat * theta_cov * (g / (g - 1.0));
     for (int j = 0; j < m; ++j) {
       if (cov(j, j) > 0 && sandwich(j, j) > cov(j, j))
-        widen[j] = std::sqrt(sandwich(j, j) / cov(j, j));
+        widen[j] = std::max(widen[j], std::sqrt(sandwich(j, j) / cov(j, j)));
     }
-    cov = widen.asDiagonal() * cov * widen.asDiagonal();
   }
+  cov = widen.asDiagonal() * cov * widen.asDiagonal();
   Eigen::VectorXd d(m);
   for (int j = 0; j < m; ++j) d[j] = map.Derivative(j, theta[j]);
   return d.asDiagonal() * cov * d.asDiagonal();
+}
+
+double StencilJitter(const std::function<double(const std::vector<double>&)>& cost,
+                     const std::vector<double>& theta, double cost_at_theta,
+                     const Eigen::MatrixXd& theta_cov, const Eigen::MatrixXd& normal,
+                     int directions) {
+  const Eigen::Index m = static_cast<Eigen::Index>(theta.size());
+  if (m == 0 || theta_cov.rows() != m || normal.rows() != m || !std::isfinite(cost_at_theta))
+    return 0;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(theta_cov);
+  if (eigen.info() != Eigen::Success) return 0;
+  const Eigen::VectorXd spread = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  const Eigen::MatrixXd root =
+      eigen.eigenvectors() * spread.asDiagonal() * eigen.eigenvectors().transpose();
+  std::mt19937_64 signs(20261124);  // the standard fixes its sequence: same stencil everywhere
+  double sum = 0;
+  int points = 0;
+  for (int d = 0; d < directions; ++d) {
+    // A corner of the unit cube, scaled to one standard deviation
+    // (Mahalanobis length 1).
+    Eigen::VectorXd corner(m);
+    for (Eigen::Index j = 0; j < m; ++j) corner[j] = (signs() & 1) ? 1.0 : -1.0;
+    const Eigen::VectorXd step = root * corner / std::sqrt(static_cast<double>(m));
+    const double predicted = 0.5 * step.dot(normal * step);
+    for (const double sign : {1.0, -1.0}) {
+      std::vector<double> at = theta;
+      for (Eigen::Index j = 0; j < m; ++j) at[j] += sign * step[j];
+      const double rise = cost(at) - cost_at_theta;
+      if (!std::isfinite(rise)) continue;
+      const double shortfall = std::max(0.0, predicted - rise);
+      sum += shortfall * shortfall;
+      ++points;
+    }
+  }
+  return points > 0 ? std::sqrt(sum / points) : 0.0;
 }
 
 void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const RefineOptions& options,

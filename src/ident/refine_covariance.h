@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "pneumaid/ident/refine.h"
@@ -23,6 +24,26 @@ Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m);
 // cannot all follow pull in different directions; the sum of the scores'
 // outer products is the meat of the run-clustered covariance.
 Eigen::VectorXd ParameterScore(const EvaluationCache& at, int m);
+
+// The scores of one experiment's time blocks of `block_s` (every channel's
+// rows of those samples; a short last block joins the one before, the start
+// priors go with the first block), each with the start offsets eliminated as
+// in ParameterScore; they sum to it. block_s <= 0: the one whole score.
+std::vector<Eigen::VectorXd> BlockScores(const FitExperiment& e, const EvaluationCache& at, int m,
+                                         double block_s);
+
+// One clustering of the scores: the sum over its clusters of score score^T
+// and their number.
+struct ClusteredMeat {
+  Eigen::MatrixXd meat;
+  int clusters = 0;
+
+  void Add(const Eigen::VectorXd& score) {
+    if (meat.size() == 0) meat = Eigen::MatrixXd::Zero(score.size(), score.size());
+    meat += score * score.transpose();
+    ++clusters;
+  }
+};
 
 // The lag-one autocorrelation of the weighted residuals, pooled over the
 // channels of every run (a channel's first sample has no predecessor; the
@@ -54,16 +75,34 @@ struct ResidualCorrelation {
 // Without that term the errors were 5 to 20 times smaller than the distance
 // to the truth on synthetic units. `normal` is J^T J of the free parameters
 // with any estimated starts eliminated.
-// Robust over runs: with `run_meat` (sum over G >= 2 runs of score score^T,
-// ParameterScore) each parameter's variance is widened to the run-clustered
-// sandwich's, N^-1 run_meat N^-1 G/(G-1), where that is larger (the
-// correlations kept): where the runs disagree about a parameter more than
-// their noise and misfit say (model error that differs from run to run) its
-// error widens. Empty on failure.
+// Robust over runs and time: for each clustering of the scores (the runs,
+// ParameterScore; the time blocks, BlockScores) with G >= 2 clusters, each
+// parameter's variance is widened to that clustered sandwich's,
+// N^-1 meat N^-1 G/(G-1), where that is larger (the correlations kept):
+// where the runs, or the stretches of one run, disagree about a parameter
+// more than their noise and misfit say (model error that differs from run
+// to run or from slide to slide) its error widens. Empty on failure.
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,
                                     const std::vector<double>& theta, double cost, long residuals,
                                     double correlation_inflation, double cost_resolution,
-                                    const Eigen::MatrixXd& run_meat = {}, int runs = 0);
+                                    const std::vector<ClusteredMeat>& clusterings = {});
+
+// How rough the cost is at the scale of the parameters' uncertainty: the
+// root mean square, over a stencil of `directions` pairs theta +- d (d one
+// standard deviation of `theta_cov` long, toward a fixed pseudo-random
+// corner), of how far the cost's rise falls short of the rise the
+// Gauss-Newton curvature predicts, 0.5 d^T `normal` d (`normal`: the runs'
+// J^T J with the starts held). A smooth cost gives about 0, and so does one
+// that rises faster than predicted (the curvature then overstates the
+// uncertainty: nothing to widen); an event-driven cost whose stick/slip
+// switches move across the stencil gives the size of its drops, and so does
+// a slope left where the fit stalled. `cost` evaluates the runs' cost at
+// theta (NaN: failed, the point is skipped); `cost_at_theta` is its value at
+// the optimum. 0 without a usable point.
+double StencilJitter(const std::function<double(const std::vector<double>&)>& cost,
+                     const std::vector<double>& theta, double cost_at_theta,
+                     const Eigen::MatrixXd& theta_cov, const Eigen::MatrixXd& normal,
+                     int directions);
 
 // Standard errors into r's parameters and uncertainty, correlations and the
 // poorly separable pairs. A coefficient at a bound gets none (its row and

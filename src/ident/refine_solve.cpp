@@ -154,6 +154,8 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     ResidualCorrelation correlation;
     double weighted_cost = 0, weighted_rows = 0;        // the runs' costs and rows, weighted
     std::map<std::string, Eigen::VectorXd> run_scores;  // J^T r summed per run
+    ClusteredMeat blocks;                               // of the runs' time blocks
+    Eigen::MatrixXd held_starts_normal = Eigen::MatrixXd::Zero(map.size(), map.size());
     for (size_t k = 0; k < experiments.size(); ++k) {
       const EvaluationCache* at_best = nullptr;
       const std::vector<double> z =
@@ -175,6 +177,8 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       correlation.Add(experiments[k], at_best->residuals, weight);
       if (normal.size() > 0) {
         normal += weight * ParameterInformation(*at_best, map.size());
+        const auto a = at_best->jacobian.leftCols(map.size());
+        held_starts_normal += weight * (a.transpose() * a);
         if (options.run_clustered_errors) {
           // One cluster per run: a window's score adds to its run's.
           const std::string& run =
@@ -182,6 +186,11 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
           Eigen::VectorXd& score = run_scores[run];
           if (score.size() == 0) score = Eigen::VectorXd::Zero(map.size());
           score += weight * ParameterScore(*at_best, map.size());
+        }
+        if (options.clustered_error_block_s > 0) {
+          for (const Eigen::VectorXd& block :
+               BlockScores(experiments[k], *at_best, map.size(), options.clustered_error_block_s))
+            blocks.Add(weight * block);
         }
       }
       if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], &r);
@@ -219,13 +228,43 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         with_prior(j, j) += slope * slope;
       }
     }
-    Eigen::MatrixXd run_meat = Eigen::MatrixXd::Zero(map.size(), map.size());
-    for (const auto& [run, score] : run_scores) run_meat += score * score.transpose();
-    Summarise(
-        ParameterCovariance(with_prior, map, p.theta, weighted_cost, std::lround(weighted_rows),
-                            correlation.Inflation(), options.stall_tolerance, run_meat,
-                            static_cast<int>(run_scores.size())),
-        map, options, &r);
+    ClusteredMeat runs;
+    for (const auto& [run, score] : run_scores) runs.Add(score);
+    const auto covariance = [&](double resolution) {
+      return ParameterCovariance(with_prior, map, p.theta, weighted_cost,
+                                 std::lround(weighted_rows), correlation.Inflation(), resolution,
+                                 {runs, blocks});
+    };
+    Eigen::MatrixXd cov = covariance(options.stall_tolerance);
+    r.cost_resolution = options.stall_tolerance;
+    if (last && options.cost_resolution_directions > 0 && cov.rows() == map.size() &&
+        r.final_cost > 0) {
+      // The cost's resolution measured where the errors reach, twice: a
+      // wider band can reach rougher cost.
+      const auto runs_cost = [&](const std::vector<double>& theta) -> double {
+        double total = 0;
+        for (size_t k = 0; k < experiments.size(); ++k) {
+          Eigen::VectorXd residuals(experiments[k].residuals());
+          const double* blocks_at[2] = {theta.data(), p.offsets[k].data()};
+          if (!p.blocks[k]->Evaluate(blocks_at, residuals.data(), nullptr)) return NAN;
+          total += 0.5 * residuals.squaredNorm();
+        }
+        return total;
+      };
+      Eigen::VectorXd slope(map.size());
+      for (int j = 0; j < map.size(); ++j) slope[j] = 1.0 / map.Derivative(j, p.theta[j]);
+      double resolution = options.stall_tolerance;
+      for (int round = 0; round < 2; ++round) {
+        const Eigen::MatrixXd theta_cov = slope.asDiagonal() * cov * slope.asDiagonal();
+        const double jitter = StencilJitter(runs_cost, p.theta, r.final_cost, theta_cov,
+                                            held_starts_normal, options.cost_resolution_directions);
+        if (!(jitter / r.final_cost > resolution)) break;
+        resolution = jitter / r.final_cost;
+        cov = covariance(resolution);
+      }
+      r.cost_resolution = resolution;
+    }
+    Summarise(cov, map, options, &r);
   }
   if (windows) r.fitted = PerRun(r.fitted, experiments);
   return r;

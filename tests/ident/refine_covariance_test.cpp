@@ -1,7 +1,8 @@
 // Refinement's uncertainty (src/ident/refine_covariance.h): the residuals'
 // lag-one autocorrelation that widens the covariance when a misfit lasts
 // many samples, the run-clustered sandwich that widens it where the runs
-// disagree, no error at a bound. Closed forms on seeded synthetic residuals.
+// disagree, the time-block-clustered one, no error at a bound, the stencil
+// that measures the cost's roughness. Closed forms on seeded synthetic residuals.
 #include "../../src/ident/refine_covariance.h"
 
 #include <gtest/gtest.h>
@@ -129,23 +130,31 @@ TEST(RunClusteredErrorsTest, TheScoreHasTheStartOffsetsEliminated) {
 // N^-1 (sum of the scores' outer products) N^-1 G / (G - 1), where that is
 // larger (in values, correlations kept); scores as the noise alone gives
 // them do not widen anything.
-TEST(RunClusteredErrorsTest, RunsThatDisagreeWidenTheErrorsToTheSandwich) {
+// Two linear parameters at theta = 0 with J^T J = [4 1; 1 2] and a cost at
+// the noise (reduced chi-square 1), white residuals, no resolution term: the
+// plain covariance is N^-1 in theta, 25 N^-1 in values.
+struct TwoParameterFit {
   const ParameterMap map = TwoLinearParameters();
   const std::vector<double> theta = {0.0, 0.0};
-  Eigen::MatrixXd normal(2, 2);
-  normal << 4, 1, 1, 2;
-  // A cost at the noise (reduced chi-square 1), white residuals, no
-  // resolution term: the plain covariance is N^-1 in theta, 25 N^-1 in values.
+  const Eigen::MatrixXd normal = (Eigen::MatrixXd(2, 2) << 4, 1, 1, 2).finished();
+  const Eigen::MatrixXd inverse = normal.inverse();
   const long rows = 1002;
   const double cost = 0.5 * (rows - 2);
-  const Eigen::MatrixXd plain = ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0);
-  const Eigen::MatrixXd inverse = normal.inverse();
+
+  Eigen::MatrixXd Covariance(const std::vector<ClusteredMeat>& clusterings = {}) const {
+    return ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0, clusterings);
+  }
+};
+
+TEST(RunClusteredErrorsTest, RunsThatDisagreeWidenTheErrorsToTheSandwich) {
+  const TwoParameterFit fit;
+  const Eigen::MatrixXd& inverse = fit.inverse;
+  const Eigen::MatrixXd plain = fit.Covariance();
   for (int i = 0; i < 2; ++i) EXPECT_NEAR(plain(i, i), 25.0 * inverse(i, i), 1e-9);
   // Two runs pulling the first parameter apart, far beyond the noise.
   Eigen::Vector2d g1(6, 0), g2(-6, 0);
   const Eigen::MatrixXd meat = g1 * g1.transpose() + g2 * g2.transpose();
-  const Eigen::MatrixXd robust =
-      ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0, meat, 2);
+  const Eigen::MatrixXd robust = fit.Covariance({{meat, 2}});
   const Eigen::MatrixXd sandwich = 25.0 * inverse * meat * inverse * 2.0;
   for (int i = 0; i < 2; ++i) {
     EXPECT_NEAR(robust(i, i), std::max(plain(i, i), sandwich(i, i)), 1e-9) << i;
@@ -156,13 +165,11 @@ TEST(RunClusteredErrorsTest, RunsThatDisagreeWidenTheErrorsToTheSandwich) {
               plain(0, 1) / std::sqrt(plain(0, 0) * plain(1, 1)), 1e-12);
   // Scores as the noise gives them: G clusters whose scores sum to zero carry
   // (G - 1) / G N in expectation, the sandwich is then N^-1: nothing widens.
-  const Eigen::MatrixXd noise =
-      ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0, 0.5 * normal, 2);
+  const Eigen::MatrixXd noise = fit.Covariance({{0.5 * fit.normal, 2}});
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j) EXPECT_NEAR(noise(i, j), plain(i, j), 1e-9);
   // One run alone is no cluster.
-  const Eigen::MatrixXd single =
-      ParameterCovariance(normal, map, theta, cost, rows, 1.0, 0.0, meat, 1);
+  const Eigen::MatrixXd single = fit.Covariance({{meat, 1}});
   EXPECT_NEAR(single(0, 0), plain(0, 0), 1e-12);
 }
 
@@ -236,6 +243,91 @@ TEST(StartDisagreementTest, DisagreeingExperimentsWidenTheRefinedError) {
     EXPECT_EQ(r.covariance(i, i), 0.01) << paths[i];
   }
   EXPECT_EQ(r.covariance(1, 2), 0.005);
+}
+
+// The time blocks' scores sum to the run's score (start offsets eliminated,
+// the start priors' rows with the first block); a short last block joins
+// the one before.
+TEST(BlockClusteredErrorsTest, TheBlocksScoresSumToTheRunsScore) {
+  const int samples = 10;  // 1 ms apart
+  const FitExperiment e = TwoChannelRun(samples);
+  std::mt19937_64 random(7);
+  std::normal_distribution<double> draw(0.0, 1.0);
+  EvaluationCache at;
+  // Two channels of 10 rows, then two prior rows; two parameters, one offset.
+  at.jacobian.resize(2 * samples + 2, 3);
+  at.residuals.resize(2 * samples + 2);
+  for (int i = 0; i < at.jacobian.rows(); ++i) {
+    for (int j = 0; j < 3; ++j) at.jacobian(i, j) = draw(random);
+    at.residuals[i] = draw(random);
+  }
+  const std::vector<Eigen::VectorXd> blocks = BlockScores(e, at, 2, 3e-3);
+  ASSERT_EQ(blocks.size(), 3u);  // samples 0-2, 3-5, 6-9
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(2);
+  for (const auto& b : blocks) sum += b;
+  const Eigen::VectorXd whole = ParameterScore(at, 2);
+  EXPECT_NEAR(sum[0], whole[0], 1e-12);
+  EXPECT_NEAR(sum[1], whole[1], 1e-12);
+  // Without offsets, a middle block is A^T r over its samples of both channels.
+  EvaluationCache plain;
+  plain.jacobian = at.jacobian.leftCols(2);
+  plain.residuals = at.residuals;
+  const Eigen::VectorXd middle = BlockScores(e, plain, 2, 3e-3)[1];
+  Eigen::VectorXd expected = Eigen::VectorXd::Zero(2);
+  for (int c = 0; c < 2; ++c) {
+    for (int i = 3; i < 6; ++i) {
+      const int row = c * samples + i;
+      expected += plain.jacobian.row(row).transpose() * plain.residuals[row];
+    }
+  }
+  EXPECT_NEAR(middle[0], expected[0], 1e-12);
+  EXPECT_NEAR(middle[1], expected[1], 1e-12);
+  // No block length: the one score.
+  EXPECT_EQ(BlockScores(e, at, 2, 0.0).size(), 1u);
+}
+
+// With two clusterings (the runs and the time blocks), each error widens to
+// the larger of the two sandwiches.
+TEST(BlockClusteredErrorsTest, EachErrorWidensToTheLargestSandwich) {
+  const TwoParameterFit fit;
+  const Eigen::MatrixXd& inverse = fit.inverse;
+  const Eigen::MatrixXd plain = fit.Covariance();
+  // The runs disagree about a, the blocks about b.
+  ClusteredMeat runs, blocks;
+  runs.Add(Eigen::Vector2d(6, 0));
+  runs.Add(Eigen::Vector2d(-6, 0));
+  for (int k = 0; k < 4; ++k) blocks.Add(Eigen::Vector2d(0, k % 2 ? 5.0 : -5.0));
+  EXPECT_EQ(blocks.clusters, 4);
+  const Eigen::MatrixXd both = fit.Covariance({runs, blocks});
+  const Eigen::MatrixXd by_runs = 25.0 * inverse * runs.meat * inverse * 2.0;
+  const Eigen::MatrixXd by_blocks = 25.0 * inverse * blocks.meat * inverse * (4.0 / 3.0);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(both(i, i), std::max({plain(i, i), by_runs(i, i), by_blocks(i, i)}), 1e-9) << i;
+  }
+}
+
+// The stencil measures how far the cost falls short of its curvature's
+// prediction one standard deviation out: nothing for a quadratic cost or one
+// that rises faster, the drop for a cost whose optimum is a spike.
+TEST(CostResolutionTest, TheStencilMeasuresTheCostsShortfall) {
+  Eigen::MatrixXd normal(2, 2);
+  normal << 4, 1, 1, 2;
+  const Eigen::MatrixXd cov = 3.0 * normal.inverse();
+  const std::vector<double> theta = {1.0, -2.0};
+  const auto quadratic = [&](const std::vector<double>& at) {
+    const Eigen::Vector2d d(at[0] - theta[0], at[1] - theta[1]);
+    return 100.0 + 0.5 * d.dot(normal * d);
+  };
+  EXPECT_NEAR(StencilJitter(quadratic, theta, 100.0, cov, normal, 3), 0.0, 1e-12);
+  const auto steeper = [&](const std::vector<double>& at) { return 2 * quadratic(at) - 100.0; };
+  EXPECT_NEAR(StencilJitter(steeper, theta, 100.0, cov, normal, 3), 0.0, 1e-12);
+  // Every point off the optimum 0.7 lower than the quadratic: a drop of 0.7.
+  const auto spike = [&](const std::vector<double>& at) { return quadratic(at) - 0.7; };
+  EXPECT_NEAR(StencilJitter(spike, theta, 100.0, cov, normal, 3), 0.7, 1e-12);
+  // Failed points are skipped; with none usable, 0.
+  const auto failing = [](const std::vector<double>&) { return NAN; };
+  EXPECT_EQ(StencilJitter(failing, theta, 100.0, cov, normal, 3), 0.0);
+  EXPECT_EQ(StencilJitter(spike, theta, 100.0, cov, normal, 0), 0.0);
 }
 
 }  // namespace

@@ -324,21 +324,50 @@ TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   }
 }
 
+// On data with model mismatch (smooth stick, the rig integrated tighter) the
+// event model's cost is rougher than its stall tolerance at the scale of the
+// errors: the stencil measures it, and the errors it widens are the same
+// fit's, never narrower, still honest (ExpectHonestErrors).
+TEST(RefineTest, TheMeasuredCostResolutionWidensTheErrorsOnAMismatchedUnit) {
+  Parameters truth = testing::HeavyHorizontalTruth();
+  truth.friction.negative = {3.0, 0.4, 6.0, 0.012};
+  const Unit unit = testing::MismatchedStrokes(truth, 23, "C", "refine_cost_resolution");
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  RefineOptions fixed;
+  fixed.cost_resolution_directions = 0;
+  const RefineResult plain = Refine(truth, unit, spec, fixed);
+  RefineOptions stencil;
+  stencil.cost_resolution_directions = 4;
+  const RefineResult measured = Refine(truth, unit, spec, stencil);
+  ASSERT_TRUE(plain.has_values() && measured.has_values());
+  EXPECT_EQ(plain.cost_resolution, fixed.stall_tolerance);
+  EXPECT_GT(measured.cost_resolution, 1.2 * fixed.stall_tolerance);
+  ASSERT_EQ(plain.coefficients.size(), measured.coefficients.size());
+  for (size_t i = 0; i < plain.coefficients.size(); ++i) {
+    const FittedCoefficient &a = plain.coefficients[i], &b = measured.coefficients[i];
+    EXPECT_EQ(a.value, b.value) << a.path;
+    EXPECT_GT(b.standard_error, a.standard_error) << a.path;
+  }
+  ExpectHonestErrors(measured, truth, spec);
+}
+
 TEST(RefineOptionsTest, IsValidNamesTheBadField) {
-  RefineOptions options;
   std::string error;
-  EXPECT_TRUE(options.IsValid(&error)) << error;
-  options.threads = 0;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("threads"), std::string::npos);
-  options = RefineOptions{};
-  options.correlation_flag = 1.5;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("correlation_flag"), std::string::npos);
-  options = RefineOptions{};
-  options.earlier_stage_stall_tolerance = -1;
-  EXPECT_FALSE(options.IsValid(&error));
-  EXPECT_NE(error.find("earlier_stage_stall_tolerance"), std::string::npos);
+  EXPECT_TRUE(RefineOptions{}.IsValid(&error)) << error;
+  const std::pair<const char*, void (*)(RefineOptions*)> bad[] = {
+      {"threads", [](RefineOptions* o) { o->threads = 0; }},
+      {"correlation_flag", [](RefineOptions* o) { o->correlation_flag = 1.5; }},
+      {"earlier_stage_stall_tolerance",
+       [](RefineOptions* o) { o->earlier_stage_stall_tolerance = -1; }},
+      {"clustered_error_block_s", [](RefineOptions* o) { o->clustered_error_block_s = -0.1; }},
+      {"cost_resolution_directions", [](RefineOptions* o) { o->cost_resolution_directions = -1; }},
+  };
+  for (const auto& [field, spoil] : bad) {
+    RefineOptions options;
+    spoil(&options);
+    EXPECT_FALSE(options.IsValid(&error)) << field;
+    EXPECT_NE(error.find(field), std::string::npos) << error;
+  }
 }
 
 }  // namespace

@@ -108,6 +108,20 @@ struct RefineOptions {
   // per run, disagree about it) where that is larger than the misfit-scaled
   // Gauss-Newton error (refine_covariance.h).
   bool run_clustered_errors = true;
+  // Standard errors robust over time too: each run's residuals cut into
+  // blocks of this length [s], each parameter's error widened to the
+  // block-clustered sandwich's where that is larger (a model error that
+  // pulls one slide's samples together is one error, not hundreds). 0: off.
+  double clustered_error_block_s = 0.2;
+  // Standard errors widened by the cost's measured roughness: after the
+  // last stage the runs' cost is evaluated on a stencil of this many pairs of
+  // points one standard error from the optimum; where it falls short of the
+  // curvature's prediction by more than stall_tolerance x cost (stick/slip
+  // switches that move, a stall on a slope) that shortfall is the fit's
+  // resolution (refine_covariance.h, StencilJitter), and measured once more
+  // at the widened errors. 2 x this many cost evaluations, twice at most.
+  // 0: the resolution is stall_tolerance.
+  int cost_resolution_directions = 1;
   // Standard errors widened where the start's own estimate disagrees: a
   // coefficient the start carries with an uncertainty (a component fit: the
   // valve staircase, the tube tests, the friction replay) and the refined
@@ -181,6 +195,10 @@ struct RefineResult : FitResult {
   // Estimated starts (FitSpec::fit_initial_pressures), last stage: how many,
   // and the largest move of an initial pressure from its logged value, in
   // the logged value's standard errors and in Pa.
+  // The cost's resolution the standard errors include, relative to the cost:
+  // stall_tolerance, or the roughness measured on the stencil when larger
+  // (RefineOptions::cost_resolution_directions).
+  double cost_resolution = 0;
   int estimated_starts = 0;
   double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
   // What a friction_replay stage found (empty without one).
