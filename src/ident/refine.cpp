@@ -422,6 +422,12 @@ std::string RefineResult::BriefReport() const {
                   estimated_starts, largest_start_offset_sigma, largest_start_offset_Pa);
     out << line;
   }
+  if (cost_resolution > 0) {
+    std::snprintf(
+        line, sizeof(line), "  standard errors include the cost's resolution, %.3g of the cost%s\n",
+        cost_resolution, cost_resolution_measured ? " (measured one standard error out)" : "");
+    out << line;
+  }
   out << CoefficientReport("  ", correlation_flag);
   for (const ExperimentCost& e : fitted) {
     std::snprintf(line, sizeof(line), "  fitted   %-16s cost %.6g -> %.6g (%ld residuals)\n",

@@ -261,6 +261,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
         if (!(jitter / r.final_cost > resolution)) break;
         resolution = jitter / r.final_cost;
         cov = covariance(resolution);
+        r.cost_resolution_measured = true;
       }
       r.cost_resolution = resolution;
     }

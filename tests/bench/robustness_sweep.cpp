@@ -8,7 +8,8 @@
 //   robustness_sweep N [--seed S] [--jobs J] [--min-units K] [--keep DIR]
 //                    [--min-units-valve-tube K]
 //                    [--start-prior on|off] [--start identify|truth]
-//                    [--held-out-probe K]
+//                    [--held-out-probe K] [--error-blocks S]
+//                    [--cost-resolution-directions K]
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
@@ -19,7 +20,10 @@
 // --held-out-probe K: per unit, K friction sets drawn within half the
 // issue's tolerances around the truth (all else true) are validated on the
 // held-out runs: how many pass the held-out rule (is that rule consistent
-// with the tolerances on this unit?).
+// with the tolerances on this unit?). --error-blocks S and
+// --cost-resolution-directions K set the refinement's options of those names
+// (RefineOptions::clustered_error_block_s, cost_resolution_directions; 0:
+// off), to measure what they give.
 #include <unistd.h>
 
 #include <algorithm>
@@ -338,7 +342,8 @@ int main(int argc, char** argv) {
   if (argc < 2) {
     std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K] "
                  "[--min-units-valve-tube K] [--keep DIR] [--start-prior on|off] "
-                 "[--start identify|truth] [--held-out-probe K]\n";
+                 "[--start identify|truth] [--held-out-probe K] [--error-blocks S] "
+                 "[--cost-resolution-directions K]\n";
     return 2;
   }
   const int n = std::atoi(argv[1]);
@@ -369,6 +374,10 @@ int main(int argc, char** argv) {
       start_truth = value == "truth";
     else if (flag == "--start-prior" && (value == "on" || value == "off"))
       refine_options.start_prior = value == "on";
+    else if (flag == "--error-blocks")
+      refine_options.clustered_error_block_s = std::atof(argv[i + 1]);
+    else if (flag == "--cost-resolution-directions")
+      refine_options.cost_resolution_directions = std::atoi(argv[i + 1]);
     else if (flag == "--start" || flag == "--start-prior") {
       std::cerr << flag << ": unknown value " << value << "\n";
       return 2;
@@ -379,6 +388,11 @@ int main(int argc, char** argv) {
   }
   if (n < 1 || jobs < 1 || probe_sets < 0) {
     std::cerr << "N and --jobs must be >= 1, --held-out-probe >= 0\n";
+    return 2;
+  }
+  std::string invalid;
+  if (!refine_options.IsValid(&invalid)) {
+    std::cerr << "refine options: " << invalid << "\n";
     return 2;
   }
   const std::filesystem::path scratch = keep.empty()

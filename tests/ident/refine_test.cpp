@@ -342,6 +342,9 @@ TEST(RefineTest, TheMeasuredCostResolutionWidensTheErrorsOnAMismatchedUnit) {
   ASSERT_TRUE(plain.has_values() && measured.has_values());
   EXPECT_EQ(plain.cost_resolution, fixed.stall_tolerance);
   EXPECT_GT(measured.cost_resolution, 1.2 * fixed.stall_tolerance);
+  EXPECT_FALSE(plain.cost_resolution_measured);
+  EXPECT_TRUE(measured.cost_resolution_measured);
+  EXPECT_NE(measured.BriefReport().find("measured one standard error out"), std::string::npos);
   ASSERT_EQ(plain.coefficients.size(), measured.coefficients.size());
   for (size_t i = 0; i < plain.coefficients.size(); ++i) {
     const FittedCoefficient &a = plain.coefficients[i], &b = measured.coefficients[i];

@@ -199,6 +199,7 @@ struct RefineResult : FitResult {
   // stall_tolerance, or the roughness measured on the stencil when larger
   // (RefineOptions::cost_resolution_directions).
   double cost_resolution = 0;
+  bool cost_resolution_measured = false;  // the stencil's, above stall_tolerance
   int estimated_starts = 0;
   double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
   // What a friction_replay stage found (empty without one).
