@@ -150,15 +150,17 @@ double StencilJitter(const std::function<double(const std::vector<double>&)>& co
     for (Eigen::Index j = 0; j < m; ++j) corner[j] = (signs() & 1) ? 1.0 : -1.0;
     const Eigen::VectorXd step = root * corner / std::sqrt(static_cast<double>(m));
     const double predicted = 0.5 * step.dot(normal * step);
+    // The pair's mean rise: a slope (a stall, the prior's pull) cancels.
+    double rise = 0;
     for (const double sign : {1.0, -1.0}) {
       std::vector<double> at = theta;
       for (Eigen::Index j = 0; j < m; ++j) at[j] += sign * step[j];
-      const double rise = cost(at) - cost_at_theta;
-      if (!std::isfinite(rise)) continue;
-      const double shortfall = std::max(0.0, predicted - rise);
-      sum += shortfall * shortfall;
-      ++points;
+      rise += 0.5 * (cost(at) - cost_at_theta);
     }
+    if (!std::isfinite(rise)) continue;
+    const double shortfall = std::max(0.0, predicted - rise);
+    sum += shortfall * shortfall;
+    ++points;
   }
   return points > 0 ? std::sqrt(sum / points) : 0.0;
 }

@@ -89,16 +89,19 @@ Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const Paramet
 
 // How rough the cost is at the scale of the parameters' uncertainty: the
 // root mean square, over a stencil of `directions` pairs theta +- d (d one
-// standard deviation of `theta_cov` long, toward a fixed pseudo-random
-// corner), of how far the cost's rise falls short of the rise the
-// Gauss-Newton curvature predicts, 0.5 d^T `normal` d (`normal`: the runs'
-// J^T J with the starts held). A smooth cost gives about 0, and so does one
-// that rises faster than predicted (the curvature then overstates the
-// uncertainty: nothing to widen); an event-driven cost whose stick/slip
-// switches move across the stencil gives the size of its drops, and so does
-// a slope left where the fit stalled. `cost` evaluates the runs' cost at
-// theta (NaN: failed, the point is skipped); `cost_at_theta` is its value at
-// the optimum. 0 without a usable point.
+// standard deviation of `theta_cov` long, Mahalanobis length 1, toward a
+// fixed pseudo-random corner of the unit cube), of how far the pair's mean
+// rise falls short of the rise the Gauss-Newton curvature predicts,
+// 0.5 d^T `normal` d (`normal`: the runs' J^T J with the starts held). The
+// pair's mean cancels a slope (a stall, the pull of a prior); a smooth cost
+// gives about 0, and so does one that rises faster than predicted (the
+// curvature then overstates the uncertainty: nothing to widen); an
+// event-driven cost whose stick/slip switches move across the stencil gives
+// the size of its drops, and a cost that flattens out within one standard
+// error (the curvature overstates the information) the size of the
+// shortfall. `cost` evaluates the cost at theta (NaN: failed, the pair is
+// skipped); `cost_at_theta` is its value at the optimum. 0 without a usable
+// pair.
 double StencilJitter(const std::function<double(const std::vector<double>&)>& cost,
                      const std::vector<double>& theta, double cost_at_theta,
                      const Eigen::MatrixXd& theta_cov, const Eigen::MatrixXd& normal,

@@ -156,6 +156,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     std::map<std::string, Eigen::VectorXd> run_scores;  // J^T r summed per run
     ClusteredMeat blocks;                               // of the runs' time blocks
     Eigen::MatrixXd held_starts_normal = Eigen::MatrixXd::Zero(map.size(), map.size());
+    std::vector<double> run_weight(experiments.size(), 1.0);  // the robust loss's slope, held
     for (size_t k = 0; k < experiments.size(); ++k) {
       const EvaluationCache* at_best = nullptr;
       const std::vector<double> z =
@@ -172,6 +173,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       // slope 1 / (1 + |r|^2 / a^2).
       const double weight =
           run_scale[k] > 0 ? 1.0 / (1.0 + at_best->residuals.squaredNorm() / run_scale[k]) : 1.0;
+      run_weight[k] = weight;
       weighted_cost += weight * r.fitted[k].after;
       weighted_rows += weight * static_cast<double>(experiments[k].data_rows());
       correlation.Add(experiments[k], at_best->residuals, weight);
@@ -238,28 +240,36 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     Eigen::MatrixXd cov = covariance(options.stall_tolerance);
     r.cost_resolution = options.stall_tolerance;
     if (last && options.cost_resolution_directions > 0 && cov.rows() == map.size() &&
-        r.final_cost > 0) {
-      // The cost's resolution measured where the errors reach, twice: a
-      // wider band can reach rougher cost.
+        weighted_cost > 0) {
+      // The cost the covariance describes: each run's weighted as in the
+      // information (a robust refit's runs at the loss's slope at the
+      // optimum), the starts held where they ended.
       const auto runs_cost = [&](const std::vector<double>& theta) -> double {
         double total = 0;
         for (size_t k = 0; k < experiments.size(); ++k) {
           Eigen::VectorXd residuals(experiments[k].residuals());
           const double* blocks_at[2] = {theta.data(), p.offsets[k].data()};
           if (!p.blocks[k]->Evaluate(blocks_at, residuals.data(), nullptr)) return NAN;
-          total += 0.5 * residuals.squaredNorm();
+          total += run_weight[k] * 0.5 * residuals.squaredNorm();
         }
         return total;
       };
+      // Values -> coordinates; a coordinate whose value no longer moves (a
+      // logistic rounded onto its bound) stays where it is.
       Eigen::VectorXd slope(map.size());
-      for (int j = 0; j < map.size(); ++j) slope[j] = 1.0 / map.Derivative(j, p.theta[j]);
+      for (int j = 0; j < map.size(); ++j) {
+        const double derivative = map.Derivative(j, p.theta[j]);
+        slope[j] = std::isfinite(derivative) && derivative != 0 ? 1.0 / derivative : 0.0;
+      }
+      // Measured once more at the widened errors (a wider band can reach
+      // rougher cost); at most two rounds, not iterated to a fixed point.
       double resolution = options.stall_tolerance;
       for (int round = 0; round < 2; ++round) {
         const Eigen::MatrixXd theta_cov = slope.asDiagonal() * cov * slope.asDiagonal();
-        const double jitter = StencilJitter(runs_cost, p.theta, r.final_cost, theta_cov,
+        const double jitter = StencilJitter(runs_cost, p.theta, weighted_cost, theta_cov,
                                             held_starts_normal, options.cost_resolution_directions);
-        if (!(jitter / r.final_cost > resolution)) break;
-        resolution = jitter / r.final_cost;
+        if (!(jitter / weighted_cost > resolution)) break;
+        resolution = jitter / weighted_cost;
         cov = covariance(resolution);
         r.cost_resolution_measured = true;
       }

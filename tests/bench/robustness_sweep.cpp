@@ -374,11 +374,18 @@ int main(int argc, char** argv) {
       start_truth = value == "truth";
     else if (flag == "--start-prior" && (value == "on" || value == "off"))
       refine_options.start_prior = value == "on";
-    else if (flag == "--error-blocks")
-      refine_options.clustered_error_block_s = std::atof(argv[i + 1]);
-    else if (flag == "--cost-resolution-directions")
-      refine_options.cost_resolution_directions = std::atoi(argv[i + 1]);
-    else if (flag == "--start" || flag == "--start-prior") {
+    else if (flag == "--error-blocks" || flag == "--cost-resolution-directions") {
+      char* end = nullptr;
+      const double number = std::strtod(value.c_str(), &end);
+      if (end == value.c_str() || *end != '\0') {
+        std::cerr << flag << ": not a number: " << value << "\n";
+        return 2;
+      }
+      if (flag == "--error-blocks")
+        refine_options.clustered_error_block_s = number;
+      else
+        refine_options.cost_resolution_directions = static_cast<int>(number);
+    } else if (flag == "--start" || flag == "--start-prior") {
       std::cerr << flag << ": unknown value " << value << "\n";
       return 2;
     } else {

@@ -307,8 +307,9 @@ TEST(BlockClusteredErrorsTest, EachErrorWidensToTheLargestSandwich) {
 }
 
 // The stencil measures how far the cost falls short of its curvature's
-// prediction one standard deviation out: nothing for a quadratic cost or one
-// that rises faster, the drop for a cost whose optimum is a spike.
+// prediction one standard deviation out: nothing for a quadratic cost, one
+// that rises faster or a slope, the shortfall of a flatter cost (which pins
+// the stencil's length), the drop for a cost whose optimum is a spike.
 TEST(CostResolutionTest, TheStencilMeasuresTheCostsShortfall) {
   Eigen::MatrixXd normal(2, 2);
   normal << 4, 1, 1, 2;
@@ -321,6 +322,15 @@ TEST(CostResolutionTest, TheStencilMeasuresTheCostsShortfall) {
   EXPECT_NEAR(StencilJitter(quadratic, theta, 100.0, cov, normal, 3), 0.0, 1e-12);
   const auto steeper = [&](const std::vector<double>& at) { return 2 * quadratic(at) - 100.0; };
   EXPECT_NEAR(StencilJitter(steeper, theta, 100.0, cov, normal, 3), 0.0, 1e-12);
+  // Half the curvature: one standard deviation of cov = 3 N^-1 (Mahalanobis
+  // length 1) has d^T N d = 3, predicted 1.5, rises 0.75: short by 0.75.
+  const auto flatter = [&](const std::vector<double>& at) { return 0.5 * quadratic(at) + 50.0; };
+  EXPECT_NEAR(StencilJitter(flatter, theta, 100.0, cov, normal, 3), 0.75, 1e-12);
+  // A slope (a stall, a prior's pull) cancels in each pair's mean.
+  const auto sloped = [&](const std::vector<double>& at) {
+    return quadratic(at) + 40.0 * (at[0] - theta[0]) - 25.0 * (at[1] - theta[1]);
+  };
+  EXPECT_NEAR(StencilJitter(sloped, theta, 100.0, cov, normal, 3), 0.0, 1e-9);
   // Every point off the optimum 0.7 lower than the quadratic: a drop of 0.7.
   const auto spike = [&](const std::vector<double>& at) { return quadratic(at) - 0.7; };
   EXPECT_NEAR(StencilJitter(spike, theta, 100.0, cov, normal, 3), 0.7, 1e-12);

@@ -113,13 +113,14 @@ struct RefineOptions {
   // block-clustered sandwich's where that is larger (a model error that
   // pulls one slide's samples together is one error, not hundreds). 0: off.
   double clustered_error_block_s = 0.2;
-  // Standard errors widened by the cost's measured roughness: after the
-  // last stage the runs' cost is evaluated on a stencil of this many pairs of
-  // points one standard error from the optimum; where it falls short of the
-  // curvature's prediction by more than stall_tolerance x cost (stick/slip
-  // switches that move, a stall on a slope) that shortfall is the fit's
-  // resolution (refine_covariance.h, StencilJitter), and measured once more
-  // at the widened errors. 2 x this many cost evaluations, twice at most.
+  // Standard errors widened by the cost's measured roughness: after each
+  // fit's last stage the runs' cost is evaluated on a stencil of this many
+  // pairs of points one standard error from the optimum; where the pairs'
+  // mean rise falls short of the curvature's prediction by more than
+  // stall_tolerance x cost (stick/slip switches that move, a cost that
+  // flattens out) that shortfall is the fit's resolution
+  // (refine_covariance.h, StencilJitter), measured once more at the widened
+  // errors. 2 x this many cost evaluations, twice at most, per fit.
   // 0: the resolution is stall_tolerance.
   int cost_resolution_directions = 1;
   // Standard errors widened where the start's own estimate disagrees: a
@@ -192,14 +193,14 @@ struct RefineResult : FitResult {
   std::vector<ExperimentCost> fitted;  // before: at the start, after: after the last stage
   int stages = 0, starts = 0, best_start = 0;  // starts, best: last stage
   double wall_time_s = 0;
-  // Estimated starts (FitSpec::fit_initial_pressures), last stage: how many,
-  // and the largest move of an initial pressure from its logged value, in
-  // the logged value's standard errors and in Pa.
   // The cost's resolution the standard errors include, relative to the cost:
   // stall_tolerance, or the roughness measured on the stencil when larger
   // (RefineOptions::cost_resolution_directions).
   double cost_resolution = 0;
   bool cost_resolution_measured = false;  // the stencil's, above stall_tolerance
+  // Estimated starts (FitSpec::fit_initial_pressures), last stage: how many,
+  // and the largest move of an initial pressure from its logged value, in
+  // the logged value's standard errors and in Pa.
   int estimated_starts = 0;
   double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
   // What a friction_replay stage found (empty without one).
