@@ -1,5 +1,6 @@
 #include "refine_covariance.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -7,14 +8,30 @@
 
 namespace pneumaid::refine_internal {
 
+namespace {
+
+// The estimated start offsets' columns B of an experiment's Jacobian against
+// the free parameters' A: A^T B and the factored B^T B (>= identity: the
+// priors), from which each elimination below takes its Schur complement.
+struct StartOffsetColumns {
+  StartOffsetColumns(const EvaluationCache& at, int m) {
+    const auto b = at.jacobian.rightCols(at.jacobian.cols() - m);
+    cross = at.jacobian.leftCols(m).transpose() * b;
+    start.compute(b.transpose() * b);
+  }
+
+  Eigen::MatrixXd cross;               // A^T B
+  Eigen::LDLT<Eigen::MatrixXd> start;  // B^T B
+};
+
+}  // namespace
+
 Eigen::MatrixXd ParameterInformation(const EvaluationCache& at, int m) {
   const auto a = at.jacobian.leftCols(m);
   Eigen::MatrixXd information = a.transpose() * a;
   if (at.jacobian.cols() == m) return information;
-  const auto b = at.jacobian.rightCols(at.jacobian.cols() - m);
-  const Eigen::MatrixXd cross = a.transpose() * b;
-  const Eigen::MatrixXd start = b.transpose() * b;  // >= identity: the priors
-  information -= cross * start.ldlt().solve(cross.transpose());
+  const StartOffsetColumns offsets(at, m);
+  information -= offsets.cross * offsets.start.solve(offsets.cross.transpose());
   return information;
 }
 
@@ -22,10 +39,9 @@ Eigen::VectorXd ParameterScore(const EvaluationCache& at, int m) {
   const auto a = at.jacobian.leftCols(m);
   Eigen::VectorXd score = a.transpose() * at.residuals;
   if (at.jacobian.cols() == m) return score;
+  const StartOffsetColumns offsets(at, m);
   const auto b = at.jacobian.rightCols(at.jacobian.cols() - m);
-  const Eigen::MatrixXd cross = a.transpose() * b;
-  const Eigen::MatrixXd start = b.transpose() * b;
-  score -= cross * start.ldlt().solve(b.transpose() * at.residuals);
+  score -= offsets.cross * offsets.start.solve(b.transpose() * at.residuals);
   return score;
 }
 
@@ -41,10 +57,8 @@ std::vector<Eigen::VectorXd> BlockScores(const FitExperiment& e, const Evaluatio
   const Eigen::Index k = at.jacobian.cols() - m;
   Eigen::MatrixXd eliminate;  // A^T B (B^T B)^-1: the start offsets' share of a score
   if (k > 0) {
-    const auto b = at.jacobian.rightCols(k);
-    const Eigen::MatrixXd cross = a.transpose() * b;
-    const Eigen::MatrixXd start = b.transpose() * b;
-    eliminate = start.ldlt().solve(cross.transpose()).transpose();
+    const StartOffsetColumns offsets(at, m);
+    eliminate = offsets.start.solve(offsets.cross.transpose()).transpose();
   }
   std::vector<Eigen::VectorXd> scores;
   for (Eigen::Index first = 0; first < n; first += length) {

@@ -155,6 +155,9 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     double weighted_cost = 0, weighted_rows = 0;        // the runs' costs and rows, weighted
     std::map<std::string, Eigen::VectorXd> run_scores;  // J^T r summed per run
     ClusteredMeat blocks;                               // of the runs' time blocks
+    // The stencil's curvature (the runs' J^T J with the starts held), kept
+    // only where the stencil runs.
+    const bool measure_resolution = last && options.cost_resolution_directions > 0;
     Eigen::MatrixXd held_starts_normal = Eigen::MatrixXd::Zero(map.size(), map.size());
     std::vector<double> run_weight(experiments.size(), 1.0);  // the robust loss's slope, held
     for (size_t k = 0; k < experiments.size(); ++k) {
@@ -179,8 +182,10 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
       correlation.Add(experiments[k], at_best->residuals, weight);
       if (normal.size() > 0) {
         normal += weight * ParameterInformation(*at_best, map.size());
-        const auto a = at_best->jacobian.leftCols(map.size());
-        held_starts_normal += weight * (a.transpose() * a);
+        if (measure_resolution) {
+          const auto a = at_best->jacobian.leftCols(map.size());
+          held_starts_normal += weight * (a.transpose() * a);
+        }
         if (options.run_clustered_errors) {
           // One cluster per run: a window's score adds to its run's.
           const std::string& run =
@@ -239,8 +244,7 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
     };
     Eigen::MatrixXd cov = covariance(options.stall_tolerance);
     r.cost_resolution = options.stall_tolerance;
-    if (last && options.cost_resolution_directions > 0 && cov.rows() == map.size() &&
-        weighted_cost > 0) {
+    if (measure_resolution && cov.rows() == map.size() && weighted_cost > 0) {
       // The cost the covariance describes: each run's weighted as in the
       // information (a robust refit's runs at the loss's slope at the
       // optimum), the starts held where they ended.
