@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "pneumaid/model/load.h"
+#include "uniform_clock.h"
 
 namespace pneumaid::friction_internal {
 
@@ -114,15 +115,6 @@ void SmoothStuckForce(const Runs& runs, std::size_t window, std::vector<double>*
       (*force)[i] = c(0) + s * (c(1) + s * c(2));
     }
   }
-}
-
-double UniformPeriod(const std::vector<double>& t) {
-  if (t.size() < 2) return 0;
-  const double period = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
-  for (std::size_t i = 1; i < t.size(); ++i) {
-    if (std::fabs(t[i] - t[i - 1] - period) > 0.01 * period) return 0;
-  }
-  return period;
 }
 
 // Residual weights of `s`: a sample n intervals from the last known state
@@ -305,13 +297,20 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
   // Segments point into these vectors: reserve so that they never move.
   data.force_N.reserve(count);
   data.position_m.reserve(count);
-  for (const Experiment& e : unit.experiments) {
-    if (!selected(e)) continue;
-    const double period = UniformPeriod(e.column("t"));
+  for (const Experiment& logged : unit.experiments) {
+    if (!selected(logged)) continue;
+    const Experiment* log = &logged;
+    double period = internal::UniformPeriod(logged.column("t"));
+    if (period <= 0) {  // read on a uniform clock instead
+      data.resampled.push_back(internal::ResampledUniformly(logged));
+      log = data.resampled.back().get();
+      period = internal::UniformPeriod(log->column("t"));
+    }
     if (period <= 0) {
-      data.skipped += e.entry.id + " (not uniformly sampled) ";
+      data.skipped += logged.entry.id + " (too few samples) ";
       continue;
     }
+    const Experiment& e = *log;
     const auto &p1 = e.column("p1"), &p2 = e.column("p2");
     std::vector<double> force(p1.size());
     for (std::size_t i = 0; i < force.size(); ++i) {

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -77,6 +78,8 @@ using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
 struct StrokeData {
   std::vector<std::vector<double>> force_N, position_m;
   std::vector<const Experiment*> experiments;  // the log of each
+  // Logs not sampled uniformly, read on a uniform clock (ResampledUniformly).
+  std::vector<std::shared_ptr<const Experiment>> resampled;
   std::vector<Segment> segments;
   std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers
   // Breakaway forces (magnitudes) of stuck phases at the stroke ends, which

@@ -198,6 +198,35 @@ bool FlatAbove(const std::vector<const ValvePlateau*>& plateaus, double opening,
   return true;
 }
 
+// A fit at a u_sat read off the log: the search started from the prior (not
+// from the split it kept), and u_sat has the standard error `u_sat_error_V`.
+void MarkSaturationFitted(const KvpBranchParams& prior, double u_sat_error_V, BranchFit* fit) {
+  if (!fit->has_values()) return;
+  const auto starts = Pack(prior);
+  for (int i = 0; i < kBranchParameters; ++i) fit->coefficients[i].start = starts[i];
+  FittedCoefficient& u_sat = fit->coefficients.back();
+  u_sat.start = prior.u_sat_V;
+  u_sat.held.clear();
+  u_sat.standard_error = u_sat_error_V;
+  fit->covariance(kBranchParameters, kBranchParameters) = u_sat_error_V * u_sat_error_V;
+  fit->u_sat_fitted = true;
+}
+
+// The plateaus a fit with u_sat in the gap (low, high) can use: a node of a
+// continuous command measures K_vp averaged over its hat, and a hat that
+// reaches into the gap mixes the polynomial with K_vp's jump at u_sat.
+std::vector<const ValvePlateau*> OutsideGap(const std::vector<const ValvePlateau*>& plateaus,
+                                            double low, double high) {
+  constexpr double kRoundOff_V = 1e-9;
+  std::vector<const ValvePlateau*> outside;
+  for (const ValvePlateau* p : plateaus) {
+    const double w = p->support_half_width_V;
+    if (w > 0 && p->u_V + w > low + kRoundOff_V && p->u_V - w < high - kRoundOff_V) continue;
+    outside.push_back(p);
+  }
+  return outside;
+}
+
 // FitBranch with u_sat free (ValveFitOptions::fit_u_sat).
 BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateaus,
                                  const KvpBranchParams& prior, const std::string& prefix,
@@ -215,9 +244,11 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   // Fits u_sat between openings k and k + 1; kept when it beats the best
   // split by more than `margin` in chi-square (Ceres' cost is half of it).
   const auto try_split = [&](std::size_t k, double margin) {
+    const auto usable = OutsideGap(plateaus, openings[k], openings[k + 1]);
+    if (!FlatAbove(usable, openings[k], options.saturation_flatness)) return;
     KvpBranchParams candidate = prior;
     candidate.u_sat_V = 0.5 * (openings[k] + openings[k + 1]);
-    const BranchFit fit = FitBranch(plateaus, candidate, prefix, options);
+    const BranchFit fit = FitBranch(usable, candidate, prefix, options);
     if (fit.has_values() &&
         (!best.has_values() || fit.final_cost < best.final_cost - 0.5 * margin)) {
       best = fit;
@@ -225,9 +256,7 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
       gap_high = openings[k + 1];
     }
   };
-  for (size_t k = 0; k + saturated < openings.size(); ++k) {
-    if (FlatAbove(plateaus, openings[k], options.saturation_flatness)) try_split(k, 0.0);
-  }
+  for (size_t k = 0; k + saturated < openings.size(); ++k) try_split(k, 0.0);
   // Where the staircase shows saturation, the top opening alone above u_sat
   // competes too: a decreasing branch starts one step below the staircase's
   // top, so a valve saturating between its two highest openings leaves it
@@ -251,22 +280,43 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   // Same split, same cost: only the value inside the gap changes.
   KvpBranchParams located = best.params;
   located.u_sat_V = ContinuousSaturation(best.params, gap_low, gap_high);
-  best = FitBranch(plateaus, located, prefix, options);
-  const auto starts = Pack(prior);  // the search started from the prior, not the split
-  for (int i = 0; i < kBranchParameters; ++i) best.coefficients[i].start = starts[i];
-  FittedCoefficient& u_sat = best.coefficients.back();
-  u_sat.start = prior.u_sat_V;
-  u_sat.held.clear();
-  u_sat.standard_error = (gap_high - gap_low) / std::sqrt(12.0);  // uniform in the gap
-  best.covariance(kBranchParameters, kBranchParameters) =
-      u_sat.standard_error * u_sat.standard_error;
-  best.u_sat_fitted = true;
+  best = FitBranch(OutsideGap(plateaus, gap_low, gap_high), located, prefix, options);
+  MarkSaturationFitted(prior, (gap_high - gap_low) / std::sqrt(12.0), &best);  // uniform in the gap
+  best.u_sat_gap_low_V = gap_low;
+  best.u_sat_gap_high_V = gap_high;
   return best;
 }
 
-double Mean(const std::vector<double>& v, std::size_t begin, std::size_t end) {
-  return std::accumulate(v.begin() + begin, v.begin() + end, 0.0) /
-         static_cast<double>(end - begin);
+// Where a continuous command's K_vp saturates: the saturation search, which
+// leaves out the nodes whose hats span K_vp's jump, picks a gap between nodes
+// but cannot tell which of two neighbouring gaps holds a small jump. Of the
+// breaks every tenth of a spacing across that gap and the gap either side
+// (the other branch's break held), the one whose nodes the branch fits best
+// at that u_sat, into breaks->*branch. Every break leaves as many nodes.
+void ScanSaturation(const Unit& unit, double normalization, const ValveFitOptions& options,
+                    const BranchFit& fit, const std::string& prefix, double KvpBreaks::*branch,
+                    KvpBreaks* breaks) {
+  const double width = fit.u_sat_gap_high_V - fit.u_sat_gap_low_V;
+  if (!fit.u_sat_fitted || !(width > 0)) return;
+  constexpr int kPoints = 30;
+  const double low = fit.u_sat_gap_low_V - width, step = 3 * width / kPoints;
+  double best = INFINITY, best_V = breaks->*branch;
+  for (int j = 0; j < kPoints; ++j) {
+    breaks->*branch = low + (j + 0.5) * step;
+    if (!(breaks->*branch > 0 && breaks->*branch < 1)) continue;
+    const std::vector<ValvePlateau> nodes =
+        ExtractValvePlateaus(unit, normalization, options, *breaks);
+    std::vector<const ValvePlateau*> points;
+    for (const ValvePlateau& p : nodes) {
+      if (p.decreasing == (branch == &KvpBreaks::decreasing_V)) points.push_back(&p);
+    }
+    KvpBranchParams at = fit.params;
+    at.u_sat_V = breaks->*branch;
+    const BranchFit candidate = FitBranch(points, at, prefix, options);
+    if (candidate.has_values() && candidate.final_cost < best)
+      best = candidate.final_cost, best_V = breaks->*branch;
+  }
+  breaks->*branch = best_V;
 }
 
 }  // namespace
@@ -285,105 +335,58 @@ bool ValveFitOptions::IsValid(std::string* error) const {
   if (!(saturation_flatness > 0)) return fail("saturation_flatness must be > 0");
   if (!(level_change_V > 0)) return fail("level_change_V must be > 0");
   if (max_levels < 2) return fail("max_levels must be >= 2");
+  if (!(held_fraction > 0 && held_fraction <= 1)) return fail("held_fraction must be in (0, 1]");
+  if (!(node_spacing_V > level_change_V && node_spacing_V <= 0.25))
+    return fail("node_spacing_V must be in (level_change_V, 0.25]");
   return true;
-}
-
-std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
-                                               const ValveFitOptions& options) {
-  const RigConstants& rig = unit.manifest.rig;
-  const auto orifice =
-      MakeOrificeCoefficients<double>(rig.gas.heat_capacity_ratio, rig.gas.gas_constant_J_per_kgK,
-                                      rig.gas.temperature_K, normalization);
-  const double tau = unit.manifest.DeclaredTau("q", 0.0);
-  std::vector<ValvePlateau> plateaus;
-  for (const Experiment& e : unit.experiments) {
-    if (e.entry.kind != ExperimentKind::kValve) continue;
-    const auto &t = e.column("t"), &u = e.column("u"), &q = e.column("q");
-    const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
-    const auto levels = internal::HeldLevels(u, options.level_change_V);
-    const std::size_t n = t.size(), m = levels.size();
-    // A ramp or a sampled signal is not a staircase: each level is an unknown.
-    if (static_cast<int>(m) > options.max_levels) continue;
-    // The flow held per level, seen through the meter's declared lag: the
-    // reading is linear in the level flows (one lagged indicator column per
-    // level), so all of them come from one least-squares solve. The first
-    // settle_fraction of each level is left out (a valve's own opening
-    // dynamics are not modelled); the meter's lag is, so short holds work.
-    std::vector<char> used(n, 0);
-    std::vector<int> used_per_level(m, 0);
-    for (std::size_t k = 0; k < m; ++k) {
-      const auto [begin, end] = levels[k];
-      const double skip = options.settle_fraction * (t[end - 1] - t[begin]);
-      for (std::size_t i = begin; i < end; ++i) {
-        if (t[i] >= t[begin] + skip) used[i] = 1, ++used_per_level[k];
-      }
-    }
-    Eigen::MatrixXd columns =
-        Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(m));
-    for (std::size_t k = 0; k < m; ++k) {
-      std::vector<double> column(n, 0.0);
-      for (std::size_t i = levels[k].first; i < levels[k].second; ++i) column[i] = 1.0;
-      if (tau > 0) {
-        ApplyFirstOrderLag([&t](std::size_t i) { return t[i] - t[i - 1]; }, tau, &column);
-      }
-      for (std::size_t i = 0; i < n; ++i) columns(static_cast<Eigen::Index>(i), k) = column[i];
-    }
-    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
-    std::size_t rows = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!used[i]) continue;
-      const auto a = columns.row(static_cast<Eigen::Index>(i));
-      normal.noalias() += a.transpose() * a;
-      rhs.noalias() += a.transpose() * q[i];
-      ++rows;
-    }
-    const Eigen::LDLT<Eigen::MatrixXd> solver(normal);
-    if (solver.info() != Eigen::Success) continue;
-    const Eigen::VectorXd flow = solver.solve(rhs);
-    double squares = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (used[i])
-        squares += std::pow(columns.row(static_cast<Eigen::Index>(i)).dot(flow) - q[i], 2);
-    }
-    const double q_sigma = unit.manifest.DeclaredSigma(
-        "q", std::sqrt(squares / std::max<double>(1.0, static_cast<double>(rows) - m)));
-    const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
-    double previous_u = 0.0;  // the level before, for the branch
-    for (std::size_t k = 0; k < m; ++k) {
-      const auto [begin, end] = levels[k];
-      const double level = Mean(u, begin, end);
-      const bool decreasing = level < previous_u;
-      previous_u = level;
-      if (level <= 0) continue;  // a closed valve says nothing about K_vp
-      if (used_per_level[k] < options.min_plateau_samples) continue;
-      const std::size_t first = end - static_cast<std::size_t>(used_per_level[k]);
-      const double up = Mean(p_up, first, end), down = Mean(p_down, first, end);
-      // Eq. 4 per unit of K_vp at the plateau's pressures.
-      const double per_kvp = orifice.flow_scale * up * FlowShape(down / up, orifice);
-      ValvePlateau plateau;
-      plateau.experiment = e.entry.id;
-      plateau.u_V = level;
-      plateau.decreasing = decreasing;
-      plateau.kvp_kg_per_s = flow[k] / per_kvp;
-      plateau.kvp_sigma =
-          std::max(q_sigma * std::sqrt(std::max(inverse(k, k), 0.0)), 1e-15) / per_kvp;
-      plateau.samples = used_per_level[k];
-      plateaus.push_back(plateau);
-    }
-  }
-  return plateaus;
 }
 
 ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
                         const ValveFitOptions& options) {
   ValveFitResult result;
   result.plateaus = ExtractValvePlateaus(unit, prior.normalization, options);
-  std::vector<const ValvePlateau*> up, down;
-  for (const auto& p : result.plateaus) (p.decreasing ? down : up).push_back(&p);
+  const auto split = [](const std::vector<ValvePlateau>& plateaus) {
+    std::array<std::vector<const ValvePlateau*>, 2> branches;  // increasing, decreasing
+    for (const auto& p : plateaus) branches[p.decreasing].push_back(&p);
+    return branches;
+  };
+  const auto first = split(result.plateaus);
   const auto fit = options.fit_u_sat ? FitBranchAndSaturation : FitBranch;
-  result.increasing = fit(up, prior.increasing, "valve.increasing", options);
-  result.decreasing = fit(down, prior.decreasing, "valve.decreasing", options);
+  result.increasing = fit(first[0], prior.increasing, "valve.increasing", options);
+  result.decreasing = fit(first[1], prior.decreasing, "valve.decreasing", options);
+  // A continuous command's nodes next to u_sat spanned K_vp's jump and were
+  // left out of the fit. The log is read again with K_vp free to jump inside
+  // the gap found (ScanSaturation), and the branch fitted there from every node.
+  const bool nodes = std::any_of(result.plateaus.begin(), result.plateaus.end(),
+                                 [](const ValvePlateau& p) { return p.support_half_width_V > 0; });
+  if (nodes && (result.increasing.u_sat_fitted || result.decreasing.u_sat_fitted)) {
+    KvpBreaks breaks;
+    if (result.increasing.u_sat_fitted) breaks.increasing_V = result.increasing.params.u_sat_V;
+    if (result.decreasing.u_sat_fitted) breaks.decreasing_V = result.decreasing.params.u_sat_V;
+    ScanSaturation(unit, prior.normalization, options, result.increasing, "valve.increasing",
+                   &KvpBreaks::increasing_V, &breaks);
+    ScanSaturation(unit, prior.normalization, options, result.decreasing, "valve.decreasing",
+                   &KvpBreaks::decreasing_V, &breaks);
+    std::vector<ValvePlateau> again =
+        ExtractValvePlateaus(unit, prior.normalization, options, breaks);
+    const auto second = split(again);
+    for (const auto& [branch, points, start, prefix, at] :
+         {std::make_tuple(&result.increasing, &second[0], &prior.increasing, "valve.increasing",
+                          breaks.increasing_V),
+          std::make_tuple(&result.decreasing, &second[1], &prior.decreasing, "valve.decreasing",
+                          breaks.decreasing_V)}) {
+      if (!branch->u_sat_fitted) continue;
+      KvpBranchParams located = branch->params;
+      located.u_sat_V = at;
+      BranchFit refit = FitBranch(*points, located, prefix, options);
+      if (!refit.has_values()) continue;
+      MarkSaturationFitted(*start, branch->coefficients.back().standard_error, &refit);
+      refit.u_sat_gap_low_V = branch->u_sat_gap_low_V;
+      refit.u_sat_gap_high_V = branch->u_sat_gap_high_V;
+      *branch = std::move(refit);
+    }
+    result.plateaus = std::move(again);
+  }
   AppendFit(result.increasing, "increasing", &result);
   AppendFit(result.decreasing, "decreasing", &result);
   return result;
@@ -391,7 +394,12 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
 
 std::string ValveFitResult::BriefReport() const {
   std::ostringstream out;
-  out << "Valve K_vp fit: " << plateaus.size() << " plateaus\n";
+  const auto nodes = std::count_if(plateaus.begin(), plateaus.end(), [](const ValvePlateau& p) {
+    return p.support_half_width_V > 0;
+  });
+  out << "Valve K_vp fit: " << plateaus.size() - nodes << " plateaus";
+  if (nodes > 0) out << ", " << nodes << " nodes of a continuous command";
+  out << "\n";
   for (const auto& [name, fit] :
        {std::make_pair("increasing", &increasing), std::make_pair("decreasing", &decreasing)}) {
     out << "  " << name << ": " << ToString(fit->status);
@@ -400,8 +408,9 @@ std::string ValveFitResult::BriefReport() const {
       continue;
     }
     char line[256];
-    std::snprintf(line, sizeof(line), ", %d plateaus, cost %.4g -> %.4g in %d iterations\n",
-                  fit->plateaus, fit->initial_cost, fit->final_cost, fit->iterations);
+    std::snprintf(line, sizeof(line), ", %d %s, cost %.4g -> %.4g in %d iterations\n",
+                  fit->plateaus, nodes > 0 ? "plateaus and nodes" : "plateaus", fit->initial_cost,
+                  fit->final_cost, fit->iterations);
     out << line << fit->CoefficientReport("    ");
     if (!fit->Correlated(0.95).empty())
       out << "    (the K_vp band is the meaningful uncertainty of poorly separable pairs)\n";

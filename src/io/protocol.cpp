@@ -26,13 +26,18 @@ class ProtocolReader : internal::YamlReader {
     const YAML::Node root =
         LoadMapping(text, "expected a mapping starting with format: pneumaid-protocol/1");
     Keys(root, "",
-         {"format", "sample_rate", "position_origin", "units", "sensors", "valve", "pipeline",
-          "stroke", "validation", "mismatch"});
+         {"format", "sample_rate", "dropped_samples", "position_origin", "units", "sensors",
+          "valve", "pipeline", "stroke", "validation", "mismatch"});
     if (!root["format"] || Text(root["format"]) != kProtocolFormat) {
       Fail(root, std::string("expected format: ") + kProtocolFormat);
     }
     Protocol p;
     if (root["sample_rate"]) p.sample_rate_Hz = Positive(root["sample_rate"], "sample_rate");
+    if (const YAML::Node dropped = root["dropped_samples"]) {
+      p.dropped_samples = Number(dropped, "dropped_samples");
+      if (!(p.dropped_samples >= 0 && p.dropped_samples < 0.5))
+        Fail(dropped, "expected dropped_samples in [0, 0.5)");
+    }
     if (const YAML::Node origin = root["position_origin"]) {
       const std::string text = Text(origin);
       if (text != "mid" && text != "retracted") Fail(origin, "expected mid | retracted");
@@ -41,10 +46,11 @@ class ProtocolReader : internal::YamlReader {
     ReadUnits(root["units"], &p);
     ReadSensors(root["sensors"], &p);
     if (const YAML::Node valve = root["valve"]) {
-      Keys(valve, "valve.", {"step", "hold"});
+      Keys(valve, "valve.", {"step", "hold", "ramp"});
       p.valve = true;
       if (valve["step"]) p.valve_step_V = Positive(valve["step"], "valve.step");
       if (valve["hold"]) p.valve_hold_s = Positive(valve["hold"], "valve.hold");
+      if (valve["ramp"]) p.valve_ramp_s = Positive(valve["ramp"], "valve.ramp");
     }
     if (const YAML::Node pipe = root["pipeline"]) {
       Keys(pipe, "pipeline.", {"tube_lengths", "command", "step_time", "duration", "schedule"});

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <utility>
 
 #include "pneumaid/eval/lag.h"
 #include "pneumaid/io/input_error.h"
@@ -20,6 +21,8 @@ constexpr double kPi = 3.14159265358979323846;
 // The rig-data format's default air density: standard conditions.
 const double kAirDensity_kg_per_m3 = RigConstants{}.air_density_kg_per_m3;
 constexpr double kHysteresisThreshold_V = 0.01;
+// Offset of the dropped-rows streams from the experiments' noise streams.
+constexpr std::uint64_t kDroppedRowsStream = 1000003;
 
 // One random stream per experiment, derived from the seed and the experiment
 // index, so adding an experiment does not change the noise of the others.
@@ -192,20 +195,35 @@ class RigBuilder {
     return OrificeMassFlow(gain, p_up, p_down, c.orifice);
   }
 
-  RigLog ValveTest(const Manifest& manifest, std::size_t index) const {
-    std::uint64_t rng = StreamSeed(seed_, index);
+  // The valve test's command: the staircase 0 -> 1 -> 0 V, or the ramp up and
+  // down (a continuous command) when the protocol asks for one.
+  std::pair<std::vector<double>, std::vector<double>> ValveCommand() const {
+    const double ramp_s = protocol_.valve_ramp_s;
+    if (ramp_s > 0) {
+      const auto t = SampleTimes(2 * ramp_s, protocol_.sample_rate_Hz);
+      std::vector<double> u(t.size());
+      for (std::size_t i = 0; i < t.size(); ++i)
+        u[i] = std::clamp(1.0 - std::fabs(t[i] - ramp_s) / ramp_s, 0.0, 1.0);
+      return {t, u};
+    }
     std::vector<double> levels;
     const int steps = static_cast<int>(std::lround(1.0 / protocol_.valve_step_V));
     for (int i = 0; i <= steps; ++i) levels.push_back(std::min(1.0, i * protocol_.valve_step_V));
     for (int i = steps - 1; i >= 0; --i) levels.push_back(i * protocol_.valve_step_V);
     const auto t = SampleTimes(levels.size() * protocol_.valve_hold_s, protocol_.sample_rate_Hz);
-    std::vector<double> u(t.size()), opening(t.size());
+    std::vector<double> u(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) {
       const auto level = std::min<std::size_t>(
           static_cast<std::size_t>(t[i] / protocol_.valve_hold_s), levels.size() - 1);
       u[i] = levels[level];
     }
-    opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
+    return {t, u};
+  }
+
+  RigLog ValveTest(const Manifest& manifest, std::size_t index) const {
+    std::uint64_t rng = StreamSeed(seed_, index);
+    const auto [t, u] = ValveCommand();
+    const std::vector<double> opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
     const double p_up = truth_.supply.supply_pressure_Pa,
                  p_down = truth_.supply.atmospheric_pressure_Pa;
     BranchLatch latch(kHysteresisThreshold_V);
@@ -214,7 +232,8 @@ class RigBuilder {
       latch.Update(u[i]);
       q[i] = ValveFlow(opening[i], latch.decreasing(), p_up, p_down);
     }
-    RigLog log = NewLog("valve-staircase", ExperimentKind::kValve);
+    RigLog log = NewLog(protocol_.valve_ramp_s > 0 ? "valve-ramp" : "valve-staircase",
+                        ExperimentKind::kValve);
     AddColumn(&log, "t", "s", t, manifest);
     AddColumn(&log, "u", "V", u, manifest);
     AddColumn(&log, "p_up", protocol_.pressure_unit,
@@ -383,7 +402,26 @@ class RigBuilder {
               manifest);
     AddColumn(&log, "q2", protocol_.flow_unit, MeasureFlow("q2", run.q2_kg_per_s, 0.0, &rng),
               manifest);
+    DropRows(StreamSeed(seed_, index + kDroppedRowsStream), &log);
     return log;
+  }
+
+  // A lossy logger: each row but the first and last is lost with probability
+  // Protocol::dropped_samples (its own random stream: the noise is unchanged).
+  void DropRows(std::uint64_t stream, RigLog* log) const {
+    if (!(protocol_.dropped_samples > 0) || log->columns.empty()) return;
+    std::mt19937_64 rng(stream);
+    std::bernoulli_distribution lost(protocol_.dropped_samples);
+    const std::size_t rows = log->columns.front().size();
+    std::vector<char> keep(rows, 1);
+    for (std::size_t i = 1; i + 1 < rows; ++i) keep[i] = !lost(rng);
+    for (auto& column : log->columns) {
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < rows; ++i) {
+        if (keep[i]) column[kept++] = column[i];
+      }
+      column.resize(kept);
+    }
   }
 
   const Parameters& truth_;

@@ -9,7 +9,7 @@
 //                    [--min-units-valve-tube K]
 //                    [--start-prior on|off] [--start identify|truth]
 //                    [--held-out-probe K] [--error-blocks S]
-//                    [--cost-resolution-directions K]
+//                    [--cost-resolution-directions K] [--units I,J,...]
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
@@ -23,7 +23,8 @@
 // with the tolerances on this unit?). --error-blocks S and
 // --cost-resolution-directions K set the refinement's options of those names
 // (RefineOptions::clustered_error_block_s, cost_resolution_directions; 0:
-// off), to measure what they give.
+// off), to measure what they give. --units I,J: only those units of the N
+// (each unit's draw depends on the seed and its index alone).
 #include <unistd.h>
 
 #include <algorithm>
@@ -66,8 +67,8 @@ const std::vector<std::string> kChecked = {"kvp.increasing", "kvp.decreasing", "
 struct Draw {
   Parameters truth;
   Protocol protocol;
-  double staircase_step_V = 0.05;
-  std::string summary;  // what was drawn, one line
+  double staircase_step_V = 0.05;  // or, for a valve ramp, the valve fit's node spacing
+  std::string summary;             // what was drawn, one line
 };
 
 double Uniform(std::mt19937_64* rng, double low, double high) {
@@ -155,13 +156,31 @@ Draw MakeDraw(std::uint64_t seed, int index) {
   // up to 0.2 mm/s (a rig's stick is not an event either).
   p.mismatch.stick_velocity_m_per_s = LogUniform(&rng, 2e-5, 2e-4);
   p.mismatch.relative_tolerance = 1e-8;
-  char line[400];
+  // Drawn from a stream of their own (session 16), so that the draws above
+  // stay those of the earlier sessions: a third of the valve tests are ramps
+  // (no plateau held), a quarter of the units' loggers drop rows.
+  std::mt19937_64 logger(seed * 1000003ULL + static_cast<std::uint64_t>(index) + 0x5bd1e995ULL);
+  if (Uniform(&logger, 0, 1) < 1.0 / 3.0) {
+    p.valve_ramp_s = Uniform(&logger, 3, 10);
+    d.staircase_step_V = ValveFitOptions{}.node_spacing_V;
+  }
+  if (Uniform(&logger, 0, 1) < 0.25) p.dropped_samples = LogUniform(&logger, 0.002, 0.02);
+  char valve[48], dropped[48] = "";
+  if (p.valve_ramp_s > 0) {
+    std::snprintf(valve, sizeof(valve), "valve ramp %.1f s", p.valve_ramp_s);
+  } else {
+    std::snprintf(valve, sizeof(valve), "valve staircase %.2f V", p.valve_step_V);
+  }
+  if (p.dropped_samples > 0)
+    std::snprintf(dropped, sizeof(dropped), ", %.1f %% rows dropped", 100 * p.dropped_samples);
+  char line[480];
   std::snprintf(
       line, sizeof(line),
-      "%s %.2f kg, u_sat %.2f, delta %.1f, %s, %.0f Hz, tube %s, strokes %s x%d margin %.0f mm, %s",
+      "%s %.2f kg, u_sat %.2f, delta %.1f, %s, %.0f Hz%s, %s, tube %s, strokes %s x%d margin %.0f "
+      "mm, %s",
       t.cylinder.orientation == Orientation::kVertical ? "vert" : "horiz", t.cylinder.load_mass_kg,
-      u_sat, t.pipeline.delta_per_s, FrictionLine(t.friction).c_str(), p.sample_rate_Hz,
-      shapes[shape], low_only ? "low" : "spread", p.stroke_cycles, p.stroke_margin_m * 1e3,
+      u_sat, t.pipeline.delta_per_s, FrictionLine(t.friction).c_str(), p.sample_rate_Hz, dropped,
+      valve, shapes[shape], low_only ? "low" : "spread", p.stroke_cycles, p.stroke_margin_m * 1e3,
       p.mismatch.regularized_friction ? "smooth stick" : "event stick");
   d.summary = line;
   return d;
@@ -343,7 +362,7 @@ int main(int argc, char** argv) {
     std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K] "
                  "[--min-units-valve-tube K] [--keep DIR] [--start-prior on|off] "
                  "[--start identify|truth] [--held-out-probe K] [--error-blocks S] "
-                 "[--cost-resolution-directions K]\n";
+                 "[--cost-resolution-directions K] [--units I,J,...]\n";
     return 2;
   }
   const int n = std::atoi(argv[1]);
@@ -352,6 +371,7 @@ int main(int argc, char** argv) {
   std::string keep;  // --keep DIR: the units are written there and kept
   RefineOptions refine_options;
   bool start_truth = false;
+  std::vector<int> indices;  // --units: the units to run (default: all N)
   if (argc % 2 != 0) {
     std::cerr << "every flag takes a value\n";
     return 2;
@@ -370,7 +390,18 @@ int main(int argc, char** argv) {
       probe_sets = std::atoi(argv[i + 1]);
     else if (flag == "--keep")
       keep = argv[i + 1];
-    else if (flag == "--start" && (value == "identify" || value == "truth"))
+    else if (flag == "--units") {
+      std::stringstream list(value);
+      for (std::string item; std::getline(list, item, ',');) {
+        char* end = nullptr;
+        const long index = std::strtol(item.c_str(), &end, 10);
+        if (end == item.c_str() || *end != '\0' || index < 0) {
+          std::cerr << "--units: not a unit index: " << item << "\n";
+          return 2;
+        }
+        indices.push_back(static_cast<int>(index));
+      }
+    } else if (flag == "--start" && (value == "identify" || value == "truth"))
       start_truth = value == "truth";
     else if (flag == "--start-prior" && (value == "on" || value == "off"))
       refine_options.start_prior = value == "on";
@@ -397,6 +428,15 @@ int main(int argc, char** argv) {
     std::cerr << "N and --jobs must be >= 1, --held-out-probe >= 0\n";
     return 2;
   }
+  for (int index : indices) {
+    if (index >= n) {
+      std::cerr << "--units: unit " << index << " is not one of the " << n << "\n";
+      return 2;
+    }
+  }
+  if (indices.empty()) {
+    for (int k = 0; k < n; ++k) indices.push_back(k);
+  }
   std::string invalid;
   if (!refine_options.IsValid(&invalid)) {
     std::cerr << "refine options: " << invalid << "\n";
@@ -406,15 +446,16 @@ int main(int argc, char** argv) {
                                             ? std::filesystem::temp_directory_path() /
                                                   ("pneumaid-sweep-" + std::to_string(::getpid()))
                                             : std::filesystem::path(keep);
-  std::vector<UnitResult> results(n);
+  const int count = static_cast<int>(indices.size());
+  std::vector<UnitResult> results(count);
   std::atomic<int> next{0};
   std::mutex print;
   std::vector<std::thread> workers;
   for (int w = 0; w < jobs; ++w) {
     workers.emplace_back([&] {
-      for (int k = next++; k < n; k = next++) {
-        results[k] =
-            RunUnit(seed, k, scratch, !keep.empty(), refine_options, start_truth, probe_sets);
+      for (int k = next++; k < count; k = next++) {
+        results[k] = RunUnit(seed, indices[k], scratch, !keep.empty(), refine_options, start_truth,
+                             probe_sets);
         const UnitResult& r = results[k];
         std::lock_guard<std::mutex> lock(print);
         std::printf("%s: %s\n", r.id.c_str(), r.summary.c_str());
@@ -451,7 +492,7 @@ int main(int argc, char** argv) {
   std::printf(
       "\nSweep of %d synthetic units (seed %llu): share within tolerance after refinement "
       "(after identify alone)\n",
-      n, static_cast<unsigned long long>(seed));
+      count, static_cast<unsigned long long>(seed));
   bool enough = true;
   for (const auto& name : kChecked) {
     int good = 0, identify_good = 0;
@@ -459,8 +500,8 @@ int main(int argc, char** argv) {
       good += r.failure.empty() && r.ok.at(name);
       identify_good += r.failure.empty() && r.identify_ok.at(name);
     }
-    std::printf("  %-15s %2d/%d (%.0f %%)  (identify %d/%d)\n", name.c_str(), good, n,
-                100.0 * good / n, identify_good, n);
+    std::printf("  %-15s %2d/%d (%.0f %%)  (identify %d/%d)\n", name.c_str(), good, count,
+                100.0 * good / count, identify_good, count);
     enough = enough && (min_units < 0 || good >= min_units);
     const bool valve_tube = name.rfind("kvp", 0) == 0 || name == "delta";
     enough = enough && (!valve_tube || min_units_valve_tube < 0 || good >= min_units_valve_tube);
@@ -477,7 +518,7 @@ int main(int argc, char** argv) {
     identify.push_back(r.identify_s);
     refine.push_back(r.refine_s);
   }
-  std::printf("  held-out x RMSE <= 2 x truth's + 0.05 mm: %d/%d\n", held, n);
+  std::printf("  held-out x RMSE <= 2 x truth's + 0.05 mm: %d/%d\n", held, count);
   if (probe_sets > 0) {
     int pass = 0, most = 0, few = 0;
     for (const auto& r : results) {
@@ -489,7 +530,7 @@ int main(int argc, char** argv) {
     std::printf(
         "  held-out probe (friction within half the tolerances, all else true): %d/%d sets pass; "
         "units where at least 90 %% pass: %d, at most 20 %%: %d\n",
-        pass, n * probe_sets, most, few);
+        pass, count * probe_sets, most, few);
   }
   // Errors honest both ways: a normal error puts 68 % within one standard
   // error; far more says the errors are wider than the fits' spread.
@@ -497,7 +538,7 @@ int main(int argc, char** argv) {
       "  refined coefficients within 3 standard errors: %d/%d (%.0f %%); within 1: %d (%.0f %%)\n",
       within, checked, checked ? 100.0 * within / checked : 0.0, within_1,
       checked ? 100.0 * within_1 / checked : 0.0);
-  std::printf("  refinement verdict 'explained': %d/%d\n", explained, n);
+  std::printf("  refinement verdict 'explained': %d/%d\n", explained, count);
   std::vector<double> at_truth;
   for (const auto& r : results)
     if (r.failure.empty()) at_truth.push_back(r.truth_chi_square);

@@ -106,6 +106,32 @@ TEST(FrictionFitTest, RecoversAHorizontalCylindersBreakawayAndSlidingFriction) {
   }
 }
 
+// A lossy logger drops 2 % of the rows of every stroke log, so no log is
+// sampled uniformly. Each is read on a uniform clock at its median interval
+// (interpolated across the gaps) and the fit recovers the vertical cylinder
+// as from complete logs; before, every stroke log was skipped ("not
+// uniformly sampled") and no slide was found.
+TEST(FrictionFitTest, ALoggerThatDropsRowsIsReadOnAUniformClock) {
+  const Parameters truth;
+  Protocol protocol = testing::StrokeProtocol(3);
+  protocol.dropped_samples = 0.02;
+  const Unit unit =
+      testing::WriteAndReadUnit(Synthesize(truth, protocol, 21, "D"), "friction_dropped_21");
+  std::size_t gaps = 0;
+  for (const Experiment& e : unit.experiments) {
+    const auto& t = e.column("t");
+    for (std::size_t i = 2; i < t.size(); ++i) gaps += t[i] - t[i - 1] > 1.5 * (t[1] - t[0]);
+  }
+  EXPECT_GT(gaps, 100u);
+  const FrictionFitResult fit =
+      FitFriction(unit, ThirtyPercentOff(truth.friction), FrictionFitOptions{});
+  std::cout << fit.BriefReport();
+  ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
+  EXPECT_EQ(fit.reason.find("not used"), std::string::npos) << fit.reason;
+  ExpectWithinTolerance(fit.positive.params, truth.friction.positive, "positive");
+  ExpectWithinTolerance(fit.negative.params, truth.friction.negative, "negative");
+}
+
 TEST(FrictionFitTest, StandardErrorsAreHonestOverTenSeeds) {
   const Parameters truth;
   const FrictionParams prior = ThirtyPercentOff(truth.friction);

@@ -20,12 +20,15 @@ namespace {
 // A valve-only synthetic unit written and read back, as a user's would be:
 // a staircase of `step_V` held `hold_s` at `rate_Hz`, a 30 ms flow meter with
 // an ADC step of `q_quantization` (standard m3/s).
+// With ramp_s > 0 the command is a ramp 0 -> 1 V over ramp_s and back instead.
 Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed, double step_V = 0.05,
-                        double hold_s = 0.3, double rate_Hz = 1000, double q_quantization = 0) {
+                        double hold_s = 0.3, double rate_Hz = 1000, double q_quantization = 0,
+                        double ramp_s = 0) {
   Protocol protocol;
   protocol.valve = true;
   protocol.valve_step_V = step_V;
   protocol.valve_hold_s = hold_s;
+  protocol.valve_ramp_s = ramp_s;
   protocol.sample_rate_Hz = rate_Hz;
   protocol.sensors["q"] = {2e-7, 0.03, q_quantization, true};
   protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
@@ -87,20 +90,58 @@ TEST(ValveFitTest, RecoversKvpWithinOnePercentOfQmaxOnTheBundledUnit) {
   EXPECT_EQ(fit.plateaus.size(), 39u);  // 20 up (0.05 .. 1) + 19 down (0.95 .. 0.05); u = 0 skipped
 }
 
-// A valve saturating at 0.62 V (prior 0.75 V) logged by a staircase of
-// 0.04 V steps held 0.25 s, with a valve that opens with a lag of its own
-// (not in the fitted model) and a quantised flow meter: u_sat in the gap
-// (0.60, 0.64] and K_vp within 1 % of q_max outside it, both branches.
+// A valve saturating at 0.62 V (prior 0.75 V) that opens with a lag of its
+// own (10 ms, not in the fitted model), logged with a quantised flow meter,
+// fitted from a staircase of `step_V` held `hold_s` (or a ramp over ramp_s).
+ValveFitResult FitValveSaturatingAt062(std::uint64_t seed, double step_V, double hold_s,
+                                       double rate_Hz, double ramp_s, Parameters* truth) {
+  truth->valve.increasing.u_sat_V = truth->valve.decreasing.u_sat_V = 0.62;
+  truth->effects["valve_lag"] = {{"tau", 0.01}};
+  ValveParams prior = Perturbed(truth->valve);
+  prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
+  const Unit unit = SyntheticValveUnit(*truth, seed, step_V, hold_s, rate_Hz, 1e-7, ramp_s);
+  ValveFitResult fit = FitValve(unit, prior, ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  return fit;
+}
+
+// The 0.62 V valve logged by a staircase of 0.04 V steps held 0.25 s: u_sat
+// in the gap (0.60, 0.64] and K_vp within 1 % of q_max outside it, both
+// branches.
 TEST(ValveFitTest, AValveSaturatingAtSixtyTwoHundredthsOfAVoltWithMismatch) {
   Parameters truth;
-  truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.62;
-  truth.effects["valve_lag"] = {{"tau", 0.01}};
-  ValveParams prior = Perturbed(truth.valve);
-  prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
-  const Unit unit = SyntheticValveUnit(truth, 62, 0.04, 0.25, 1000, 1e-7);
-  const ValveFitResult fit = FitValve(unit, prior, ValveFitOptions{});
-  std::cout << fit.BriefReport();
+  const ValveFitResult fit = FitValveSaturatingAt062(62, 0.04, 0.25, 1000, 0, &truth);
   ExpectSaturationInGap(fit, truth.valve, 0.60, 0.64);
+}
+
+// A ramp is not a staircase: no plateau is held. The same valve logged by a
+// ramp 0 -> 1 -> 0 V over 2 x 8 s at 500 Hz: K_vp is read on nodes every
+// 0.02 V, and where it jumps at u_sat from a scan of breaks across the node
+// gaps: u_sat within 0.01 V of 0.62 and K_vp within 1 % of q_max outside
+// (0.61, 0.63], both branches. Read as a staircase of 0.01 V "levels" (as
+// before), its decreasing branch showed no saturation and kept the prior's
+// u_sat, at a chi-square of 1.1e4 on 98 levels.
+TEST(ValveFitTest, ARampIsReadOnAGridOfOpeningsAndGivesTheSaturation) {
+  Parameters truth;
+  const ValveFitResult fit = FitValveSaturatingAt062(162, 0.05, 0.3, 500, 8.0, &truth);
+  int nodes = 0;
+  for (const ValvePlateau& p : fit.plateaus) nodes += p.support_half_width_V > 0;
+  EXPECT_EQ(nodes, static_cast<int>(fit.plateaus.size()));
+  EXPECT_GE(nodes, 90);  // 50 nodes up, 49 down, and each branch's break twice
+  ExpectSaturationInGap(fit, truth.valve, 0.61, 0.63);
+}
+
+// A fast ramp at the paper's saturation (0.75 V, 2 x 3 s at 1 kHz), read
+// through the meter's 30 ms lag (0.01 V of opening), where K_vp hardly jumps
+// (the increasing polynomial reaches q_max at 0.735 V, 0.6 % above it at
+// 0.75 V): u_sat within 0.01 V and K_vp within 1 % of q_max outside
+// (0.74, 0.76].
+TEST(ValveFitTest, AFastRampIsReadThroughTheMetersLag) {
+  Parameters truth;
+  const Unit unit = SyntheticValveUnit(truth, 75, 0.05, 0.3, 1000, 0, 3.0);
+  const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  ExpectSaturationInGap(fit, truth.valve, 0.74, 0.76);
 }
 
 // A valve saturating at 0.83 V logged by a staircase of 0.1 V steps up to

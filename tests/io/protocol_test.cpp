@@ -53,11 +53,25 @@ TEST(ProtocolTest, ATubeScheduleAStrokeDwellAndAMismatchAreRead) {
   EXPECT_EQ(p.mismatch.relative_tolerance, 1.0e-9);
 }
 
+TEST(ProtocolTest, AValveRampAndALossyLoggerAreRead) {
+  const Protocol p = ParseProtocol(
+      "format: pneumaid-protocol/1\n"
+      "dropped_samples: 0.01\n"
+      "valve: {ramp: 6}\n",
+      "p");
+  EXPECT_TRUE(p.valve);
+  EXPECT_EQ(p.valve_ramp_s, 6.0);
+  EXPECT_EQ(p.dropped_samples, 0.01);
+  EXPECT_EQ(ParseProtocol("format: pneumaid-protocol/1\nvalve: {step: 0.1}\n", "p").valve_ramp_s,
+            0.0);  // a staircase by default
+}
+
 TEST(ProtocolTest, ABadScheduleOrMismatchNamesItsLine) {
   for (const char* bad :
        {"pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5, 1], [0.2, 0]]}\n",
         "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5]]}\n",
-        "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n"}) {
+        "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n",
+        "\ndropped_samples: 0.5\n", "valve:\n  ramp: -1\n"}) {
     try {
       ParseProtocol(std::string("format: pneumaid-protocol/1\n") + bad, "p.yaml");
       ADD_FAILURE() << bad << " accepted";

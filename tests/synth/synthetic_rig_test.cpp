@@ -162,6 +162,44 @@ TEST(SyntheticRigTest, ValveTestShowsBothBranchesThroughTheMeterLag) {
   EXPECT_NEAR(at_half[1], truth.valve.decreasing.q_max_kg_per_s * down * choked, 2e-3 * q_max);
 }
 
+// A lossy logger drops rows and changes nothing else: every kept row is the
+// complete log's row (same noise), the first and last rows stay, the valve
+// and tube logs are whole. A ramp's command runs 0 -> 1 -> 0 V.
+TEST(SyntheticRigTest, DroppedRowsAreRowsOfTheCompleteLogAndARampIsARamp) {
+  const Parameters truth;
+  Protocol complete = SmallProtocol(1.0), lossy = complete;
+  complete.valve_ramp_s = lossy.valve_ramp_s = 1.0;
+  lossy.dropped_samples = 0.05;
+  const SyntheticUnit a = Synthesize(truth, complete, 5, "D"), b = Synthesize(truth, lossy, 5, "D");
+  ASSERT_EQ(a.logs.size(), b.logs.size());
+  for (std::size_t k = 0; k < a.logs.size(); ++k) {
+    const auto &all = a.logs[k].columns, &kept = b.logs[k].columns;
+    const bool actuator = a.logs[k].entry.kind == ExperimentKind::kValidation;
+    const std::size_t rows = all.front().size(), left = kept.front().size();
+    if (!actuator) {
+      EXPECT_EQ(all, kept) << a.logs[k].entry.id;
+      continue;
+    }
+    EXPECT_LT(left, rows * 0.98);
+    EXPECT_GT(left, rows * 0.92);
+    EXPECT_EQ(kept.front().front(), all.front().front());
+    EXPECT_EQ(kept.front().back(), all.front().back());
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < left; ++i) {
+      while (j < rows && all.front()[j] != kept.front()[i]) ++j;
+      ASSERT_LT(j, rows);
+      for (std::size_t c = 0; c < all.size(); ++c) EXPECT_EQ(kept[c][i], all[c][j]);
+    }
+  }
+  const RigLog& ramp = a.logs.front();
+  ASSERT_EQ(ramp.entry.id, "valve-ramp");
+  const auto& u = ramp.columns[1];
+  EXPECT_EQ(u.front(), 0.0);
+  EXPECT_EQ(*std::max_element(u.begin(), u.end()), 1.0);
+  EXPECT_NEAR(u[u.size() / 4], 0.5, 0.01);
+  EXPECT_NEAR(u.back(), 0.0, 1e-9);
+}
+
 TEST(SyntheticRigTest, DeterministicPerSeed) {
   const Parameters truth;
   const auto a = UnitFiles(Synthesize(truth, SmallProtocol(1.0), 5, "D"));

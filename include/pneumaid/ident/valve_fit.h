@@ -1,8 +1,9 @@
 // Identification of the valve gain K_vp(u) (seed paper Eq. 3) from valve
-// logs: the steady plateaus of a staircase, each turned into a measured K_vp
-// through Eq. 4 at the measured pressures, then one Ceres least-squares
-// problem per branch (increasing / decreasing, split by the direction of the
-// step that reached the plateau), with covariance.
+// logs: what each log measures of K_vp (the steady plateaus of a staircase, or
+// K_vp on a grid of openings for a ramp or any command that is not held),
+// through Eq. 4 at the measured pressures and the meter's declared lag, then
+// one Ceres least-squares problem per branch (increasing / decreasing, as the
+// command's direction latches it), with covariance.
 #pragma once
 
 #include <string>
@@ -20,9 +21,14 @@ struct ValveFitOptions {
   // first settle_fraction of the level (a valve's own opening dynamics are
   // not modelled).
   double settle_fraction = 0.2;
-  // A valve log with more held levels than this (a ramp, a sampled signal)
-  // is not a staircase and is not used.
+  // A valve log is read as a staircase when at least held_fraction of its
+  // samples lie in held levels (a level whose command trends by less than
+  // half of level_change_V) and it has at most max_levels levels. Any other
+  // log (a ramp, a sampled signal) is a continuous command: K_vp of each
+  // branch is solved for on nodes every node_spacing_V, linear in between.
+  double held_fraction = 0.8;
   int max_levels = 200;
+  double node_spacing_V = 0.02;
   // Plateaus with fewer samples used are not used.
   int min_plateau_samples = 10;
   // Half-width of the reported K_vp band in standard deviations.
@@ -51,7 +57,8 @@ struct ValveFitOptions {
   bool IsValid(std::string* error) const;
 };
 
-// One steady plateau of a valve log.
+// One steady plateau of a valve log, or one node of a continuous command's
+// K_vp grid.
 struct ValvePlateau {
   std::string experiment;
   double u_V = 0;
@@ -59,6 +66,10 @@ struct ValvePlateau {
   double kvp_kg_per_s = 0;  // measured K_vp
   double kvp_sigma = 0;     // its standard error
   int samples = 0;
+  // A node of a continuous command: its K_vp is that of the hat from
+  // u_V - support_half_width_V to u_V + support_half_width_V (one side of it
+  // at a break, KvpBreaks); 0 for a plateau.
+  double support_half_width_V = 0;
 };
 
 // K_vp of one branch on a grid of u, with its band.
@@ -72,6 +83,7 @@ struct KvpBand {
 struct BranchFit : FitResult {
   KvpBranchParams params;     // the coefficients as a branch (the prior's when not fitted)
   bool u_sat_fitted = false;  // u_sat was read off the staircase
+  double u_sat_gap_low_V = 0, u_sat_gap_high_V = 0;  // the openings it lies between
   int plateaus = 0;
   KvpBand band;
 };
@@ -83,9 +95,21 @@ struct ValveFitResult : FitResult {
   std::string BriefReport() const;
 };
 
-// The plateaus of every valve experiment of `unit`. `normalization` is N of Eq. 4.
+// Where K_vp of a continuous command may jump (u_sat), per branch; 0: no
+// jump is placed, each node spans node_spacing_V either side.
+struct KvpBreaks {
+  double increasing_V = 0;
+  double decreasing_V = 0;
+};
+
+// The plateaus of every valve experiment of `unit` (and the nodes of those
+// whose command is not held, with K_vp free to jump at `breaks`; the sum of
+// their logs' squared flow residuals [kg^2/s^2] into `squares`).
+// `normalization` is N of Eq. 4.
 std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
-                                               const ValveFitOptions& options);
+                                               const ValveFitOptions& options,
+                                               const KvpBreaks& breaks = {},
+                                               double* squares = nullptr);
 
 // Fits both branches; a branch without enough plateaus keeps `prior`'s values.
 ValveFitResult FitValve(const Unit& unit, const ValveParams& prior, const ValveFitOptions& options);

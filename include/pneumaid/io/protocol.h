@@ -24,16 +24,23 @@ struct SensorModel {
 
 struct Protocol {
   double sample_rate_Hz = 1000.0;
+  // The share of rows a lossy logger drops from the stroke and validation
+  // logs (independently per row, never the first or last): their sampling is
+  // then not uniform.
+  double dropped_samples = 0.0;
   PositionOrigin position_origin = PositionOrigin::kRetracted;
   std::string length_unit = "mm";
   std::string pressure_unit = "bar_g";
   std::string flow_unit = "l/min";
   std::map<std::string, SensorModel> sensors;  // by column name
 
-  // Valve test: staircase 0 -> 1 -> 0 in steps of valve_step_V held valve_hold_s.
+  // Valve test: staircase 0 -> 1 -> 0 in steps of valve_step_V held
+  // valve_hold_s; or, when valve_ramp_s > 0, a ramp 0 -> 1 V over valve_ramp_s
+  // and back down over as long (a continuous command, no plateaus).
   bool valve = false;
   double valve_step_V = 0.05;
   double valve_hold_s = 0.3;
+  double valve_ramp_s = 0.0;
 
   // Pipeline tests: a step to pipeline_command_V at pipeline_step_time_s, per
   // tube length; or, when pipeline_schedule is given, the command held at

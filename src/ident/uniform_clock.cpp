@@ -1,0 +1,50 @@
+#include "uniform_clock.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pneumaid::internal {
+
+double UniformPeriod(const std::vector<double>& t) {
+  if (t.size() < 2) return 0;
+  const double period = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (std::fabs(t[i] - t[i - 1] - period) > 0.01 * period) return 0;
+  }
+  return period;
+}
+
+std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {
+  const auto& t = e.column("t");
+  auto out = std::make_shared<Experiment>();
+  out->entry = e.entry;
+  out->path = e.path;
+  out->sha256 = e.sha256;
+  if (t.size() < 2) return out;
+  std::vector<double> intervals(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];
+  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+  const double period = intervals[intervals.size() / 2];
+  const auto samples =
+      static_cast<std::size_t>(std::floor((t.back() - t.front()) / period + 1e-9)) + 1;
+  std::vector<double> clock(samples);
+  for (std::size_t k = 0; k < samples; ++k) clock[k] = t.front() + static_cast<double>(k) * period;
+  for (const auto& [name, values] : e.columns) {
+    std::vector<double>& column = out->columns[name];
+    if (name == "t") {
+      column = clock;
+      continue;
+    }
+    column.resize(samples);
+    std::size_t j = 0;  // t[j] <= clock[k] < t[j + 1]
+    for (std::size_t k = 0; k < samples; ++k) {
+      while (j + 2 < t.size() && t[j + 1] <= clock[k]) ++j;
+      const double w = std::clamp((clock[k] - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0);
+      column[k] = name == "u" ? (w < 1 ? values[j] : values[j + 1])
+                              : (1 - w) * values[j] + w * values[j + 1];
+    }
+  }
+  return out;
+}
+
+}  // namespace pneumaid::internal

@@ -1,0 +1,319 @@
+// What a valve log measures of K_vp(u): the plateaus of a held command (a
+// staircase), or, for a command that is not held (a ramp, a sampled signal),
+// K_vp on a grid of openings per branch. Both are read through the flow
+// meter's declared lag by one linear least-squares solve per log.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "held_levels.h"
+#include "pneumaid/eval/lag.h"
+#include "pneumaid/ident/valve_fit.h"
+#include "pneumaid/model/orifice.h"
+#include "pneumaid/model/valve_bank.h"
+
+namespace pneumaid {
+namespace {
+
+using Levels = std::vector<std::pair<std::size_t, std::size_t>>;
+
+double Mean(const std::vector<double>& v, std::size_t begin, std::size_t end) {
+  return std::accumulate(v.begin() + begin, v.begin() + end, 0.0) /
+         static_cast<double>(end - begin);
+}
+
+// Is the command held (a staircase)? Each level's trend (its least-squares
+// slope times its duration) must stay below half the level threshold: a
+// ramp's level runs through the whole threshold, a held level's noise does
+// not. At least `held_fraction` of the samples must lie in such levels.
+bool HeldCommand(const std::vector<double>& t, const std::vector<double>& u, const Levels& levels,
+                 const ValveFitOptions& options) {
+  if (static_cast<int>(levels.size()) > options.max_levels) return false;
+  std::size_t held = 0;
+  for (const auto& [begin, end] : levels) {
+    if (end - begin < 3) continue;
+    const double t_mean = Mean(t, begin, end), u_mean = Mean(u, begin, end);
+    double stt = 0, stu = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      stt += (t[i] - t_mean) * (t[i] - t_mean);
+      stu += (t[i] - t_mean) * (u[i] - u_mean);
+    }
+    const double trend_V = stt > 0 ? std::fabs(stu / stt) * (t[end - 1] - t[begin]) : 0.0;
+    if (trend_V < 0.5 * options.level_change_V) held += end - begin;
+  }
+  return static_cast<double>(held) >= options.held_fraction * static_cast<double>(u.size());
+}
+
+// The plateaus of a staircase: the flow held per level, seen through the
+// meter's declared lag: the reading is linear in the level flows (one lagged
+// indicator column per level), so all of them come from one least-squares
+// solve. The first settle_fraction of each level is left out (a valve's own
+// opening dynamics are not modelled); the meter's lag is, so short holds work.
+void StaircasePlateaus(const Experiment& e, const Levels& levels,
+                       const OrificeCoefficients<double>& orifice, double tau_s, const Unit& unit,
+                       const ValveFitOptions& options, std::vector<ValvePlateau>* plateaus) {
+  const auto &t = e.column("t"), &u = e.column("u"), &q = e.column("q");
+  const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
+  const std::size_t n = t.size(), m = levels.size();
+  std::vector<char> used(n, 0);
+  std::vector<int> used_per_level(m, 0);
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto [begin, end] = levels[k];
+    const double skip = options.settle_fraction * (t[end - 1] - t[begin]);
+    for (std::size_t i = begin; i < end; ++i) {
+      if (t[i] >= t[begin] + skip) used[i] = 1, ++used_per_level[k];
+    }
+  }
+  Eigen::MatrixXd columns =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(m));
+  for (std::size_t k = 0; k < m; ++k) {
+    std::vector<double> column(n, 0.0);
+    for (std::size_t i = levels[k].first; i < levels[k].second; ++i) column[i] = 1.0;
+    if (tau_s > 0) {
+      ApplyFirstOrderLag([&t](std::size_t i) { return t[i] - t[i - 1]; }, tau_s, &column);
+    }
+    for (std::size_t i = 0; i < n; ++i) columns(static_cast<Eigen::Index>(i), k) = column[i];
+  }
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+  std::size_t rows = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!used[i]) continue;
+    const auto a = columns.row(static_cast<Eigen::Index>(i));
+    normal.noalias() += a.transpose() * a;
+    rhs.noalias() += a.transpose() * q[i];
+    ++rows;
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> solver(normal);
+  if (solver.info() != Eigen::Success) return;
+  const Eigen::VectorXd flow = solver.solve(rhs);
+  double squares = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (used[i]) squares += std::pow(columns.row(static_cast<Eigen::Index>(i)).dot(flow) - q[i], 2);
+  }
+  const double q_sigma = unit.manifest.DeclaredSigma(
+      "q", std::sqrt(squares / std::max<double>(1.0, static_cast<double>(rows) - m)));
+  const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
+  double previous_u = 0.0;  // the level before, for the branch
+  for (std::size_t k = 0; k < m; ++k) {
+    const auto [begin, end] = levels[k];
+    const double level = Mean(u, begin, end);
+    const bool decreasing = level < previous_u;
+    previous_u = level;
+    if (level <= 0) continue;  // a closed valve says nothing about K_vp
+    if (used_per_level[k] < options.min_plateau_samples) continue;
+    const std::size_t first = end - static_cast<std::size_t>(used_per_level[k]);
+    const double up = Mean(p_up, first, end), down = Mean(p_down, first, end);
+    // Eq. 4 per unit of K_vp at the plateau's pressures.
+    const double per_kvp = orifice.flow_scale * up * FlowShape(down / up, orifice);
+    ValvePlateau plateau;
+    plateau.experiment = e.entry.id;
+    plateau.u_V = level;
+    plateau.decreasing = decreasing;
+    plateau.kvp_kg_per_s = flow[k] / per_kvp;
+    plateau.kvp_sigma =
+        std::max(q_sigma * std::sqrt(std::max(inverse(k, k), 0.0)), 1e-15) / per_kvp;
+    plateau.samples = used_per_level[k];
+    plateaus->push_back(plateau);
+  }
+}
+
+// The nodes of one branch's K_vp for a command that is not held: every
+// node_spacing_V from the first (K_vp(0) = 0 is implied), sorted. With a
+// break at u_sat (> 0) K_vp may jump there: the node is doubled, its left
+// limit ending the polynomial and its right one starting saturation (the
+// grid nodes stay, so that every break leaves as many unknowns).
+struct BranchNodes {
+  std::vector<double> u_V;
+  std::vector<char> right;  // at or above the break
+  double break_V = 0;
+
+  BranchNodes(double spacing_V, double break_V) : break_V(break_V) {
+    const int grid = static_cast<int>(std::ceil(1.0 / spacing_V - 1e-9));
+    bool doubled = !(break_V > 0);
+    for (int k = 1; k <= grid; ++k) {
+      const double node = std::min(1.0, k * spacing_V);
+      if (!doubled && node >= break_V) {
+        u_V.insert(u_V.end(), {break_V, break_V});
+        right.insert(right.end(), {0, 1});
+        doubled = true;
+        if (node == break_V) continue;  // the break is this node
+      }
+      u_V.push_back(node);
+      right.push_back(!(break_V > 0) ? 0 : node > break_V);
+    }
+  }
+
+  // The (up to two) nodes whose hats hold `opening`, with their weights.
+  void Hats(double opening, int* node, double* hat) const {
+    node[0] = node[1] = -1;
+    const bool upper = break_V > 0 && opening >= break_V;
+    // The nodes of the opening's side: [first, last).
+    const std::size_t split = std::find(right.begin(), right.end(), 1) - right.begin();
+    const std::size_t first = upper ? split : 0, last = upper ? u_V.size() : split;
+    if (first == last) return;
+    const auto begin = u_V.begin() + first, end = u_V.begin() + last;
+    const std::size_t above = std::upper_bound(begin, end, opening) - u_V.begin();
+    if (above == last) {  // at or past the side's last node: it alone
+      node[0] = static_cast<int>(last - 1);
+      hat[0] = 1.0;
+      return;
+    }
+    const double low = above == first ? (upper ? break_V : 0.0) : u_V[above - 1];
+    const double w = (opening - low) / (u_V[above] - low);
+    node[0] = static_cast<int>(above);
+    hat[0] = w;
+    if (above > first) {
+      node[1] = static_cast<int>(above - 1);
+      hat[1] = 1 - w;
+    }
+  }
+};
+
+// A command that is not held: K_vp of each branch is taken as linear between
+// its nodes (BranchNodes), so the flow at each sample is linear in the nodes'
+// K_vp (a hat function of the opening times Eq. 4 per unit of K_vp at the
+// sample's pressures), lagged by the meter: one least-squares solve. Each
+// sample's branch is latched as the model latches it. A node is reported
+// with the half-width of its hat, so that the saturation search can leave
+// out the nodes whose hat spans K_vp's jump; with breaks (the second pass, at
+// the u_sat found) the nodes at a break are its one-sided limits.
+void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& orifice, double tau_s,
+                     const Unit& unit, const ValveFitOptions& options, const KvpBreaks& breaks,
+                     std::vector<ValvePlateau>* plateaus, double* squares_out) {
+  const auto &t = e.column("t"), &u = e.column("u"), &q = e.column("q");
+  const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
+  const std::size_t n = t.size();
+  const double h = options.node_spacing_V;
+  const BranchNodes branch[2] = {BranchNodes(h, breaks.increasing_V),
+                                 BranchNodes(h, breaks.decreasing_V)};
+  const int offset[2] = {0, static_cast<int>(branch[0].u_V.size())};
+  const int nodes = offset[1] + static_cast<int>(branch[1].u_V.size());
+  // Each sample's (up to two) hat contributions: column (the branch's offset
+  // plus its node) and weight, the weight including Eq. 4 per unit of K_vp.
+  struct Contribution {
+    int column[2] = {-1, -1};
+    double weight[2] = {0, 0};
+  };
+  std::vector<Contribution> x(n);
+  std::vector<double> support(nodes, 0.0);
+  BranchLatch latch(options.level_change_V);
+  double scale = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    latch.Update(u[i]);
+    const double opening = std::clamp(u[i], 0.0, 1.0);
+    if (opening <= 0 || !(p_up[i] > 0)) continue;
+    const double per_kvp = orifice.flow_scale * p_up[i] * FlowShape(p_down[i] / p_up[i], orifice);
+    const int b = latch.decreasing() ? 1 : 0;
+    int node[2];
+    double hat[2];
+    branch[b].Hats(opening, node, hat);
+    for (int slot = 0; slot < 2; ++slot) {
+      if (node[slot] < 0 || hat[slot] <= 0) continue;
+      x[i].column[slot] = offset[b] + node[slot];
+      x[i].weight[slot] = hat[slot] * per_kvp;
+      support[offset[b] + node[slot]] += hat[slot];
+    }
+    scale = std::max(scale, per_kvp);
+  }
+  // Only nodes some sample reaches are unknowns.
+  std::vector<int> index(nodes, -1);
+  int m = 0;
+  for (int c = 0; c < nodes; ++c) {
+    if (support[c] > 0) index[c] = m++;
+  }
+  if (m == 0) return;
+  // The meter's lag, exact for a flow held between samples, applied to each
+  // column as a running state; a state that has decayed away leaves the set.
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m), state = Eigen::VectorXd::Zero(m);
+  std::vector<int> active;
+  double qq = 0;
+  const auto add = [&](const Contribution& c, double factor) {
+    for (int s = 0; s < 2; ++s) {
+      if (c.column[s] < 0) continue;
+      const int j = index[c.column[s]];
+      if (state(j) == 0.0 && std::find(active.begin(), active.end(), j) == active.end())
+        active.push_back(j);
+      state(j) += factor * c.weight[s];
+    }
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    if (tau_s > 0 && i > 0) {
+      const double keep = std::exp(-(t[i] - t[i - 1]) / tau_s);
+      for (int j : active) state(j) *= keep;
+      add(x[i - 1], 1 - keep);
+    } else {
+      for (int j : active) state(j) = 0.0;
+      active.clear();
+      add(x[i], 1.0);
+    }
+    active.erase(std::remove_if(active.begin(), active.end(),
+                                [&](int j) {
+                                  if (std::fabs(state(j)) >= 1e-12 * scale) return false;
+                                  state(j) = 0.0;
+                                  return true;
+                                }),
+                 active.end());
+    for (int a : active) {
+      rhs(a) += state(a) * q[i];
+      for (int b : active) normal(a, b) += state(a) * state(b);
+    }
+    qq += q[i] * q[i];
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> solver(normal);
+  if (solver.info() != Eigen::Success) return;
+  const Eigen::VectorXd kvp = solver.solve(rhs);
+  const double squares = std::max(0.0, qq - 2 * kvp.dot(rhs) + kvp.dot(normal * kvp));
+  *squares_out += squares;
+  const double q_sigma = unit.manifest.DeclaredSigma(
+      "q", std::sqrt(squares / std::max(1.0, static_cast<double>(n) - m)));
+  const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
+  for (int c = 0; c < nodes; ++c) {
+    const int j = index[c];
+    if (j < 0 || support[c] < options.min_plateau_samples) continue;
+    const int b = c >= offset[1] ? 1 : 0, k = c - offset[b];
+    const BranchNodes& nodes_of = branch[b];
+    ValvePlateau node;
+    node.experiment = e.entry.id;
+    // A break's left limit is read just below u_sat, where K_vp is the polynomial.
+    node.u_V = nodes_of.u_V[k] == nodes_of.break_V && !nodes_of.right[k]
+                   ? std::nextafter(nodes_of.break_V, 0.0)
+                   : nodes_of.u_V[k];
+    node.decreasing = b == 1;
+    node.kvp_kg_per_s = kvp(j);
+    node.kvp_sigma = std::max(q_sigma * std::sqrt(std::max(inverse(j, j), 0.0)), 1e-15);
+    node.samples = static_cast<int>(std::lround(support[c]));
+    node.support_half_width_V = h;
+    plateaus->push_back(node);
+  }
+}
+
+}  // namespace
+
+std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
+                                               const ValveFitOptions& options,
+                                               const KvpBreaks& breaks, double* squares) {
+  const RigConstants& rig = unit.manifest.rig;
+  const auto orifice =
+      MakeOrificeCoefficients<double>(rig.gas.heat_capacity_ratio, rig.gas.gas_constant_J_per_kgK,
+                                      rig.gas.temperature_K, normalization);
+  const double tau = unit.manifest.DeclaredTau("q", 0.0);
+  std::vector<ValvePlateau> plateaus;
+  double continuous_squares = 0;
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind != ExperimentKind::kValve) continue;
+    const auto& u = e.column("u");
+    const auto levels = internal::HeldLevels(u, options.level_change_V);
+    if (HeldCommand(e.column("t"), u, levels, options)) {
+      StaircasePlateaus(e, levels, orifice, tau, unit, options, &plateaus);
+    } else {
+      ContinuousNodes(e, orifice, tau, unit, options, breaks, &plateaus, &continuous_squares);
+    }
+  }
+  if (squares != nullptr) *squares = continuous_squares;
+  return plateaus;
+}
+
+}  // namespace pneumaid
