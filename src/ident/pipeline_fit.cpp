@@ -11,6 +11,7 @@
 #include "determination.h"
 #include "held_levels.h"
 #include "pneumaid/eval/lag.h"
+#include "tube_from_meters.h"
 
 namespace pneumaid {
 namespace {
@@ -164,13 +165,12 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   fit.levels = log.levels = static_cast<int>(held.size());
   if (n < 20) return not_fitted("fewer than 20 samples");
   if (held.size() < 2) return not_fitted("the command never changes: a step response is needed");
+  log.sigma_in = std::max(manifest.DeclaredSigma("q_in", NoiseFromDifferences(*log.q_in)), 1e-12);
+  log.sigma_out =
+      std::max(manifest.DeclaredSigma("q_out", NoiseFromDifferences(*log.q_out)), 1e-12);
   if (log.levels > options.max_levels) {
-    char note[200];
-    std::snprintf(note, sizeof(note),
-                  "the command takes %d held levels (more than %d: a ramp or a sampled signal?); "
-                  "each level is an unknown valve flow",
-                  log.levels, options.max_levels);
-    return not_fitted(note);
+    internal::FitTubeFromMeters(e, manifest, options, log.sigma_in, log.sigma_out, &fit);
+    return fit;
   }
   log.level.resize(n);
   for (std::size_t k = 0; k < held.size(); ++k) {
@@ -178,9 +178,6 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   }
   log.tau_in_s = manifest.DeclaredTau("q_in", 0.0);
   log.tau_out_s = manifest.DeclaredTau("q_out", 0.0);
-  log.sigma_in = std::max(manifest.DeclaredSigma("q_in", NoiseFromDifferences(*log.q_in)), 1e-12);
-  log.sigma_out =
-      std::max(manifest.DeclaredSigma("q_out", NoiseFromDifferences(*log.q_out)), 1e-12);
 
   // Start: the best of the prior's delta and a log-spaced scan, each with
   // its best level flows.

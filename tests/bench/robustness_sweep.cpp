@@ -122,9 +122,9 @@ Draw MakeDraw(std::uint64_t seed, int index) {
   p.valve_hold_s = Uniform(&rng, 0.2, 0.4);
   p.tube_lengths_m = {0.38};
   if (Uniform(&rng, 0, 1) < 0.5) p.tube_lengths_m.push_back(Pick<double>(&rng, {0.09, 0.9, 1.2}));
-  const int shape = std::uniform_int_distribution<int>(0, 3)(rng);
+  int shape = std::uniform_int_distribution<int>(0, 3)(rng);
   const double on = Uniform(&rng, 0.05, 0.2), level = Uniform(&rng, 0.6, 1.0);
-  const char* shapes[] = {"step", "on-off", "two levels", "staircase"};
+  const char* shapes[] = {"step", "on-off", "two levels", "staircase", "ramp"};
   switch (shape) {
     case 0:
       p.pipeline_schedule = {{on, level}};
@@ -165,6 +165,18 @@ Draw MakeDraw(std::uint64_t seed, int index) {
     d.staircase_step_V = ValveFitOptions{}.node_spacing_V;
   }
   if (Uniform(&logger, 0, 1) < 0.25) p.dropped_samples = LogUniform(&logger, 0.002, 0.02);
+  // A sixth of the tube tests are a ramp up and down in 10 ms steps (no level held).
+  if (Uniform(&logger, 0, 1) < 1.0 / 6.0) {
+    const double ramp_s = Uniform(&logger, 0.4, 1.0), top = Uniform(&logger, 0.6, 1.0);
+    const int steps = static_cast<int>(std::lround(ramp_s / 0.01));
+    p.pipeline_schedule.clear();
+    for (int k = 0; k <= steps; ++k)
+      p.pipeline_schedule.push_back({on + 0.01 * k, top * k / steps});
+    for (int k = 1; k <= steps; ++k)
+      p.pipeline_schedule.push_back({on + ramp_s + 0.01 * k, top * (steps - k) / steps});
+    p.pipeline_duration_s = p.pipeline_schedule.back().first + 0.8;
+    shape = 4;
+  }
   char valve[48], dropped[48] = "";
   if (p.valve_ramp_s > 0) {
     std::snprintf(valve, sizeof(valve), "valve ramp %.1f s", p.valve_ramp_s);

@@ -29,8 +29,10 @@ struct PipelineFitOptions {
   // A change of the logged command larger than this starts a new held level;
   // smaller changes are the logger's noise.
   double level_change_V = 0.01;
-  // A log with more held levels than this (a ramp, a sampled signal) is not
-  // used: each level is an unknown flow.
+  // Each held level is an unknown valve flow. A log with more held levels
+  // than this (a ramp, a sampled signal) is fitted from the two meters'
+  // readings alone instead: L_in q_out = L_out L_delta q_in whatever the
+  // valve's flow (src/ident/tube_from_meters.h).
   int max_levels = 60;
   // delta counts as determined when its standard error is below this fraction
   // of its value; otherwise the tube is reported as not fitted.

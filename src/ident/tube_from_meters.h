@@ -1,0 +1,20 @@
+// The tube fit of a log whose command is not held (a ramp, a sampled
+// signal): no level flows to solve for, delta from the two meters' readings
+// alone (tube_from_meters.cpp).
+#pragma once
+
+#include "pneumaid/ident/pipeline_fit.h"
+#include "pneumaid/io/rig_data.h"
+
+namespace pneumaid::internal {
+
+// Fits delta of the tube log `e` into `fit` (its status, reason, value and
+// standard error). The standard error is the sandwich clustered by blocks of
+// five correlation times (the residuals are filtered, so neighbours
+// correlate), which also carries any model error. sigma_in and sigma_out are
+// the meters' noise (declared or read off the log).
+void FitTubeFromMeters(const Experiment& e, const Manifest& manifest,
+                       const PipelineFitOptions& options, double sigma_in, double sigma_out,
+                       TubeFit* fit);
+
+}  // namespace pneumaid::internal
