@@ -94,7 +94,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
     }
     Channel c = row;
     c.factor = wanted->second.weight / sigma;
-    c.meter_tau_s = row.name[0] == 'q' ? unit.manifest.DeclaredTau(row.name, 0.0) : 0.0;
+    c.meter_tau_s = unit.manifest.DeclaredTau(row.name, 0.0);
     out.channels.push_back(c);
   }
   if (out.channels.empty()) {

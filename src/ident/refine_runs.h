@@ -21,7 +21,7 @@ struct Channel {
   std::vector<double> Trajectory::*values;
   Eigen::MatrixXd TrajectorySensitivities::*derivatives;
   double factor;       // weight / sigma
-  double meter_tau_s;  // flows: the declared meter lag, 0 when none
+  double meter_tau_s;  // the channel's declared instrument lag, 0 when none
 };
 
 // Nuisance coordinates of an estimated start: the offsets of p1(t0), p2(t0)

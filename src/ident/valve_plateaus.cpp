@@ -122,8 +122,9 @@ void StaircasePlateaus(const Experiment& e, const Levels& levels,
 // The nodes of one branch's K_vp for a command that is not held: every
 // node_spacing_V from the first (K_vp(0) = 0 is implied), sorted. With a
 // break at u_sat (> 0) K_vp may jump there: the node is doubled, its left
-// limit ending the polynomial and its right one starting saturation (the
-// grid nodes stay, so that every break leaves as many unknowns).
+// limit ending the polynomial and its right one starting saturation. The
+// grid nodes stay (a break on a grid node replaces it), so that breaks
+// between grid nodes leave as many unknowns.
 struct BranchNodes {
   std::vector<double> u_V;
   std::vector<char> right;  // at or above the break

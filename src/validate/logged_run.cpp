@@ -106,11 +106,14 @@ Parameters WithUnitConstants(const Parameters& params, const Unit& unit) {
   return out;
 }
 
-// The simulated run as the rig's instruments would have logged it: flows
-// through the declared meter lags.
+// The simulated run as the rig's instruments would have logged it: every
+// channel through its declared instrument lag (flow meters, and any lag
+// declared for the position or pressure transducers).
 void ApplyDeclaredLags(const Manifest& manifest, Trajectory* run) {
   for (const auto& [name, values] :
-       {std::make_pair("q1", &run->q1_kg_per_s), std::make_pair("q2", &run->q2_kg_per_s)}) {
+       {std::make_pair("x", &run->x_m), std::make_pair("p1", &run->p1_Pa),
+        std::make_pair("p2", &run->p2_Pa), std::make_pair("q1", &run->q1_kg_per_s),
+        std::make_pair("q2", &run->q2_kg_per_s)}) {
     const double tau_s = manifest.DeclaredTau(name, 0.0);
     if (tau_s > 0) *values = FirstOrderLag(run->t_s, *values, tau_s);
   }

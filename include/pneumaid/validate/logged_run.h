@@ -32,8 +32,8 @@ Parameters WithUnitConstants(const Parameters& params, const Unit& unit);
 InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m,
                                 int* samples_averaged = nullptr);
 
-// A simulated run as the rig's instruments would have logged it: flows
-// through the meter lags the manifest declares.
+// A simulated run as the rig's instruments would have logged it: each
+// channel (x, p1, p2, q1, q2) through the lag the manifest declares for it.
 void ApplyDeclaredLags(const Manifest& manifest, Trajectory* run);
 
 }  // namespace pneumaid
