@@ -20,6 +20,7 @@ std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {
   out->entry = e.entry;
   out->path = e.path;
   out->sha256 = e.sha256;
+  out->time_origin_s = e.time_origin_s;
   if (t.size() < 2) return out;
   std::vector<double> intervals(t.size() - 1);
   for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];

@@ -548,6 +548,12 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
     out.units_as_written[column.name] = column.unit;
     out.columns[column.name] = std::move(values);
   }
+  // Time counts from the log's first sample: a logger's absolute clock (Unix
+  // time, 1.7e9 s, resolved to 2.4e-7 s) leaves the simulator no digits for
+  // its steps.
+  std::vector<double>& t = out.columns.at("t");
+  out.time_origin_s = t.front();
+  for (double& value : t) value -= out.time_origin_s;
   out.sha256 = sha256.valid() ? sha256.get() : Sha256Hex(text);
   return out;
 }

@@ -111,6 +111,24 @@ TEST_F(RigDataTest, ReadsAValidUnitIntoSI) {
   EXPECT_DOUBLE_EQ(run.q2_kg_per_s[2], -2e-6);
 }
 
+// A logger's absolute clock (Unix time): time counts from the log's first
+// sample, the logged origin is kept, the intervals are the logged ones (to
+// the 2.4e-7 s a double resolves at 1.7e9 s).
+TEST_F(RigDataTest, TimeCountsFromTheLogsFirstSample) {
+  files_["step.csv"] =
+      "t [s],u [V],x [mm],p1 [bar],p2 [kPa]\n"
+      "1732500000.0,1,0,1,100\n1732500000.001,1,0.5,1.5,100\n1732500000.002,1,1,2,110\n";
+  WriteAll();
+  const Unit unit = ReadUnit(UnitDir());
+  const Experiment& step = unit.experiments[2];
+  EXPECT_EQ(step.time_origin_s, 1732500000.0);
+  EXPECT_EQ(step.column("t")[0], 0.0);
+  EXPECT_NEAR(step.column("t")[1], 0.001, 3e-7);
+  EXPECT_NEAR(step.column("t")[2], 0.002, 3e-7);
+  EXPECT_EQ(unit.experiments[1].column("t")[0], 0.0);  // a log that starts at 0 is unchanged
+  EXPECT_EQ(unit.experiments[1].time_origin_s, 0.0);
+}
+
 // Each log's SHA-256 is its bytes' whether hashed on a second thread or on
 // the reading one (a batch worker's).
 TEST_F(RigDataTest, HashesEachLogOnceWhereverItIsHashed) {

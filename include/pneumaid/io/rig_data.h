@@ -77,11 +77,13 @@ struct Experiment {
   ExperimentEntry entry;
   std::string path;    // the file read
   std::string sha256;  // of its bytes
-  // SI columns by name: t [s], u [V], x [m from mid-stroke], pressures [Pa
-  // absolute], flows [kg/s]. Only the columns of the kind's table.
+  // SI columns by name: t [s, from the log's first sample], u [V], x [m from
+  // mid-stroke], pressures [Pa absolute], flows [kg/s]. Only the columns of
+  // the kind's table.
   std::map<std::string, std::vector<double>> columns;
   std::map<std::string, std::string> units_as_written;  // column -> unit in the header ("" = SI)
   std::vector<std::string> ignored_columns;
+  double time_origin_s = 0;  // the logged time of the first sample (t = 0 here)
 
   std::size_t samples() const;
   const std::vector<double>& column(const std::string& name) const;  // empty when absent
