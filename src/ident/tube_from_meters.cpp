@@ -45,7 +45,7 @@ class CrossFilter {
 
   // What the meters' white noise (sigma_in, sigma_out) leaves in one
   // residual: each noise through its filters, the power gain read off the
-  // filters' impulse response at the median interval.
+  // filters' impulse response at the mean interval.
   double NoiseVariance(double delta_per_s, double sigma_in, double sigma_out) const {
     const auto gain = [this](std::vector<double> taus) {
       std::vector<double> impulse(std::min<std::size_t>(t_.size(), 200000), 0.0);

@@ -9,10 +9,12 @@
 namespace pneumaid::internal {
 
 // Fits delta of the tube log `e` into `fit` (its status, reason, value and
-// standard error). The standard error is the sandwich clustered by blocks of
+// standard error). The standard error: the meters' white noise through the
+// filters (the adjoint lags applied to the sensitivity), widened by the
+// reduced chi-square when above 1, or the sandwich clustered by blocks of
 // five correlation times (the residuals are filtered, so neighbours
-// correlate), which also carries any model error. sigma_in and sigma_out are
-// the meters' noise (declared or read off the log).
+// correlate) when that is larger. sigma_in and sigma_out are the meters'
+// noise (declared or read off the log).
 void FitTubeFromMeters(const Experiment& e, const Manifest& manifest,
                        const PipelineFitOptions& options, double sigma_in, double sigma_out,
                        TubeFit* fit);

@@ -272,7 +272,7 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
     best = FitBranch(plateaus, prior, prefix, options);
     if (best.has_values()) {
       best.coefficients.back().held =
-          "the staircase shows no saturation (no " + std::to_string(saturated) +
+          "the log shows no saturation (no " + std::to_string(saturated) +
           " or more top openings with one flat K_vp); held at the prior's";
     }
     return best;
@@ -292,7 +292,8 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
 // but cannot tell which of two neighbouring gaps holds a small jump. Of the
 // breaks every tenth of a spacing across that gap and the gap either side
 // (the other branch's break held), the one whose nodes the branch fits best
-// at that u_sat, into breaks->*branch. Every break leaves as many nodes.
+// at that u_sat (per degree of freedom: a break next to a grid node leaves
+// a limit node with too few samples to report), into breaks->*branch.
 void ScanSaturation(const Unit& unit, double normalization, const ValveFitOptions& options,
                     const BranchFit& fit, const std::string& prefix, double KvpBreaks::*branch,
                     KvpBreaks* breaks) {
@@ -313,8 +314,10 @@ void ScanSaturation(const Unit& unit, double normalization, const ValveFitOption
     KvpBranchParams at = fit.params;
     at.u_sat_V = breaks->*branch;
     const BranchFit candidate = FitBranch(points, at, prefix, options);
-    if (candidate.has_values() && candidate.final_cost < best)
-      best = candidate.final_cost, best_V = breaks->*branch;
+    const double dof = static_cast<double>(points.size()) - kBranchParameters;
+    if (!candidate.has_values() || !(dof > 0)) continue;
+    if (candidate.final_cost / dof < best)
+      best = candidate.final_cost / dof, best_V = breaks->*branch;
   }
   breaks->*branch = best_V;
 }
@@ -344,7 +347,10 @@ bool ValveFitOptions::IsValid(std::string* error) const {
 ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
                         const ValveFitOptions& options) {
   ValveFitResult result;
-  result.plateaus = ExtractValvePlateaus(unit, prior.normalization, options);
+  // With u_sat held at the prior's, a continuous command's K_vp may jump there.
+  KvpBreaks held;
+  if (!options.fit_u_sat) held = {prior.increasing.u_sat_V, prior.decreasing.u_sat_V};
+  result.plateaus = ExtractValvePlateaus(unit, prior.normalization, options, held);
   const auto split = [](const std::vector<ValvePlateau>& plateaus) {
     std::array<std::vector<const ValvePlateau*>, 2> branches;  // increasing, decreasing
     for (const auto& p : plateaus) branches[p.decreasing].push_back(&p);
@@ -355,8 +361,8 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
   result.increasing = fit(first[0], prior.increasing, "valve.increasing", options);
   result.decreasing = fit(first[1], prior.decreasing, "valve.decreasing", options);
   // A continuous command's nodes next to u_sat spanned K_vp's jump and were
-  // left out of the fit. The log is read again with K_vp free to jump inside
-  // the gap found (ScanSaturation), and the branch fitted there from every node.
+  // left out of the fit. The log is read again with K_vp free to jump where
+  // ScanSaturation finds it, and the branch fitted there from every node.
   const bool nodes = std::any_of(result.plateaus.begin(), result.plateaus.end(),
                                  [](const ValvePlateau& p) { return p.support_half_width_V > 0; });
   if (nodes && (result.increasing.u_sat_fitted || result.decreasing.u_sat_fitted)) {
@@ -370,22 +376,32 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
     std::vector<ValvePlateau> again =
         ExtractValvePlateaus(unit, prior.normalization, options, breaks);
     const auto second = split(again);
-    for (const auto& [branch, points, start, prefix, at] :
-         {std::make_tuple(&result.increasing, &second[0], &prior.increasing, "valve.increasing",
-                          breaks.increasing_V),
-          std::make_tuple(&result.decreasing, &second[1], &prior.decreasing, "valve.decreasing",
-                          breaks.decreasing_V)}) {
-      if (!branch->u_sat_fitted) continue;
-      KvpBranchParams located = branch->params;
-      located.u_sat_V = at;
-      BranchFit refit = FitBranch(*points, located, prefix, options);
-      if (!refit.has_values()) continue;
-      MarkSaturationFitted(*start, branch->coefficients.back().standard_error, &refit);
-      refit.u_sat_gap_low_V = branch->u_sat_gap_low_V;
-      refit.u_sat_gap_high_V = branch->u_sat_gap_high_V;
-      *branch = std::move(refit);
+    BranchFit refits[2];
+    bool all = true;
+    for (int b = 0; b < 2; ++b) {
+      BranchFit& branch = b == 0 ? result.increasing : result.decreasing;
+      if (!branch.u_sat_fitted) continue;
+      KvpBranchParams located = branch.params;
+      located.u_sat_V = b == 0 ? breaks.increasing_V : breaks.decreasing_V;
+      refits[b] =
+          FitBranch(second[b], located, b == 0 ? "valve.increasing" : "valve.decreasing", options);
+      all = all && refits[b].has_values();
     }
-    result.plateaus = std::move(again);
+    // Both refits or neither, so that the branches and the plateaus reported agree.
+    if (all) {
+      for (int b = 0; b < 2; ++b) {
+        BranchFit& branch = b == 0 ? result.increasing : result.decreasing;
+        if (!branch.u_sat_fitted) continue;
+        // u_sat keeps the error of the node gap, now centred on where it lies.
+        const double error = branch.coefficients.back().standard_error;
+        const double width = branch.u_sat_gap_high_V - branch.u_sat_gap_low_V;
+        MarkSaturationFitted(b == 0 ? prior.increasing : prior.decreasing, error, &refits[b]);
+        refits[b].u_sat_gap_low_V = refits[b].params.u_sat_V - 0.5 * width;
+        refits[b].u_sat_gap_high_V = refits[b].params.u_sat_V + 0.5 * width;
+        branch = std::move(refits[b]);
+      }
+      result.plateaus = std::move(again);
+    }
   }
   AppendFit(result.increasing, "increasing", &result);
   AppendFit(result.decreasing, "decreasing", &result);

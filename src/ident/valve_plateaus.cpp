@@ -12,6 +12,7 @@
 #include "pneumaid/ident/valve_fit.h"
 #include "pneumaid/model/orifice.h"
 #include "pneumaid/model/valve_bank.h"
+#include "pneumaid/sim/simulate.h"
 
 namespace pneumaid {
 namespace {
@@ -182,7 +183,7 @@ struct BranchNodes {
 // the u_sat found) the nodes at a break are its one-sided limits.
 void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& orifice, double tau_s,
                      const Unit& unit, const ValveFitOptions& options, const KvpBreaks& breaks,
-                     std::vector<ValvePlateau>* plateaus, double* squares_out) {
+                     std::vector<ValvePlateau>* plateaus) {
   const auto &t = e.column("t"), &u = e.column("u"), &q = e.column("q");
   const auto &p_up = e.column("p_up"), &p_down = e.column("p_down");
   const std::size_t n = t.size();
@@ -199,13 +200,14 @@ void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& ori
   };
   std::vector<Contribution> x(n);
   std::vector<double> support(nodes, 0.0);
-  BranchLatch latch(options.level_change_V);
+  BranchLatch latch(SimulationOptions{}.hysteresis_threshold_V);  // as the simulator latches
   double scale = 0;
   for (std::size_t i = 0; i < n; ++i) {
     latch.Update(u[i]);
     const double opening = std::clamp(u[i], 0.0, 1.0);
     if (opening <= 0 || !(p_up[i] > 0)) continue;
     const double per_kvp = orifice.flow_scale * p_up[i] * FlowShape(p_down[i] / p_up[i], orifice);
+    if (!(per_kvp > 0)) continue;  // no pressure drop: the sample says nothing of K_vp
     const int b = latch.decreasing() ? 1 : 0;
     int node[2];
     double hat[2];
@@ -267,7 +269,6 @@ void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& ori
   if (solver.info() != Eigen::Success) return;
   const Eigen::VectorXd kvp = solver.solve(rhs);
   const double squares = std::max(0.0, qq - 2 * kvp.dot(rhs) + kvp.dot(normal * kvp));
-  *squares_out += squares;
   const double q_sigma = unit.manifest.DeclaredSigma(
       "q", std::sqrt(squares / std::max(1.0, static_cast<double>(n) - m)));
   const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
@@ -295,14 +296,13 @@ void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& ori
 
 std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
                                                const ValveFitOptions& options,
-                                               const KvpBreaks& breaks, double* squares) {
+                                               const KvpBreaks& breaks) {
   const RigConstants& rig = unit.manifest.rig;
   const auto orifice =
       MakeOrificeCoefficients<double>(rig.gas.heat_capacity_ratio, rig.gas.gas_constant_J_per_kgK,
                                       rig.gas.temperature_K, normalization);
   const double tau = unit.manifest.DeclaredTau("q", 0.0);
   std::vector<ValvePlateau> plateaus;
-  double continuous_squares = 0;
   for (const Experiment& e : unit.experiments) {
     if (e.entry.kind != ExperimentKind::kValve) continue;
     const auto& u = e.column("u");
@@ -310,10 +310,9 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
     if (HeldCommand(e.column("t"), u, levels, options)) {
       StaircasePlateaus(e, levels, orifice, tau, unit, options, &plateaus);
     } else {
-      ContinuousNodes(e, orifice, tau, unit, options, breaks, &plateaus, &continuous_squares);
+      ContinuousNodes(e, orifice, tau, unit, options, breaks, &plateaus);
     }
   }
-  if (squares != nullptr) *squares = continuous_squares;
   return plateaus;
 }
 

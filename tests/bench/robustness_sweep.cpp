@@ -403,6 +403,10 @@ int main(int argc, char** argv) {
     else if (flag == "--keep")
       keep = argv[i + 1];
     else if (flag == "--units") {
+      if (value.empty()) {
+        std::cerr << "--units: an empty list\n";
+        return 2;
+      }
       std::stringstream list(value);
       for (std::string item; std::getline(list, item, ',');) {
         char* end = nullptr;
@@ -446,6 +450,8 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  std::sort(indices.begin(), indices.end());
+  indices.erase(std::unique(indices.begin(), indices.end()), indices.end());  // each unit once
   if (indices.empty()) {
     for (int k = 0; k < n; ++k) indices.push_back(k);
   }

@@ -83,7 +83,9 @@ struct KvpBand {
 struct BranchFit : FitResult {
   KvpBranchParams params;     // the coefficients as a branch (the prior's when not fitted)
   bool u_sat_fitted = false;  // u_sat was read off the staircase
-  double u_sat_gap_low_V = 0, u_sat_gap_high_V = 0;  // the openings it lies between
+  // The interval u_sat lies in: the openings either side (a ramp's: one node
+  // spacing centred on where the scan of breaks put it).
+  double u_sat_gap_low_V = 0, u_sat_gap_high_V = 0;
   int plateaus = 0;
   KvpBand band;
 };
@@ -103,13 +105,11 @@ struct KvpBreaks {
 };
 
 // The plateaus of every valve experiment of `unit` (and the nodes of those
-// whose command is not held, with K_vp free to jump at `breaks`; the sum of
-// their logs' squared flow residuals [kg^2/s^2] into `squares`).
+// whose command is not held, with K_vp free to jump at `breaks`).
 // `normalization` is N of Eq. 4.
 std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
                                                const ValveFitOptions& options,
-                                               const KvpBreaks& breaks = {},
-                                               double* squares = nullptr);
+                                               const KvpBreaks& breaks = {});
 
 // Fits both branches; a branch without enough plateaus keeps `prior`'s values.
 ValveFitResult FitValve(const Unit& unit, const ValveParams& prior, const ValveFitOptions& options);
