@@ -244,8 +244,7 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
     // A replay over a long slide integrates any bias of the force twice: the
     // rest of such a slide is left to the force balance (friction_slides.h).
     const std::size_t max_slide = std::max<std::size_t>(
-        options.min_stuck_samples,
-        static_cast<std::size_t>(internal::WholeSamples(options.max_slide_s, period_s)));
+        options.min_stuck_samples, static_cast<std::size_t>(options.max_slide_s / period_s));
     bool cut = false;
     if (s.end > stuck_end + max_slide) {
       s.end = stuck_end + max_slide;
@@ -319,8 +318,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
                                           rig.area_1_m2(), rig.area_2_m2(), weight_N);
     }
     const auto& x = e.column("x");
-    const int min_samples =
-        std::max(options.min_stuck_samples, internal::SamplesCovering(options.min_stuck_s, period));
+    const int min_samples = std::max(options.min_stuck_samples,
+                                     static_cast<int>(std::ceil(options.min_stuck_s / period)));
     const Runs runs =
         StuckRuns(x, band, min_samples, options.max_stuck_speed_m_per_s * period,
                   options.max_stuck_acceleration_m_per_s2 * period * period, sigma_x_m);

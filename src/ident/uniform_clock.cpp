@@ -14,18 +14,6 @@ double UniformPeriod(const std::vector<double>& t) {
   return period;
 }
 
-namespace {
-constexpr double kClockRoundOff = 1e-6;  // of one interval
-}  // namespace
-
-int WholeSamples(double duration_s, double period_s) {
-  return static_cast<int>(std::floor(duration_s / period_s + kClockRoundOff));
-}
-
-int SamplesCovering(double duration_s, double period_s) {
-  return static_cast<int>(std::ceil(duration_s / period_s - kClockRoundOff));
-}
-
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {
   const auto& t = e.column("t");
   auto out = std::make_shared<Experiment>();

@@ -14,14 +14,6 @@ namespace pneumaid::internal {
 // mean, else 0.
 double UniformPeriod(const std::vector<double>& t);
 
-// How many whole sampling intervals fit in `duration_s`, and how many it
-// takes to cover it, with the round-off of a logged clock forgiven: a
-// duration of exactly four intervals is four, whether the interval read off
-// the time stamps is a part in 1e9 above or below its nominal value (a
-// logger's clock origin moves it that much).
-int WholeSamples(double duration_s, double period_s);
-int SamplesCovering(double duration_s, double period_s);
-
 // `e` on a uniform clock at its median sampling interval: each column
 // interpolated linearly between its samples, the command (`u`) held from
 // each sample.
