@@ -16,6 +16,8 @@
 namespace pneumaid {
 namespace {
 
+using internal::DeltaScan;
+
 // What one tube log's fit needs: samples, the level each sample belongs to,
 // meter lags and the channels' noise.
 struct TubeLog {
@@ -184,11 +186,9 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   std::vector<double> flow, best_flow;
   double best_delta = options.initial_delta_per_s;
   double best_cost = BestLevels(log, best_delta, &best_flow);
-  const double decades = std::log10(options.max_delta_per_s / options.min_delta_per_s);
-  const int points =
-      std::max(2, static_cast<int>(std::ceil(decades * options.scan_points_per_decade)));
-  for (int k = 0; k <= points; ++k) {
-    const double delta = options.min_delta_per_s * std::pow(10.0, decades * k / points);
+  const DeltaScan scan(options);
+  for (int k = 0; k <= scan.points; ++k) {
+    const double delta = scan.At(k);
     const double cost = BestLevels(log, delta, &flow);
     if (cost < best_cost) best_cost = cost, best_delta = delta, best_flow = flow;
   }

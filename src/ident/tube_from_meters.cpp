@@ -26,6 +26,7 @@ class CrossFilter {
         tau_out_s_(manifest.DeclaredTau("q_out", 0.0)),
         out_through_in_(e.column("q_out")) {
     if (tau_in_s_ > 0) ApplyFirstOrderLag(Intervals(), tau_in_s_, &out_through_in_);
+    out_noise_gain_ = tau_in_s_ > 0 ? PowerGain({tau_in_s_}) : 1.0;  // q_out's noise through L_in
   }
 
   // L_in q_out - L_out L_delta q_in.
@@ -47,22 +48,8 @@ class CrossFilter {
   // residual: each noise through its filters, the power gain read off the
   // filters' impulse response at the mean interval.
   double NoiseVariance(double delta_per_s, double sigma_in, double sigma_out) const {
-    const auto gain = [this](std::vector<double> taus) {
-      std::vector<double> impulse(std::min<std::size_t>(t_.size(), 200000), 0.0);
-      if (impulse.size() < 2) return 1.0;
-      impulse[1] = 1.0;  // the filters act from the next sample on
-      const double h = (t_.back() - t_.front()) / static_cast<double>(t_.size() - 1);
-      for (double tau : taus) {
-        if (tau > 0) ApplyFirstOrderLag([h](std::size_t) { return h; }, tau, &impulse);
-      }
-      double sum = 0;
-      for (std::size_t i = 1; i < impulse.size(); ++i) sum += impulse[i] * impulse[i];
-      return taus.empty() ? 1.0 : sum;
-    };
-    const std::vector<double> in_path = {1.0 / delta_per_s, tau_out_s_};
-    std::vector<double> out_path;
-    if (tau_in_s_ > 0) out_path.push_back(tau_in_s_);
-    return sigma_in * sigma_in * gain(in_path) + sigma_out * sigma_out * gain(out_path);
+    return sigma_in * sigma_in * PowerGain({1.0 / delta_per_s, tau_out_s_}) +
+           sigma_out * sigma_out * out_noise_gain_;
   }
 
   // Var(J'r) under the meters' white noise: sigma_out^2 |L_in' J|^2 +
@@ -86,6 +73,21 @@ class CrossFilter {
   double Time(std::size_t i) const { return t_[i]; }
 
  private:
+  // The white-noise power gain of the lags `taus` in turn: the sum of the
+  // squares of their impulse response at the mean interval.
+  double PowerGain(const std::vector<double>& taus) const {
+    std::vector<double> impulse(std::min<std::size_t>(t_.size(), 200000), 0.0);
+    if (impulse.size() < 2) return 1.0;
+    impulse[1] = 1.0;  // the filters act from the next sample on
+    const double h = (t_.back() - t_.front()) / static_cast<double>(t_.size() - 1);
+    for (double tau : taus) {
+      if (tau > 0) ApplyFirstOrderLag([h](std::size_t) { return h; }, tau, &impulse);
+    }
+    double sum = 0;
+    for (std::size_t i = 1; i < impulse.size(); ++i) sum += impulse[i] * impulse[i];
+    return sum;
+  }
+
   // w <- L' w for the lag L of ApplyFirstOrderLag (y_0 = x_0, y_i = a_i
   // y_(i-1) + (1 - a_i) x_(i-1)): lambda_k = w_k + a_(k+1) lambda_(k+1)
   // backwards, then x_j's share is (1 - a_(j+1)) lambda_(j+1), plus lambda_0
@@ -109,6 +111,7 @@ class CrossFilter {
   const std::vector<double>& q_in_;
   double tau_in_s_, tau_out_s_;
   std::vector<double> out_through_in_;
+  double out_noise_gain_ = 1.0;
 };
 
 }  // namespace
@@ -117,12 +120,8 @@ void FitTubeFromMeters(const Experiment& e, const Manifest& manifest,
                        const PipelineFitOptions& options, double sigma_in, double sigma_out,
                        TubeFit* fit) {
   const CrossFilter filter(e, manifest);
-  const double decades = std::log10(options.max_delta_per_s / options.min_delta_per_s);
-  const int points =
-      std::max(2, static_cast<int>(std::ceil(decades * options.scan_points_per_decade)));
-  const auto at = [&](double k) {
-    return options.min_delta_per_s * std::pow(10.0, decades * k / points);
-  };
+  const DeltaScan scan(options);
+  const auto at = [&scan](double k) { return scan.At(k); };
   // The meters' noise passes through L_out L_delta, more of it the faster
   // the tube: its expected share of the squares is taken off, so that noise
   // does not pull delta (an errors-in-variables correction).
@@ -132,12 +131,12 @@ void FitTubeFromMeters(const Experiment& e, const Manifest& manifest,
   };
   int best_k = 0;
   double best = INFINITY;
-  for (int k = 0; k <= points; ++k) {
+  for (int k = 0; k <= scan.points; ++k) {
     const double value = objective(at(k));
     if (value < best) best = value, best_k = k;
   }
   // Golden section in k (log delta) across the best scan point's neighbours.
-  double low = std::max(0.0, best_k - 1.0), high = std::min<double>(points, best_k + 1.0);
+  double low = std::max(0.0, best_k - 1.0), high = std::min<double>(scan.points, best_k + 1.0);
   const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
   double a = high - golden * (high - low), b = low + golden * (high - low);
   double fa = objective(at(a)), fb = objective(at(b));

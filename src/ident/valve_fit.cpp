@@ -287,6 +287,14 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   return best;
 }
 
+// The plateaus of each branch: increasing first, then decreasing.
+std::array<std::vector<const ValvePlateau*>, 2> Branches(
+    const std::vector<ValvePlateau>& plateaus) {
+  std::array<std::vector<const ValvePlateau*>, 2> branches;
+  for (const auto& p : plateaus) branches[p.decreasing].push_back(&p);
+  return branches;
+}
+
 // Where a continuous command's K_vp saturates: the saturation search, which
 // leaves out the nodes whose hats span K_vp's jump, picks a gap between nodes
 // but cannot tell which of two neighbouring gaps holds a small jump. Of the
@@ -307,10 +315,7 @@ void ScanSaturation(const Unit& unit, double normalization, const ValveFitOption
     if (!(breaks->*branch > 0 && breaks->*branch < 1)) continue;
     const std::vector<ValvePlateau> nodes =
         ExtractValvePlateaus(unit, normalization, options, *breaks);
-    std::vector<const ValvePlateau*> points;
-    for (const ValvePlateau& p : nodes) {
-      if (p.decreasing == (branch == &KvpBreaks::decreasing_V)) points.push_back(&p);
-    }
+    const auto points = Branches(nodes)[branch == &KvpBreaks::decreasing_V];
     KvpBranchParams at = fit.params;
     at.u_sat_V = breaks->*branch;
     const BranchFit candidate = FitBranch(points, at, prefix, options);
@@ -351,12 +356,7 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
   KvpBreaks held;
   if (!options.fit_u_sat) held = {prior.increasing.u_sat_V, prior.decreasing.u_sat_V};
   result.plateaus = ExtractValvePlateaus(unit, prior.normalization, options, held);
-  const auto split = [](const std::vector<ValvePlateau>& plateaus) {
-    std::array<std::vector<const ValvePlateau*>, 2> branches;  // increasing, decreasing
-    for (const auto& p : plateaus) branches[p.decreasing].push_back(&p);
-    return branches;
-  };
-  const auto first = split(result.plateaus);
+  const auto first = Branches(result.plateaus);
   const auto fit = options.fit_u_sat ? FitBranchAndSaturation : FitBranch;
   result.increasing = fit(first[0], prior.increasing, "valve.increasing", options);
   result.decreasing = fit(first[1], prior.decreasing, "valve.decreasing", options);
@@ -375,7 +375,7 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
                    &KvpBreaks::decreasing_V, &breaks);
     std::vector<ValvePlateau> again =
         ExtractValvePlateaus(unit, prior.normalization, options, breaks);
-    const auto second = split(again);
+    const auto second = Branches(again);
     BranchFit refits[2];
     bool all = true;
     for (int b = 0; b < 2; ++b) {
