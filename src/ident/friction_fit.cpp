@@ -224,6 +224,7 @@ bool FrictionFitOptions::IsValid(std::string* error) const {
   if (arrest_samples < 0) return fail("arrest_samples must be >= 0");
   if (stuck_force_samples < 3) return fail("stuck_force_samples must be >= 3");
   if (!(end_margin_m >= 0)) return fail("end_margin_m must be >= 0");
+  if (!(end_slide_m >= 0)) return fail("end_slide_m must be >= 0");
   if (substeps < 1) return fail("substeps must be >= 1");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(outlier_ratio > 1)) return fail("outlier_ratio must be > 1");

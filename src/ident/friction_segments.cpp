@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -207,7 +208,7 @@ double EscapeVelocityError(const std::vector<double>& x, std::size_t at, std::si
 void CutSegments(const std::vector<double>& force, const std::vector<double>& x, const Runs& runs,
                  double band, double half_stroke_m, double contact_m, double period_s,
                  double sigma_x_m, double drift_m, const FrictionFitOptions& options,
-                 StrokeData* data) {
+                 const std::array<bool, 2>& from_stops, StrokeData* data) {
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const auto [stuck_begin, stuck_end] = runs[k];
     Segment s{};
@@ -216,20 +217,34 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
     s.period_s = period_s;
     s.begin = std::max(stuck_begin + 1,
                        stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
-    // A rod stuck at an end may rest on the stop, and the pressures there
-    // change faster than a replay between samples follows (the chamber at
-    // the end is nearly its dead volume): no segment starts there. Its
-    // breakaway force still tells Fs.
-    if (EndContact(x[stuck_end - 1], half_stroke_m, contact_m) != 0) {
-      const std::size_t after = std::min(x.size() - 1, stuck_end + options.min_stuck_samples);
-      const double travel = x[after] - x[stuck_end - 1];
-      if (std::fabs(travel) > band) {
-        const int direction = travel > 0 ? +1 : -1;
-        data->end_breakaway_N[direction > 0 ? 0 : 1].push_back(
-            direction * force[BreakawaySample(x, stuck_begin, stuck_end, sigma_x_m)]);
+    // A rod stuck at an end may rest on the stop, whose force is not
+    // friction: its segment starts once the force points away from the stop,
+    // and only a slide that leaves the stop is replayed, over its first
+    // end_slide_m (the chamber at the stop is near its dead volume, and its
+    // pressure falls faster than a replay between samples follows).
+    const int contact = EndContact(x[stuck_end - 1], half_stroke_m, contact_m);
+    if (contact != 0) {
+      // Which way the rod first moves beyond the band (a heavy rod moves
+      // off slowly), before it sticks again.
+      const std::size_t next_stuck = k + 1 < runs.size() ? runs[k + 1].first : x.size();
+      int leaving = 0;
+      for (std::size_t i = stuck_end; i < next_stuck && leaving == 0; ++i) {
+        const double travel = x[i] - x[stuck_end - 1];
+        if (std::fabs(travel) > band) leaving = travel > 0 ? +1 : -1;
       }
-      ++data->excluded;
-      continue;
+      if (leaving != 0) {
+        data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
+            leaving * force[BreakawaySample(x, stuck_begin, stuck_end, sigma_x_m)]);
+      }
+      std::size_t free_from = s.begin;  // after the last sample pushing into the stop
+      for (std::size_t i = s.begin; i < stuck_end; ++i) {
+        if (contact * force[i] >= 0) free_from = i + 1;
+      }
+      if (leaving != -contact || !from_stops[leaving > 0 ? 0 : 1] || free_from + 2 > stuck_end) {
+        ++data->excluded;
+        continue;
+      }
+      s.begin = free_from;
     }
     // The run's last sample may already be the first of the slide.
     const std::size_t settled_end = std::max(s.begin + 1, stuck_end - 1);
@@ -250,14 +265,21 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
       s.end = stuck_end + max_slide;
       cut = true;
     }
+    // A slide from a stop keeps at least two samples after its breakaway.
+    const std::size_t min_slide = contact != 0 ? 2 : options.min_stuck_samples;
+    bool left_stop = false;  // a slide from a stop has left its contact zone
     for (std::size_t i = stuck_end; i < s.end; ++i) {
-      if (EndContact(x[i], half_stroke_m, contact_m) != 0) {
+      const int touches = EndContact(x[i], half_stroke_m, contact_m);
+      const bool far_from_stop = contact != 0 && i >= stuck_end + min_slide &&
+                                 std::fabs(x[i] - s.initial_position_m) > options.end_slide_m;
+      if ((touches != 0 && (touches != contact || left_stop)) || far_from_stop) {
         s.end = i;
         cut = true;
         break;
       }
+      left_stop = left_stop || touches == 0;
     }
-    if (s.end < stuck_end + options.min_stuck_samples) {
+    if (s.end < stuck_end + min_slide) {
       ++data->excluded;
       continue;
     }
@@ -278,8 +300,13 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
   }
 }
 
-StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m, const StrokeSelection& selection) {
+namespace {
+
+// PrepareStrokes, with slides that leave an end stop replayed in the
+// directions `from_stops` says.
+StrokeData PrepareStrokesFrom(const Unit& unit, const FrictionFitOptions& options, double band,
+                              double sigma_x_m, const StrokeSelection& selection,
+                              const std::array<bool, 2>& from_stops) {
   const RigConstants& rig = unit.manifest.rig;
   const double force_sigma_N = std::hypot(unit.manifest.DeclaredSigma("p1", 0.0) * rig.area_1_m2(),
                                           unit.manifest.DeclaredSigma("p2", 0.0) * rig.area_2_m2());
@@ -330,7 +357,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
     const std::size_t first_segment = data.segments.size();
     CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m,
-                options.end_margin_m + 4 * sigma_x_m, period, sigma_x_m, drift_m, options, &data);
+                options.end_margin_m + 4 * sigma_x_m, period, sigma_x_m, drift_m, options,
+                from_stops, &data);
     if (!options.force_balance) continue;
     std::vector<bool> covered(x.size(), false);
     for (const auto& [begin, end] : runs)
@@ -353,6 +381,23 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
       cluster.log = static_cast<int>(data.experiments.size()) - 1;
       data.clusters.push_back(std::move(cluster));
     }
+  }
+  return data;
+}
+
+}  // namespace
+
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
+                          double sigma_x_m, const StrokeSelection& selection) {
+  StrokeData data = PrepareStrokesFrom(unit, options, band, sigma_x_m, selection, {false, false});
+  // A breakaway from a stop is replayed through the fast pressure transient
+  // of a chamber near its dead volume: only a direction with too few slides
+  // that break away mid-stroke (strokes from stop to stop) reads its Fs there.
+  const std::array<bool, 2> from_stops = {
+      options.end_slide_m > 0 && SegmentsOf(data, +1) < kMinMidStrokeBreakaways,
+      options.end_slide_m > 0 && SegmentsOf(data, -1) < kMinMidStrokeBreakaways};
+  if (from_stops[0] || from_stops[1]) {
+    data = PrepareStrokesFrom(unit, options, band, sigma_x_m, selection, from_stops);
   }
   return data;
 }

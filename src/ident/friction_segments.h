@@ -82,8 +82,8 @@ struct StrokeData {
   std::vector<std::shared_ptr<const Experiment>> resampled;
   std::vector<Segment> segments;
   std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers
-  // Breakaway forces (magnitudes) of stuck phases at the stroke ends, which
-  // start no segment: positive direction first.
+  // Breakaway forces (magnitudes) of stuck phases at the stroke ends,
+  // positive direction first.
   std::vector<double> end_breakaway_N[2];
   int excluded = 0;
   std::string skipped;  // logs that could not be used, why
@@ -130,6 +130,10 @@ RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps);
 
 // Force-balance samples a direction needs before its slides say anything.
 constexpr std::size_t kMinSlideSamples = 20;
+
+// A direction with fewer slides that break away mid-stroke also replays its
+// breakaways from the end stops (FrictionFitOptions::end_slide_m).
+constexpr int kMinMidStrokeBreakaways = 3;
 
 // (Fd, b) of one direction from its force-balance samples with Fs and vs
 // given (Fd in [0, Fs], b >= 0); the weighted squared misfit, HUGE_VAL (and

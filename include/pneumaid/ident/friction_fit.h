@@ -7,8 +7,10 @@
 // With the paper's friction the rod moves in stick-slip, so the logs are cut
 // into segments at the rod's stuck phases: each segment starts stuck at the
 // phase's measured position (v = 0 is then known exactly), covers breakaway,
-// the slide and the next arrest (friction_segments.h). No segment starts at a
-// stroke end (end-stop forces, fast pressures there). Smooth slides that no
+// the slide and the next arrest (friction_segments.h). A segment starts at a
+// stroke end only in a direction with too few breakaways mid-stroke, and then
+// covers little more than its breakaway (end_slide_m: end-stop forces, fast
+// pressures there). Smooth slides that no
 // segment covers enter as force balance, friction(v) = F - M a
 // (friction_slides.h). Breakaways and the force balance start the fit, and a
 // screen of replayed candidates a second fit where it finds a better start; a
@@ -60,6 +62,16 @@ struct FrictionFitOptions {
   // slide is cut where it enters that zone, and a rod stuck there starts its
   // segment once the force points away from the stop.
   double end_margin_m = 3e-4;
+  // Strokes that run from stop to stop stick nowhere else: a direction with
+  // fewer than three slides that break away mid-stroke also replays the
+  // slides that leave an end stop, from its breakaway until the rod has
+  // travelled this far [m] (at least two samples), which is what tells
+  // its Fs. Not further: the chamber at the stop is near its dead volume, so
+  // its pressure falls faster than a replay between samples follows once the
+  // rod moves, and not in a direction with slides mid-stroke, whose
+  // component fits it moved (docs/identification.md). 0: no segment starts
+  // at a stop.
+  double end_slide_m = 1e-4;
   // A slide replayed from its breakaway is cut after this long [s] (the
   // replay integrates any bias of the measured force twice); the rest of it
   // enters as force balance.
