@@ -16,6 +16,7 @@
 #include "friction_problem.h"
 #include "friction_segments.h"
 #include "friction_slides.h"
+#include "friction_starts.h"
 #include "pneumaid/ident/rod_replay.h"
 #include "pneumaid/model/load.h"
 
@@ -211,45 +212,12 @@ Attempt FitFrom(const StrokeData& data, double mass_kg, const FrictionFitOptions
   return a;
 }
 
-}  // namespace
-
-bool FrictionFitOptions::IsValid(std::string* error) const {
-  const auto fail = [error](const char* what) {
-    if (error != nullptr) *error = what;
-    return false;
-  };
-  if (!(stuck_band_m > 0)) return fail("stuck_band_m must be > 0");
-  if (min_stuck_samples < 2) return fail("min_stuck_samples must be >= 2");
-  if (max_stuck_samples < 2) return fail("max_stuck_samples must be >= 2");
-  if (arrest_samples < 0) return fail("arrest_samples must be >= 0");
-  if (stuck_force_samples < 3) return fail("stuck_force_samples must be >= 3");
-  if (!(end_margin_m >= 0)) return fail("end_margin_m must be >= 0");
-  if (!(end_slide_m >= 0)) return fail("end_slide_m must be >= 0");
-  if (substeps < 1) return fail("substeps must be >= 1");
-  if (max_iterations < 1) return fail("max_iterations must be >= 1");
-  if (!(outlier_ratio > 1)) return fail("outlier_ratio must be > 1");
-  if (!(identifiable_relative_error > 0)) return fail("identifiable_relative_error must be > 0");
-  if (!(prior_static_sigma_N > 0) || !(prior_dynamic_sigma_N > 0) ||
-      !(prior_viscous_sigma_N_s_per_m > 0) || !(prior_stribeck_log_sigma > 0))
-    return fail("prior_*_sigma must be > 0");
-  if (!(min_stuck_s >= 0)) return fail("min_stuck_s must be >= 0");
-  if (!(max_stuck_speed_m_per_s > 0)) return fail("max_stuck_speed_m_per_s must be > 0");
-  if (!(max_stuck_acceleration_m_per_s2 > 0))
-    return fail("max_stuck_acceleration_m_per_s2 must be > 0");
-  if (!(max_slide_s > 0)) return fail("max_slide_s must be > 0");
-  if (!(breakaway_timing_per_s >= 0) || !std::isfinite(breakaway_timing_per_s))
-    return fail("breakaway_timing_per_s must be finite and >= 0");
-  return true;
-}
-
-FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
-                              const FrictionFitOptions& options) {
+// FitFriction on the strokes `data` cut from `unit`.
+FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const FrictionParams& prior,
+                             const FrictionFitOptions& options) {
   FrictionFitResult result;
   result.positive.params = prior.positive;
   result.negative.params = prior.negative;
-  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
-  const double band = StuckBand(options, sigma_m);
-  const StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
   const Block prior_blocks[2] = {Pack(prior.positive), Pack(prior.negative)};
   result.excluded_segments = data.excluded;
   result.positive.segments = SegmentsOf(data, +1);
@@ -443,6 +411,28 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   if (!data.skipped.empty())
     result.reason += (result.reason.empty() ? "not used: " : "; not used: ") + data.skipped;
   return result;
+}
+
+}  // namespace
+
+FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
+                              const FrictionFitOptions& options) {
+  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
+  const double band = StuckBand(options, sigma_m);
+  const StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
+  FrictionFitResult result = FitStrokes(unit, data, prior, options);
+  // A direction whose Fs its slides mid-stroke do not determine reads it
+  // where the rod leaves the stops too (FrictionFitOptions::end_slide_m).
+  std::array<bool, 2> stops = {false, false};
+  for (int d = 0; d < 2; ++d) {
+    const FittedCoefficient* fs =
+        result.Find(std::string("friction.") + (d == 0 ? "positive" : "negative") + ".Fs");
+    stops[d] = options.end_slide_m > 0 && !data.from_stops[d] && !data.end_breakaway_N[d].empty() &&
+               fs != nullptr && !fs->determined();
+  }
+  if (!stops[0] && !stops[1]) return result;
+  const StrokeData with_stops = PrepareStrokes(unit, options, band, sigma_m, {}, stops);
+  return FitStrokes(unit, with_stops, prior, options);
 }
 
 std::string FrictionFitResult::BriefReport() const {

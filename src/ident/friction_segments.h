@@ -85,6 +85,8 @@ struct StrokeData {
   // Breakaway forces (magnitudes) of stuck phases at the stroke ends,
   // positive direction first.
   std::vector<double> end_breakaway_N[2];
+  // Whether slides that leave a stop are replayed, positive direction first.
+  std::array<bool, 2> from_stops = {false, false};
   int excluded = 0;
   std::string skipped;  // logs that could not be used, why
 };
@@ -113,12 +115,12 @@ struct StrokeSelection {
 // Per log its driving force and position, the replay segments cut from them
 // and the force-balance slides no segment covers (`SlideCluster::log` indexes
 // `experiments`).
+// Slides that leave an end stop are replayed in a direction with fewer than
+// kMinMidStrokeBreakaways mid-stroke, and in those `stops` names (positive
+// first; FrictionFitOptions::end_slide_m > 0 for either).
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m, const StrokeSelection& selection = {});
-
-// A starting point for Fs: the median force at breakaway of the slides of
-// `direction` (the stroke ends' breakaways with fewer than three).
-double BreakawayMedian(const StrokeData& data, int direction, double fallback);
+                          double sigma_x_m, const StrokeSelection& selection = {},
+                          const std::array<bool, 2>& stops = {false, false});
 
 // Replayed segments and force-balance slides of one direction.
 int SegmentsOf(const StrokeData& data, int direction);
@@ -134,16 +136,5 @@ constexpr std::size_t kMinSlideSamples = 20;
 // A direction with fewer slides that break away mid-stroke also replays its
 // breakaways from the end stops (FrictionFitOptions::end_slide_m).
 constexpr int kMinMidStrokeBreakaways = 3;
-
-// (Fd, b) of one direction from its force-balance samples with Fs and vs
-// given (Fd in [0, Fs], b >= 0); the weighted squared misfit, HUGE_VAL (and
-// fd, b untouched) with fewer than kMinSlideSamples samples.
-double FitSliding(const std::vector<internal::SlideCluster>& clusters, int direction, double fs,
-                  double vs, double* fd, double* b);
-
-// Fd, b, vs of one direction from its force-balance samples, Fs given (the
-// breakaways): the best point of a vs grid, (Fd, b) solved exactly at each.
-// Leaves `block` as it is with fewer than kMinSlideSamples samples.
-void ForceBalanceStart(const StrokeData& data, int direction, Block* block);
 
 }  // namespace pneumaid::friction_internal

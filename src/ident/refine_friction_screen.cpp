@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "friction_segments.h"
+#include "friction_starts.h"
 #include "pneumaid/model/parameter_table.h"
 #include "refine_verdict.h"
 

@@ -3,6 +3,7 @@
 // are replayed from their arrest, and the weights of a forward replay. On
 // logs the fitted model did not make (smooth stick, tight tolerances).
 #include "../../src/ident/friction_segments.h"
+#include "../../src/ident/friction_starts.h"
 
 #include <gtest/gtest.h>
 

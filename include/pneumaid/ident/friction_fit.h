@@ -8,9 +8,9 @@
 // into segments at the rod's stuck phases: each segment starts stuck at the
 // phase's measured position (v = 0 is then known exactly), covers breakaway,
 // the slide and the next arrest (friction_segments.h). A segment starts at a
-// stroke end only in a direction with too few breakaways mid-stroke, and then
-// covers little more than its breakaway (end_slide_m: end-stop forces, fast
-// pressures there). Smooth slides that no
+// stroke end only in a direction whose breakaways mid-stroke are too few or
+// leave Fs undetermined, and then covers little more than its breakaway
+// (end_slide_m: end-stop forces, fast pressures there). Smooth slides that no
 // segment covers enter as force balance, friction(v) = F - M a
 // (friction_slides.h). Breakaways and the force balance start the fit, and a
 // screen of replayed candidates a second fit where it finds a better start; a
@@ -63,8 +63,9 @@ struct FrictionFitOptions {
   // segment once the force points away from the stop.
   double end_margin_m = 3e-4;
   // Strokes that run from stop to stop stick nowhere else: a direction with
-  // fewer than three slides that break away mid-stroke also replays the
-  // slides that leave an end stop, from its breakaway until the rod has
+  // fewer than three slides that break away mid-stroke, or whose Fs those
+  // slides do not determine (then fitted again), also replays the slides
+  // that leave an end stop, from its breakaway until the rod has
   // travelled this far [m] (at least two samples), which is what tells
   // its Fs. Not further: the chamber at the stop is near its dead volume, so
   // its pressure falls faster than a replay between samples follows once the

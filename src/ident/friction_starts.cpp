@@ -1,0 +1,73 @@
+#include "friction_starts.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace pneumaid::friction_internal {
+
+// Median over the slides of `direction` of the force where the rod left its
+// rest (BreakawaySample), a starting point for Fs; without three such
+// slides, the median breakaway force at the stroke ends.
+double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
+  std::vector<double> forces;
+  for (const Segment& s : data.segments) {
+    if (s.direction == direction) forces.push_back(s.breakaway_force_N);
+  }
+  if (forces.size() >= 3) return Median(forces);
+  const std::vector<double>& at_ends = data.end_breakaway_N[direction > 0 ? 0 : 1];
+  return at_ends.size() >= 3 ? Median(at_ends) : fallback;
+}
+
+// (Fd, b) of one direction from its force-balance samples with Fs and vs
+// given: the magnitude Fs e + Fd (1 - e) + b v, e = exp(-(v/vs)^2), is
+// linear in (Fd, b); Fd in [0, Fs] and b >= 0.
+double FitSliding(const std::vector<internal::SlideCluster>& clusters, int direction, double fs,
+                  double vs, double* fd, double* b) {
+  std::size_t samples = 0;
+  for (const auto& c : clusters) {
+    if (c.direction == direction) samples += c.speed_m_per_s.size();
+  }
+  if (samples < kMinSlideSamples) return HUGE_VAL;
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+  const auto each = [&](const auto& use) {
+    for (const auto& c : clusters) {
+      if (c.direction != direction) continue;
+      for (std::size_t i = 0; i < c.speed_m_per_s.size(); ++i) {
+        const double v = c.speed_m_per_s[i], e = std::exp(-(v / vs) * (v / vs));
+        use(Eigen::Vector2d(1 - e, v), c.friction_N[i] - fs * e, c.weight[i] * c.weight[i]);
+      }
+    }
+  };
+  each([&](const Eigen::Vector2d& x, double y, double w) {
+    normal += w * x * x.transpose();
+    rhs += w * y * x;
+  });
+  Eigen::Vector2d theta = normal.ldlt().solve(rhs);
+  if (!(theta(1) >= 0)) theta = Eigen::Vector2d(rhs(0) / normal(0, 0), 0.0);
+  theta(0) = std::clamp(theta(0), 0.0, std::max(fs, 0.0));
+  double cost = 0;
+  each([&](const Eigen::Vector2d& x, double y, double w) {
+    cost += w * std::pow(y - x.dot(theta), 2);
+  });
+  *fd = theta(0);
+  *b = theta(1);
+  return cost;
+}
+
+// Fd, b, vs of one direction from its force-balance samples with Fs given
+// (the breakaways): the best point of a vs grid (1 mm/s to 0.1 m/s), (Fd, b)
+// solved exactly at each. Leaves `block` as it is with too few samples.
+void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
+  const double fs = (*block)[0];
+  double best = HUGE_VAL;
+  for (int g = 0; g <= 24; ++g) {
+    const double vs = 1e-3 * std::pow(100.0, g / 24.0);
+    double fd = 0, b = 0;
+    const double cost = FitSliding(data.clusters, direction, fs, vs, &fd, &b);
+    if (cost < best) best = cost, *block = {fs, fd, b, vs};
+  }
+}
+
+}  // namespace pneumaid::friction_internal
