@@ -5,6 +5,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Issue 12's redesign: no file in src/ident/ over 500 lines.
+long=$(find src/ident -name '*.cpp' -o -name '*.h' | xargs wc -l | awk '$2 != "total" && $1 > 500')
+if [ -n "$long" ]; then
+  echo "files in src/ident/ over 500 lines (issue 12): $long" >&2
+  exit 1
+fi
+
 # openmpi-bin: the batch test launches `mpirun -n 2 pneumaid batch --shard auto`;
 # chromium: the report's own check in a headless browser (Release pass only).
 EXTRA_PACKAGES="openmpi-bin chromium" scripts/setup.sh
