@@ -427,12 +427,17 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
   for (int d = 0; d < 2; ++d) {
     const FittedCoefficient* fs =
         result.Find(std::string("friction.") + (d == 0 ? "positive" : "negative") + ".Fs");
-    stops[d] = options.end_slide_m > 0 && !data.from_stops[d] && !data.end_breakaway_N[d].empty() &&
+    stops[d] = options.end_slide_m > 0 && !data.from_stops[d] && data.stop_departures[d] > 0 &&
                fs != nullptr && !fs->determined();
   }
   if (!stops[0] && !stops[1]) return result;
   const StrokeData with_stops = PrepareStrokes(unit, options, band, sigma_m, {}, stops);
-  return FitStrokes(unit, with_stops, prior, options);
+  FrictionFitResult again = FitStrokes(unit, with_stops, prior, options);
+  // Kept unless it failed or ran out of iterations where the first did not.
+  const bool first_converged = result.status == FitStatus::kConverged;
+  if (again.status == FitStatus::kConverged || (!first_converged && again.has_values()))
+    return again;
+  return result;
 }
 
 std::string FrictionFitResult::BriefReport() const {

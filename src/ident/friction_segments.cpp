@@ -236,6 +236,7 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
         data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
             leaving * force[BreakawaySample(x, stuck_begin, stuck_end, sigma_x_m)]);
       }
+      if (leaving == -contact) ++data->stop_departures[leaving > 0 ? 0 : 1];
       std::size_t free_from = s.begin;  // after the last sample pushing into the stop
       for (std::size_t i = s.begin; i < stuck_end; ++i) {
         if (contact * force[i] >= 0) free_from = i + 1;
@@ -283,8 +284,10 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
       ++data->excluded;
       continue;
     }
+    // A slide from a stop goes the way the rod was seen leaving it, also when
+    // its first end_slide_m stay inside the band.
     const double travel = x[s.end - 1] - s.initial_position_m;
-    s.direction = travel > band ? +1 : (travel < -band ? -1 : 0);
+    s.direction = contact != 0 ? -contact : travel > band ? +1 : (travel < -band ? -1 : 0);
     s.slide_begin = stuck_end - 1;
     double escape_error_m_per_s = 0;
     if (s.direction != 0) {
@@ -391,6 +394,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
                           double sigma_x_m, const StrokeSelection& selection,
                           const std::array<bool, 2>& stops) {
   StrokeData data = PrepareStrokesFrom(unit, options, band, sigma_x_m, selection, {false, false});
+  // Slides under segments enter the force balance anyway: the segments
+  // themselves are not used.
+  if (selection.slides_under_segments) return data;
   // A breakaway from a stop is replayed through the fast pressure transient
   // of a chamber near its dead volume: only a direction with too few slides
   // that break away mid-stroke (strokes from stop to stop) reads its Fs there.

@@ -85,7 +85,9 @@ struct StrokeData {
   // Breakaway forces (magnitudes) of stuck phases at the stroke ends,
   // positive direction first.
   std::vector<double> end_breakaway_N[2];
-  // Whether slides that leave a stop are replayed, positive direction first.
+  // Slides that leave a stop, and whether they are replayed (positive
+  // direction first).
+  int stop_departures[2] = {0, 0};
   std::array<bool, 2> from_stops = {false, false};
   int excluded = 0;
   std::string skipped;  // logs that could not be used, why
@@ -117,7 +119,8 @@ struct StrokeSelection {
 // `experiments`).
 // Slides that leave an end stop are replayed in a direction with fewer than
 // kMinMidStrokeBreakaways mid-stroke, and in those `stops` names (positive
-// first; FrictionFitOptions::end_slide_m > 0 for either).
+// first; FrictionFitOptions::end_slide_m > 0 for either), unless
+// `selection` takes every slide into the force balance.
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
                           double sigma_x_m, const StrokeSelection& selection = {},
                           const std::array<bool, 2>& stops = {false, false});

@@ -3,13 +3,13 @@
 // are replayed from their arrest, and the weights of a forward replay. On
 // logs the fitted model did not make (smooth stick, tight tolerances).
 #include "../../src/ident/friction_segments.h"
-#include "../../src/ident/friction_starts.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 
+#include "../../src/ident/friction_starts.h"
 #include "../synth/synth_test_util.h"
 #include "friction_test_util.h"
 #include "pneumaid/io/params_yaml.h"
@@ -45,6 +45,25 @@ Unit TurningStrokes(double rate_Hz, double mass_kg) {
   protocol.mismatch.relative_tolerance = 1e-8;
   return testing::WriteAndReadUnit(Synthesize(truth, protocol, 4, "S"),
                                    "friction_segments_" + std::to_string(int(rate_Hz)));
+}
+
+// The paper's vertical cylinder with `mass_kg` and this friction.
+Parameters VerticalTruth(double mass_kg, const StribeckParams& positive,
+                         const StribeckParams& negative) {
+  Parameters truth;  // vertical
+  truth.cylinder.load_mass_kg = mass_kg;
+  truth.friction.positive = positive;
+  truth.friction.negative = negative;
+  return truth;
+}
+
+// `cycles` of strokes at `levels`, logged at `rate_Hz`, `margin_m` short of the stops.
+Protocol Strokes(int cycles, double rate_Hz, std::vector<double> levels, double margin_m) {
+  Protocol protocol = testing::StrokeProtocol(cycles);
+  protocol.sample_rate_Hz = rate_Hz;
+  protocol.stroke_levels_V = std::move(levels);
+  protocol.stroke_margin_m = margin_m;
+  return protocol;
 }
 
 StrokeData Prepare(const Unit& unit, const FrictionFitOptions& options) {
@@ -83,14 +102,9 @@ TEST(FrictionSegmentsTest, ASlideThatTurnsBackBeforeItStopsIsReplayedForwardOnly
 // had begun to empty the driving chamber (a heavy vertical rod at 500 Hz:
 // -3.8 N for 19.9 N).
 TEST(FrictionSegmentsTest, TheBreakawayIsReadWhereTheRodLeavesItsRest) {
-  Parameters truth;  // vertical
-  truth.cylinder.load_mass_kg = 1.15;
-  truth.friction.positive = {19.9, 1.12, 12.2, 0.0045};
-  truth.friction.negative = {10.7, 0.67, 7.3, 0.0022};
-  Protocol protocol = testing::StrokeProtocol(2);
-  protocol.sample_rate_Hz = 500;
-  protocol.stroke_levels_V = {0.5, 0.7, 0.9};
-  protocol.stroke_margin_m = 0.005;
+  const Parameters truth =
+      VerticalTruth(1.15, {19.9, 1.12, 12.2, 0.0045}, {10.7, 0.67, 7.3, 0.0022});
+  Protocol protocol = Strokes(2, 500, {0.5, 0.7, 0.9}, 0.005);
   protocol.mismatch.regularized_friction = true;
   protocol.mismatch.stick_velocity_m_per_s = 1e-4;
   protocol.mismatch.relative_tolerance = 1e-8;
@@ -129,6 +143,42 @@ TEST(FrictionSegmentsTest, TheBreakawaysTimingErrorWidensOnlyTheForwardReplay) {
     widened += a.direction != 0 && a.weight.back() < 0.5 * b.weight.back() && !a.two_sided;
   }
   EXPECT_GT(widened, 0);
+}
+
+// Strokes from stop to stop: a segment that starts at a stop starts where the
+// force no longer pushes into it, goes the way the rod leaves, and ends once
+// the rod has travelled end_slide_m; with end_slide_m = 0 none starts there.
+TEST(FrictionSegmentsTest, ASlideFromAStopIsReplayedFromWhereTheForceLeavesTheStop) {
+  const Parameters truth = VerticalTruth(0.75, {11.3, 0.2, 14.7, 0.018}, {15.2, 4.4, 8.8, 0.004});
+  const Protocol protocol = Strokes(1, 2000, {0.45, 0.95}, 0.0);
+  const Unit unit =
+      testing::WriteAndReadUnit(Synthesize(truth, protocol, 3, "E"), "friction_segments_stops");
+  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
+  const FrictionFitOptions options;
+  const double band = StuckBand(options, sigma_m);
+  const double zone = options.end_margin_m + 4 * sigma_m, half = 0.5 * truth.cylinder.stroke_m;
+  const StrokeData data = PrepareStrokes(unit, options, band, sigma_m, {}, {true, true});
+  int from_stops = 0;
+  for (const Segment& s : data.segments) {
+    const std::vector<double>& x = *s.position_m;
+    const std::vector<double>& force = *s.force_N;
+    const int contact =
+        x[s.slide_begin] > half - zone ? +1 : (x[s.slide_begin] < zone - half ? -1 : 0);
+    if (contact == 0) continue;
+    ++from_stops;
+    EXPECT_EQ(s.direction, -contact);
+    for (std::size_t i = s.begin; i <= s.slide_begin; ++i) EXPECT_LT(contact * force[i], 0) << i;
+    for (std::size_t i = s.slide_begin + 3; i < s.end; ++i) {
+      EXPECT_LE(std::fabs(x[i] - s.initial_position_m), options.end_slide_m) << i;
+    }
+  }
+  EXPECT_GE(from_stops, 2);
+  FrictionFitOptions no_stops;
+  no_stops.end_slide_m = 0;
+  for (const Segment& s :
+       PrepareStrokes(unit, no_stops, band, sigma_m, {}, {true, true}).segments) {
+    EXPECT_LT(std::fabs((*s.position_m)[s.slide_begin]), half - zone);
+  }
 }
 
 }  // namespace

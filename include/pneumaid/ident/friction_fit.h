@@ -59,13 +59,15 @@ struct FrictionFitOptions {
   int stuck_force_samples = 20;
   // Within this distance of a stroke end [m] (plus 4 x the declared position
   // noise) the rod may touch the end stop, whose forces are not friction: a
-  // slide is cut where it enters that zone, and a rod stuck there starts its
-  // segment once the force points away from the stop.
+  // slide is cut where it enters that zone, and a rod stuck there starts a
+  // segment (in a direction that replays its stops: end_slide_m) once the
+  // force points away from the stop.
   double end_margin_m = 3e-4;
   // Strokes that run from stop to stop stick nowhere else: a direction with
   // fewer than three slides that break away mid-stroke, or whose Fs those
   // slides do not determine (then fitted again), also replays the slides
-  // that leave an end stop, from its breakaway until the rod has
+  // that leave an end stop, from the stuck samples whose force points away
+  // from the stop through the breakaway until the rod has
   // travelled this far [m] (at least two samples), which is what tells
   // its Fs. Not further: the chamber at the stop is near its dead volume, so
   // its pressure falls faster than a replay between samples follows once the
