@@ -23,6 +23,10 @@
 namespace pneumaid {
 namespace {
 
+// A direction with fewer slides that break away mid-stroke also replays its
+// breakaways from the end stops (FrictionFitOptions::end_slide_m).
+constexpr int kMinMidStrokeBreakaways = 3;
+
 using namespace friction_internal;
 
 // Per segment: its residuals, the Jacobian's friction columns (the free
@@ -419,19 +423,30 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
                               const FrictionFitOptions& options) {
   const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
   const double band = StuckBand(options, sigma_m);
-  const StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
+  StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
+  // A breakaway from a stop is replayed through the fast pressure transient
+  // of a chamber near its dead volume (FrictionFitOptions::end_slide_m):
+  // only a direction with too few slides that break away mid-stroke
+  // (strokes from stop to stop) reads its Fs there from the start...
+  std::array<bool, 2> from_stops = {SegmentsOf(data, +1) < kMinMidStrokeBreakaways,
+                                    SegmentsOf(data, -1) < kMinMidStrokeBreakaways};
+  const auto departs = [&data, &options](int d) {
+    return options.end_slide_m > 0 && data.stop_departures[d] > 0;
+  };
+  if ((from_stops[0] && departs(0)) || (from_stops[1] && departs(1))) {
+    data = PrepareStrokes(unit, options, band, sigma_m, {}, from_stops);
+  }
   FrictionFitResult result = FitStrokes(unit, data, prior, options);
-  // A direction whose Fs its slides mid-stroke do not determine reads it
-  // where the rod leaves the stops too (FrictionFitOptions::end_slide_m).
-  std::array<bool, 2> stops = {false, false};
+  // ... and one whose Fs its slides mid-stroke do not determine, fitted again.
+  bool again_needed = false;
   for (int d = 0; d < 2; ++d) {
     const FittedCoefficient* fs =
         result.Find(std::string("friction.") + (d == 0 ? "positive" : "negative") + ".Fs");
-    stops[d] = options.end_slide_m > 0 && !data.from_stops[d] && data.stop_departures[d] > 0 &&
-               fs != nullptr && !fs->determined();
+    const bool undetermined = fs != nullptr && !fs->determined();
+    if (!from_stops[d] && departs(d) && undetermined) from_stops[d] = again_needed = true;
   }
-  if (!stops[0] && !stops[1]) return result;
-  const StrokeData with_stops = PrepareStrokes(unit, options, band, sigma_m, {}, stops);
+  if (!again_needed) return result;
+  const StrokeData with_stops = PrepareStrokes(unit, options, band, sigma_m, {}, from_stops);
   FrictionFitResult again = FitStrokes(unit, with_stops, prior, options);
   // Kept unless it failed or ran out of iterations where the first did not.
   const bool first_converged = result.status == FitStatus::kConverged;

@@ -303,13 +303,9 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
   }
 }
 
-namespace {
-
-// PrepareStrokes, with slides that leave an end stop replayed in the
-// directions `from_stops` says.
-StrokeData PrepareStrokesFrom(const Unit& unit, const FrictionFitOptions& options, double band,
-                              double sigma_x_m, const StrokeSelection& selection,
-                              const std::array<bool, 2>& from_stops) {
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
+                          double sigma_x_m, const StrokeSelection& selection,
+                          const std::array<bool, 2>& from_stops) {
   const RigConstants& rig = unit.manifest.rig;
   const double force_sigma_N = std::hypot(unit.manifest.DeclaredSigma("p1", 0.0) * rig.area_1_m2(),
                                           unit.manifest.DeclaredSigma("p2", 0.0) * rig.area_2_m2());
@@ -321,6 +317,8 @@ StrokeData PrepareStrokesFrom(const Unit& unit, const FrictionFitOptions& option
                selection.runs.end() &&
            !e.column("x").empty() && !e.column("p1").empty() && !e.column("p2").empty();
   };
+  const std::array<bool, 2> replay_stops = {options.end_slide_m > 0 && from_stops[0],
+                                            options.end_slide_m > 0 && from_stops[1]};
   StrokeData data;
   std::size_t count = 0;
   for (const Experiment& e : unit.experiments) count += selected(e);
@@ -361,7 +359,7 @@ StrokeData PrepareStrokesFrom(const Unit& unit, const FrictionFitOptions& option
     const std::size_t first_segment = data.segments.size();
     CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m,
                 options.end_margin_m + 4 * sigma_x_m, period, sigma_x_m, drift_m, options,
-                from_stops, &data);
+                replay_stops, &data);
     if (!options.force_balance) continue;
     std::vector<bool> covered(x.size(), false);
     for (const auto& [begin, end] : runs)
@@ -384,28 +382,6 @@ StrokeData PrepareStrokesFrom(const Unit& unit, const FrictionFitOptions& option
       cluster.log = static_cast<int>(data.experiments.size()) - 1;
       data.clusters.push_back(std::move(cluster));
     }
-  }
-  return data;
-}
-
-}  // namespace
-
-StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m, const StrokeSelection& selection,
-                          const std::array<bool, 2>& stops) {
-  StrokeData data = PrepareStrokesFrom(unit, options, band, sigma_x_m, selection, {false, false});
-  // Slides under segments enter the force balance anyway: the segments
-  // themselves are not used.
-  if (selection.slides_under_segments) return data;
-  // A breakaway from a stop is replayed through the fast pressure transient
-  // of a chamber near its dead volume: only a direction with too few slides
-  // that break away mid-stroke (strokes from stop to stop) reads its Fs there.
-  const std::array<bool, 2> from_stops = {
-      options.end_slide_m > 0 && (stops[0] || SegmentsOf(data, +1) < kMinMidStrokeBreakaways),
-      options.end_slide_m > 0 && (stops[1] || SegmentsOf(data, -1) < kMinMidStrokeBreakaways)};
-  if (from_stops[0] || from_stops[1]) {
-    data = PrepareStrokesFrom(unit, options, band, sigma_x_m, selection, from_stops);
-    data.from_stops = from_stops;
   }
   return data;
 }

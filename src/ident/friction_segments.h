@@ -85,10 +85,8 @@ struct StrokeData {
   // Breakaway forces (magnitudes) of stuck phases at the stroke ends,
   // positive direction first.
   std::vector<double> end_breakaway_N[2];
-  // Slides that leave a stop, and whether they are replayed (positive
-  // direction first).
+  // Slides that leave a stop, replayed or not (positive direction first).
   int stop_departures[2] = {0, 0};
-  std::array<bool, 2> from_stops = {false, false};
   int excluded = 0;
   std::string skipped;  // logs that could not be used, why
 };
@@ -117,13 +115,11 @@ struct StrokeSelection {
 // Per log its driving force and position, the replay segments cut from them
 // and the force-balance slides no segment covers (`SlideCluster::log` indexes
 // `experiments`).
-// Slides that leave an end stop are replayed in a direction with fewer than
-// kMinMidStrokeBreakaways mid-stroke, and in those `stops` names (positive
-// first; FrictionFitOptions::end_slide_m > 0 for either), unless
-// `selection` takes every slide into the force balance.
+// Slides that leave an end stop are replayed in the directions `from_stops`
+// names (positive first; FrictionFitOptions::end_slide_m > 0).
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
                           double sigma_x_m, const StrokeSelection& selection = {},
-                          const std::array<bool, 2>& stops = {false, false});
+                          const std::array<bool, 2>& from_stops = {false, false});
 
 // Replayed segments and force-balance slides of one direction.
 int SegmentsOf(const StrokeData& data, int direction);
@@ -135,9 +131,5 @@ RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps);
 
 // Force-balance samples a direction needs before its slides say anything.
 constexpr std::size_t kMinSlideSamples = 20;
-
-// A direction with fewer slides that break away mid-stroke also replays its
-// breakaways from the end stops (FrictionFitOptions::end_slide_m).
-constexpr int kMinMidStrokeBreakaways = 3;
 
 }  // namespace pneumaid::friction_internal

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 
 #include "../synth/synth_test_util.h"
 #include "friction_test_util.h"
@@ -284,6 +285,16 @@ TEST(FrictionFitTest, AHeavyLoadThatNeverSticksMidStrokeGetsItsFrictionFromSlide
   ExpectWithinToleranceOrHeld(fit, "negative", truth.friction.negative, {"Fs", "Fd", "b"}, 2);
 }
 
+// The fit without the breakaways from the stops (end_slide_m = 0), then with.
+std::pair<FrictionFitResult, FrictionFitResult> FitWithoutAndWithStops(const Unit& unit) {
+  FrictionFitOptions mid_stroke_only;
+  mid_stroke_only.end_slide_m = 0;
+  FrictionFitResult without = FitFriction(unit, FrictionParams{}, mid_stroke_only);
+  FrictionFitResult with = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
+  std::cout << without.BriefReport() << with.BriefReport();
+  return {std::move(without), std::move(with)};
+}
+
 // Strokes that run from stop to stop with a heavy vertical rod, the common
 // protocol of a rig engineer: the rod never sticks mid-stroke, so every
 // breakaway is one from an end stop. Replayed over their first end_slide_m,
@@ -292,11 +303,7 @@ TEST(FrictionFitTest, AHeavyLoadThatNeverSticksMidStrokeGetsItsFrictionFromSlide
 TEST(FrictionFitTest, StrokesFromStopToStopGetFsFromTheBreakawaysAtTheStops) {
   const Parameters truth = VerticalTruth(0.75, {11.3, 0.2, 14.7, 0.018}, {15.2, 4.4, 8.8, 0.004});
   const Unit unit = MismatchedStrokes(truth, 11, 5000, {0.45, 0.7, 0.95}, 2, 0.0);
-  FrictionFitOptions without_stops;
-  without_stops.end_slide_m = 0;
-  const FrictionFitResult held = FitFriction(unit, FrictionParams{}, without_stops);
-  const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
-  std::cout << held.BriefReport() << fit.BriefReport();
+  const auto [held, fit] = FitWithoutAndWithStops(unit);
   ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
   // Without the stops each Fs is held or known no better than its tolerance.
   for (const char* direction : {"positive", "negative"}) {
@@ -320,11 +327,7 @@ TEST(FrictionFitTest, AnFsTheMidStrokeSlidesLeaveOpenIsReadAtTheStops) {
   const Parameters truth =
       HorizontalTruth(0.14, {6.1, 1.77, 4.4, 0.0133}, {5.0, 0.77, 13.7, 0.0025});
   Unit unit = MismatchedStrokes(truth, 1, 1000, {0.31, 0.36, 0.4}, 3, 0.0);
-  FrictionFitOptions mid_stroke_only;
-  mid_stroke_only.end_slide_m = 0;
-  const FrictionFitResult held = FitFriction(unit, FrictionParams{}, mid_stroke_only);
-  const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
-  std::cout << held.BriefReport() << fit.BriefReport();
+  const auto [held, fit] = FitWithoutAndWithStops(unit);
   ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
   EXPECT_GE(held.negative.segments, 3);  // enough to count, too few to tell Fs
   EXPECT_FALSE(Coefficient(held, "negative", "Fs").determined());
