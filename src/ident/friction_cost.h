@@ -171,6 +171,13 @@ inline std::array<double, kDirectionParameters> PriorSigmas(const FrictionFitOpt
           options.prior_viscous_sigma_N_s_per_m, options.prior_stribeck_log_sigma};
 }
 
+// The slope of coefficient i's prior residual (PriorResidual) at `value`:
+// 1 / sigma, vs on its log scale.
+inline double PriorSlope(int i, double value,
+                         const std::array<double, kDirectionParameters>& sigma) {
+  return i == 3 ? 1.0 / (value * sigma[i]) : 1.0 / sigma[i];
+}
+
 // The weak prior: (theta - prior) / sigma per coefficient, vs on a log scale.
 // It keeps a coefficient the logs do not determine near the prior instead of
 // letting it wander (or the fit fail on a singular J'J), and is negligible

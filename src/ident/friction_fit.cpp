@@ -11,8 +11,8 @@
 #include <numeric>
 #include <sstream>
 
-#include "determination.h"
 #include "friction_cost.h"
+#include "friction_covariance.h"
 #include "friction_problem.h"
 #include "friction_segments.h"
 #include "friction_slides.h"
@@ -28,15 +28,6 @@ namespace {
 constexpr int kMinMidStrokeBreakaways = 3;
 
 using namespace friction_internal;
-
-// Per segment: its residuals, the Jacobian's friction columns (the free
-// blocks, positive first) and its arrest-time column (empty when one-sided),
-// robust loss applied.
-struct SegmentJacobian {
-  Eigen::VectorXd residuals;
-  Eigen::MatrixXd friction;
-  Eigen::VectorXd stop_time;
-};
 
 bool Evaluate(const StrokeData& data, const std::vector<double*>& free_blocks, SegmentProblem* p,
               std::vector<SegmentJacobian>* out) {
@@ -73,30 +64,6 @@ bool Evaluate(const StrokeData& data, const std::vector<double*>& free_blocks, S
     }
   }
   return true;
-}
-
-// The information J'J of the friction columns and the sum of the clusters'
-// score outer products (J_k' r_k)(J_k' r_k)', segments and force-balance
-// slides being the clusters and each arrest time eliminated inside its own
-// segment (the Schur complement): the bread and meat of the cluster-robust
-// covariance (J'J)^-1 meat (J'J)^-1.
-void Information(const std::vector<SegmentJacobian>& segments, Eigen::MatrixXd* information,
-                 Eigen::MatrixXd* meat) {
-  const Eigen::Index m = segments.front().friction.cols();
-  *information = Eigen::MatrixXd::Zero(m, m);
-  *meat = Eigen::MatrixXd::Zero(m, m);
-  for (const SegmentJacobian& j : segments) {
-    Eigen::MatrixXd a = j.friction;
-    Eigen::VectorXd r = j.residuals;
-    const double norm = j.stop_time.size() ? j.stop_time.squaredNorm() : 0.0;
-    if (norm > 0) {
-      a -= j.stop_time * (j.stop_time.transpose() * a) / norm;
-      r -= j.stop_time * (j.stop_time.dot(r) / norm);
-    }
-    *information += a.transpose() * a;
-    const Eigen::VectorXd score = a.transpose() * r;
-    *meat += score * score.transpose();
-  }
 }
 
 std::string ColumnPath(int column) {
@@ -324,77 +291,15 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
     result.iterations = fit.iterations;
     result.outlier_segments = fit.outlier_segments;
     stopped = fit.stopped;
-    // The robust covariance of the free columns: the data's information plus
-    // the prior's in the bread, the clusters' scores and the prior (one more
-    // independent observation of each coefficient) in the meat, so that
-    // where the logs say nothing the error is the prior's, not zero.
-    Eigen::MatrixXd information, meat;
-    Information(jacobians, &information, &meat);
-    const double clusters = static_cast<double>(jacobians.size());
-    meat *= clusters / std::max(clusters - 1.0, 1.0);
-    std::vector<Eigen::Index> index;  // of each free column in `columns`
-    for (int c : free) {
-      index.push_back(std::find(columns.begin(), columns.end(), c) - columns.begin());
-    }
-    const Eigen::Index m = static_cast<Eigen::Index>(free.size());
-    Eigen::MatrixXd bread(m, m), score(m, m);
-    for (Eigen::Index a = 0; a < m; ++a) {
-      for (Eigen::Index b = 0; b < m; ++b) {
-        bread(a, b) = information(index[a], index[b]);
-        score(a, b) = meat(index[a], index[b]);
-      }
-      const int i = free[a] % kDirectionParameters;
-      const double value = (*blocks[free[a] / kDirectionParameters])[i];
-      const double slope = i == 3 ? 1.0 / (value * sigma[i]) : 1.0 / sigma[i];  // vs: ln scale
-      bread(a, a) += slope * slope;
-      score(a, a) += slope * slope;
-    }
-    const Eigen::MatrixXd inverse = bread.inverse();
-    covariance = inverse * score * inverse;
-    // What the logs determine (determination.h); vs means something only
-    // through the Stribeck drop Fs - Fd, so it goes with an undetermined Fs.
-    for (Eigen::Index a = 0; a < m; ++a) {
-      const int c = free[a], i = c % kDirectionParameters;
-      const double value = (*blocks[c / kDirectionParameters])[i];
-      const double error = std::sqrt(std::max(covariance(a, a), 0.0));
-      if (internal::IsDetermined(value, error, kDeterminedFloor[i],
-                                 options.identifiable_relative_error)) {
-        continue;
-      }
-      char why[200];
-      std::snprintf(why, sizeof(why), "not determined by these logs (%.4g +- %.2g); %s", value,
-                    error,
-                    options.held_at_prior ? "held at the prior" : "regularised toward the prior");
-      held[c] = why;
-    }
-    for (int d = 0; d < 2; ++d) {
-      const int fs = d * kDirectionParameters, vs = fs + 3;
-      if (!held[fs].empty() && held[vs].empty() && held[fs] != "no slide this way") {
-        held[vs] = std::string(
-                       "not determined by these logs: Fs, which sets the Stribeck drop, "
-                       "is not; ") +
-                   (options.held_at_prior ? "held at the prior" : "regularised toward the prior");
-      }
-    }
+    covariance = RobustCovariance(jacobians, columns, free, blocks, sigma);
+    MarkUndetermined(covariance, free, blocks, options, &held);
     for (int c = 0; c < 2 * kDirectionParameters; ++c) {
       if (!held[c].empty() && options.held_at_prior) {
         (*blocks[c / kDirectionParameters])[c % kDirectionParameters] =
             prior_blocks[c / kDirectionParameters][c % kDirectionParameters];
       }
     }
-    std::vector<int> still;  // the columns the logs determine
-    for (int c : free) {
-      if (held[c].empty()) still.push_back(c);
-    }
-    Eigen::MatrixXd kept(still.size(), still.size());
-    for (std::size_t a = 0; a < still.size(); ++a) {
-      for (std::size_t b = 0; b < still.size(); ++b) {
-        kept(a, b) = covariance(std::find(free.begin(), free.end(), still[a]) - free.begin(),
-                                std::find(free.begin(), free.end(), still[b]) - free.begin());
-      }
-    }
-    free = still;
-    covariance = kept;
+    KeepDetermined(held, &free, &covariance);
   }
   result.segments = static_cast<int>(data.segments.size());
   double squares = 0;

@@ -10,6 +10,7 @@
 #include "friction_segments.h"
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/model/effects.h"
+#include "quiet_solver.h"
 
 namespace pneumaid {
 namespace {
@@ -122,7 +123,7 @@ SlideFrictionStart FrictionFromSlides(const Unit& unit, const std::vector<std::s
   problem.SetParameterLowerBound(&kp, 0, range.plausible_min);
   problem.SetParameterUpperBound(&kp, 0, range.plausible_max);
   if (!slide_options.pressure_gain) problem.SetParameterBlockConstant(&kp);
-  ceres::Solver::Options solver;
+  ceres::Solver::Options solver = internal::QuietSolverOptions();
   solver.max_num_iterations = options.max_iterations;
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);

@@ -5,6 +5,7 @@
 
 #include "friction_cost.h"
 #include "friction_slides.h"
+#include "quiet_solver.h"
 
 namespace pneumaid::friction_internal {
 
@@ -48,7 +49,7 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
 }
 
 ceres::Solver::Summary Solve(const FrictionFitOptions& options, ceres::Problem* problem) {
-  ceres::Solver::Options solver_options;
+  ceres::Solver::Options solver_options = internal::QuietSolverOptions();
   // The arrest times are eliminated per segment (Schur complement).
   solver_options.linear_solver_type = ceres::DENSE_SCHUR;
   solver_options.max_num_iterations = options.max_iterations;

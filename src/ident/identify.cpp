@@ -1,7 +1,10 @@
 #include "pneumaid/ident/identify.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <sstream>
 
+#include "../io/provenance_map.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
@@ -40,61 +43,72 @@ void AddPriorsUnder(const std::string& prefix, const std::string& why, IdentifyR
   }
 }
 
-std::string QuoteYaml(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
+// The identified set's provenance: what made it (tool, date, the unit and
+// the sha256 of every log) and each component fit's cost.
 std::string Provenance(const Unit& unit, const IdentifyOptions& options,
                        const IdentifyReport& report) {
-  std::ostringstream out;
-  out << "{tool: " << QuoteYaml("pneumaid " + options.tool_version)
-      << ", date: " << QuoteYaml(options.date) << ", unit_directory: " << QuoteYaml(unit.directory)
-      << ", inputs: [";
-  for (std::size_t i = 0; i < unit.experiments.size(); ++i) {
-    const auto& e = unit.experiments[i];
-    out << (i ? ", " : "") << "{file: " << QuoteYaml(e.entry.file) << ", sha256: " << e.sha256
-        << "}";
+  YAML::Node root(YAML::NodeType::Map);
+  root["tool"] = "pneumaid " + options.tool_version;
+  root["date"] = options.date;
+  root["unit_directory"] = unit.directory;
+  YAML::Node inputs(YAML::NodeType::Sequence);
+  for (const auto& e : unit.experiments) {
+    YAML::Node input(YAML::NodeType::Map);
+    input["file"] = e.entry.file;
+    input["sha256"] = e.sha256;
+    inputs.push_back(input);
   }
-  out << "]";
+  root["inputs"] = inputs;
   for (const auto& [name, fit] : {std::make_pair("valve_increasing", &report.valve.increasing),
                                   std::make_pair("valve_decreasing", &report.valve.decreasing)}) {
     if (!fit->has_values()) continue;
-    out << ", " << name << ": {final_cost: " << FormatDouble(fit->final_cost)
-        << ", iterations: " << fit->iterations << ", plateaus: " << fit->plateaus << "}";
+    YAML::Node entry(YAML::NodeType::Map);
+    entry["final_cost"] = FormatDouble(fit->final_cost);
+    entry["iterations"] = fit->iterations;
+    entry["plateaus"] = fit->plateaus;
+    root[name] = entry;
   }
   if (report.pipeline.has_values()) {
-    out << ", pipeline: {delta_at_rig: " << FormatDouble(report.pipeline.coefficients.front().value)
-        << ", tubes: " << report.pipeline.tubes.size() << "}";
+    YAML::Node entry(YAML::NodeType::Map);
+    entry["delta_at_rig"] = FormatDouble(report.pipeline.coefficients.front().value);
+    entry["tubes"] = report.pipeline.tubes.size();
+    root["pipeline"] = entry;
   }
   if (report.friction.has_values()) {
-    out << ", friction: {final_cost: " << FormatDouble(report.friction.final_cost)
-        << ", iterations: " << report.friction.iterations
-        << ", segments: " << report.friction.segments << "}";
+    YAML::Node entry(YAML::NodeType::Map);
+    entry["final_cost"] = FormatDouble(report.friction.final_cost);
+    entry["iterations"] = report.friction.iterations;
+    entry["segments"] = report.friction.segments;
+    root["friction"] = entry;
   }
-  out << "}";
-  return out.str();
+  return EmitProvenance(root);
+}
+
+// Whether `component` is fitted: requested and its kind of experiment
+// logged. Otherwise its parameters (under `prefix`) stay the prior's, with
+// why; InputError when it was asked for by name and the unit has no such log.
+bool WillFit(Component component, ExperimentKind kind, const std::string& prefix, const Unit& unit,
+             const IdentifyOptions& options, IdentifyReport* report) {
+  if (!options.components.count(component)) {
+    AddPriorsUnder(prefix, "not requested", report);
+    return false;
+  }
+  if (HasKind(unit, kind)) return true;
+  const std::string what = std::string(ToString(component));
+  const std::string log = std::string(ToString(kind)) + " experiment";
+  if (options.components_explicit) {
+    throw InputError(
+        unit.manifest_path(), 0, 0,
+        "components: " + what + " was asked for, but the unit has no " + log + " to fit");
+  }
+  AddPriorsUnder(prefix, "no " + log, report);
+  return false;
 }
 
 void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
                       Parameters* params, IdentifyReport* report) {
-  if (!options.components.count(Component::kPipeline)) {
-    AddPriorsUnder("pipeline.", "not requested", report);
+  if (!WillFit(Component::kPipeline, ExperimentKind::kPipeline, "pipeline.", unit, options, report))
     return;
-  }
-  if (!HasKind(unit, ExperimentKind::kPipeline)) {
-    if (options.components_explicit) {
-      throw InputError(
-          unit.manifest_path(), 0, 0,
-          "components: pipeline was asked for, but the unit has no pipeline experiment to fit");
-    }
-    AddPriorsUnder("pipeline.", "no pipeline experiment", report);
-    return;
-  }
   PipelineFitOptions pipeline_options = options.pipeline;
   pipeline_options.initial_delta_per_s = prior.pipeline.delta_per_s;
   report->pipeline = FitPipeline(unit, pipeline_options);
@@ -111,19 +125,8 @@ void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyO
 
 void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
                       Parameters* params, IdentifyReport* report) {
-  if (!options.components.count(Component::kFriction)) {
-    AddPriorsUnder("friction.", "not requested", report);
+  if (!WillFit(Component::kFriction, ExperimentKind::kStroke, "friction.", unit, options, report))
     return;
-  }
-  if (!HasKind(unit, ExperimentKind::kStroke)) {
-    if (options.components_explicit) {
-      throw InputError(
-          unit.manifest_path(), 0, 0,
-          "components: friction was asked for, but the unit has no stroke experiment to fit");
-    }
-    AddPriorsUnder("friction.", "no stroke experiment", report);
-    return;
-  }
   report->friction = FitFriction(unit, prior.friction, options.friction);
   Record(report->friction, params, report);
 }
@@ -164,16 +167,9 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   Parameters params = WithUnitConstants(prior, unit);
   params.uncertainty.clear();
   *report = IdentifyReport{};
-  const bool valve_wanted = options.components.count(Component::kValve) > 0;
-  if (valve_wanted && HasKind(unit, ExperimentKind::kValve)) {
+  if (WillFit(Component::kValve, ExperimentKind::kValve, "valve.", unit, options, report)) {
     report->valve = FitValve(unit, prior.valve, options.valve);
     Record(report->valve, &params, report);
-  } else if (valve_wanted && options.components_explicit) {
-    throw InputError(
-        unit.manifest_path(), 0, 0,
-        "components: valve was asked for, but the unit has no valve experiment to fit");
-  } else {
-    AddPriorsUnder("valve.", "no valve experiment", report);
   }
   IdentifyPipeline(unit, prior, options, &params, report);
   IdentifyFriction(unit, prior, options, &params, report);

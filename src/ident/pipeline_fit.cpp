@@ -11,6 +11,7 @@
 #include "determination.h"
 #include "held_levels.h"
 #include "pneumaid/eval/lag.h"
+#include "quiet_solver.h"
 #include "tube_from_meters.h"
 
 namespace pneumaid {
@@ -206,7 +207,7 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   problem.AddResidualBlock(cost, nullptr, theta.data(), &valve_tau_s);
   problem.SetParameterLowerBound(theta.data(), log.levels, 1e-3);  // delta > 0
   problem.SetParameterLowerBound(&valve_tau_s, 0, 0.0);
-  ceres::Solver::Options solver_options;
+  ceres::Solver::Options solver_options = internal::QuietSolverOptions();
   solver_options.linear_solver_type = ceres::DENSE_QR;
   solver_options.max_num_iterations = options.max_iterations;
   ceres::Solver::Summary summary;

@@ -8,6 +8,7 @@
 
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/validate.h"
+#include "quiet_solver.h"
 #include "refine_covariance.h"
 #include "refine_verdict.h"
 
@@ -25,14 +26,12 @@ ceres::CallbackReturnType ProgressCallback::operator()(const ceres::IterationSum
 }
 
 ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& options) {
-  ceres::Solver::Options s;
+  ceres::Solver::Options s = internal::QuietSolverOptions();
   s.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   s.linear_solver_type = ceres::DENSE_QR;
   s.max_num_iterations = spec.max_iterations;
   s.num_threads = options.threads;
   s.function_tolerance = options.function_tolerance;
-  s.minimizer_progress_to_stdout = false;  // the library prints nothing: RefineOptions::log
-  s.logging_type = ceres::SILENT;
   return s;
 }
 

@@ -14,6 +14,7 @@
 #include "pneumaid/eval/lag.h"
 #include "pneumaid/model/kvp.h"
 #include "pneumaid/model/orifice.h"
+#include "quiet_solver.h"
 
 namespace pneumaid {
 namespace {
@@ -138,7 +139,7 @@ BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpB
             new PlateauResidual{p->u_V, p->kvp_kg_per_s, p->kvp_sigma, prior.u_sat_V}),
         nullptr, theta.data());
   }
-  ceres::Solver::Options solver_options;
+  ceres::Solver::Options solver_options = internal::QuietSolverOptions();
   solver_options.linear_solver_type = ceres::DENSE_QR;
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.function_tolerance = 1e-12;

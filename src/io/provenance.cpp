@@ -25,17 +25,21 @@ YAML::Node ProvenanceMap(const std::string& provenance) {
   return kept;
 }
 
-std::string WithProvenanceEntry(const std::string& provenance, const std::string& key,
-                                const YAML::Node& entry) {
-  YAML::Node root = ProvenanceMap(provenance);
-  root[key] = entry;
+std::string EmitProvenance(const YAML::Node& root) {
   YAML::Emitter out;
   out.SetMapFormat(YAML::Flow);
   out.SetSeqFormat(YAML::Flow);
   out << root;
   // yaml-cpp reports an emitter error in its state, not by throwing.
-  if (!out.good()) throw std::logic_error("provenance entry " + key + ": " + out.GetLastError());
+  if (!out.good()) throw std::logic_error("provenance: " + out.GetLastError());
   return out.c_str();
+}
+
+std::string WithProvenanceEntry(const std::string& provenance, const std::string& key,
+                                const YAML::Node& entry) {
+  YAML::Node root = ProvenanceMap(provenance);
+  root[key] = entry;
+  return EmitProvenance(root);
 }
 
 bool HasProvenanceEntry(const std::string& provenance, const std::string& key) {

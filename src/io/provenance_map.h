@@ -12,6 +12,10 @@ namespace pneumaid {
 // mapping is kept under `given`), or an empty one.
 YAML::Node ProvenanceMap(const std::string& provenance);
 
+// A provenance mapping as text, in flow style (values quoted by the emitter
+// where they need it): the one way the library writes provenance.
+std::string EmitProvenance(const YAML::Node& root);
+
 // `provenance` with the entry `key` set to `entry` (replacing any earlier
 // one: a mapping has one key of a name), emitted in flow style (values
 // quoted by the emitter where they need it).

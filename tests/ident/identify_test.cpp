@@ -58,6 +58,8 @@ TEST(IdentifyTest, ComponentsWithoutDataAreRefusedWhenAskedForAndPriorsOtherwise
   options.components_explicit = false;
   const Parameters without_strokes = Identify(no_stroke, defaults, options, &report);
   EXPECT_TRUE(Lists(report.priors, "friction.positive.Fs (no stroke experiment)"));
+  // The unit logs a valve test: the valve is the prior's because only friction was asked for.
+  EXPECT_TRUE(Lists(report.priors, "valve.increasing.a (not requested)"));
   // No confident number from nothing: a prior carries no standard error.
   EXPECT_EQ(without_strokes.uncertainty.count("friction.positive.Fs"), 0u);
   options.components_explicit = true;

@@ -1,6 +1,6 @@
 // `identify`: a unit's logs -> a parameter set. Each component is a fit of
-// its own; what cannot be fitted (a missing experiment kind, a fit not yet
-// available) comes from the prior, and the report says which is which.
+// its own; what is not fitted (not requested, or no log of its kind) comes
+// from the prior, and the report says which is which and why.
 #pragma once
 
 #include <set>
@@ -22,7 +22,9 @@ const char* ToString(Component component);
 struct IdentifyOptions {
   // Components to fit (default: all).
   std::set<Component> components = {Component::kValve, Component::kPipeline, Component::kFriction};
-  bool components_explicit = false;  // --only was given
+  // The caller named `components`: a named component whose kind of log the
+  // unit lacks is an InputError (otherwise the prior, reported as such).
+  bool components_explicit = false;
   ValveFitOptions valve;
   PipelineFitOptions pipeline;  // initial_delta_per_s is taken from the prior
   FrictionFitOptions friction;
@@ -42,8 +44,9 @@ struct IdentifyReport {
 };
 
 // The unit's conditions and geometry (manifest), fitted components, priors
-// for the rest, uncertainty and provenance. Throws InputError when a requested
-// component cannot be identified at all.
+// for the rest, uncertainty and provenance. Throws InputError when the
+// options are not valid or a component named explicitly has no log to fit,
+// FitError when the identified set is not physical.
 Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
                     IdentifyReport* report);
 

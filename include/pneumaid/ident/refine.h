@@ -228,7 +228,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
 // How well `params` explain the fitted runs of `spec` on `unit`, with no fit:
 // each run simulated from its logged start, its channels' reduced
 // chi-squares and worst windows, the median over runs and the verdict
-// (status kExplained or kNotExplained, message as Refine's).
+// (status kConverged, that is explained, or kNotExplained; message as
+// Refine's).
 RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,
                          const RefineOptions& options);
 

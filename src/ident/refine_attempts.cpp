@@ -1,0 +1,232 @@
+#include "refine_attempts.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+#include "pneumaid/ident/friction_fit.h"
+#include "pneumaid/validate/logged_run.h"
+#include "refine_friction_screen.h"
+#include "refine_parameters.h"
+#include "refine_solve.h"
+#include "refine_verdict.h"
+
+namespace pneumaid::refine_internal {
+namespace {
+
+// FitStage::friction_replay: the identification's friction fit on the
+// stroke logs, from the current friction; directions without slides keep it.
+void ReplayFriction(const Unit& unit, Parameters* params, std::string* report) {
+  const FrictionFitResult fit = FitFriction(unit, params->friction, FrictionFitOptions{});
+  *report += fit.BriefReport();
+  fit.ApplyTo(params);  // a direction without slides holds the current values
+}
+
+// The spec of one stage: its parameters only, in the order of `parameters`.
+FitSpec StageSpec(const FitSpec& spec, const FitStage& stage) {
+  FitSpec one = spec;
+  one.stages.clear();
+  if (stage.parameters.empty()) return one;  // all
+  one.parameters.clear();
+  for (const FreeParameter& p : spec.parameters) {
+    if (std::count(stage.parameters.begin(), stage.parameters.end(), p.path)) {
+      one.parameters.push_back(p);
+    }
+  }
+  return one;
+}
+
+StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spec,
+                    const std::vector<FitStage>& stages, const RefineOptions& options,
+                    bool robust_runs = false) {
+  StagedFit out;
+  RefineResult& r = out.result;
+  Parameters current = from;
+  out.before_last = from;
+  int iterations = 0;
+  bool first_fit = true;
+  for (size_t k = 0; k < stages.size(); ++k) {
+    if (stages[k].friction_replay) {
+      ReplayFriction(unit, &current, &r.replay_report);
+      continue;
+    }
+    const std::string replay_report = r.replay_report;
+    out.before_last = current;
+    r = RefineStage(current, unit, StageSpec(spec, stages[k]), stages[k].windows,
+                    k + 1 == stages.size(), options, robust_runs);
+    r.replay_report = replay_report;
+    iterations += r.iterations;
+    if (first_fit) {
+      out.before = r.fitted;
+      out.cost_before = r.initial_cost;
+      out.first_fit_windowed = stages[k].windows;
+      first_fit = false;
+    }
+    if (!r.has_values()) {
+      r.reason = "stage " + std::to_string(k + 1) + ": " + r.reason;
+      break;
+    }
+    current = r.params;
+  }
+  r.iterations = iterations;
+  JudgeLastStage(stages.back(), unit, spec, options, &r);
+  return out;
+}
+
+}  // namespace
+
+void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options, RefineResult* r) {
+  if (last.windows && r->has_values()) {
+    r->misfits = WholeRunMisfits(r->params, unit, spec, options);
+  }
+  Judge(options, r);
+}
+
+bool Better(const RefineResult& a, const RefineResult& b) {
+  if (!a.has_values()) return false;
+  if (!b.has_values()) return true;
+  const bool a_explained = a.status == FitStatus::kConverged;
+  const bool b_explained = b.status == FitStatus::kConverged;
+  if (a_explained != b_explained) return a_explained;
+  const auto finite_or_huge = [](const RefineResult& r) {
+    return std::isnan(r.reduced_chi_square) ? HUGE_VAL : r.reduced_chi_square;
+  };
+  return finite_or_huge(a) < finite_or_huge(b);
+}
+
+Attempts::Attempts(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                   const std::vector<FitStage>& stages, const RefineOptions& options)
+    : start_(start),
+      unit_(unit),
+      spec_(spec),
+      stages_(stages),
+      options_(options),
+      best_(FitStages(start, unit, spec, stages, options)),
+      given_has_values_(best_.result.has_values()),
+      given_before_last_(best_.before_last),
+      screened_start_(start) {}
+
+bool Attempts::Offer(StagedFit&& candidate, std::string* report) {
+  const int iterations = best_.result.iterations + candidate.result.iterations;
+  const bool better = Better(candidate.result, best_.result);
+  if (better) {
+    best_ = std::move(candidate);
+    kept_report_ = report;
+  }
+  best_.result.iterations = iterations;
+  return better;
+}
+
+void Attempts::ScreenFriction() {
+  // A friction coefficient at a bound of its range (Fd and b at 0, vs at
+  // 1 m/s: Coulomb friction passed off as Stribeck) is a basin the runs
+  // tolerate but do not determine: screened like a stall, even when the
+  // given start itself passes the verdict.
+  const RefineResult& given = best_.result;
+  const bool friction_at_bound =
+      given.has_values() && std::any_of(given.coefficients.begin(), given.coefficients.end(),
+                                        [](const FittedCoefficient& c) {
+                                          return c.at_bound && c.path.rfind("friction.", 0) == 0;
+                                        });
+  if ((Explained() && !friction_at_bound) || !options_.screen_friction_starts) return;
+  // The fit from the given start stalled (not explained, out of iterations
+  // or nothing usable) or left friction at a bound: a start whose friction
+  // is read off the logs may lie in the basin that explains the runs.
+  FrictionScreen screen = ScreenFrictionStarts(start_, unit_, spec_, options_, friction_at_bound,
+                                               options_.screened_alternatives);
+  screen_report_ = screen.report;
+  screened_candidates_ = screen.candidates;
+  if (screen_report_.empty()) return;  // the screen moved nothing
+  screened_start_ = std::move(screen.start);
+  screened_ = true;
+  StagedFit from_screened = FitStages(screened_start_, unit_, spec_, stages_, options_);
+  from_screened.from_screened_start = true;
+  if (!Offer(std::move(from_screened), &screen_report_)) {
+    screen_report_ += "; not kept: the fit from the given start ends lower";
+  }
+  // Not explained from the best candidate either: the next-best ones.
+  int tried = 0, kept = 0;
+  for (Parameters& alternative : screen.alternatives) {
+    if (Explained()) break;
+    ++tried;
+    StagedFit from_alternative = FitStages(alternative, unit_, spec_, stages_, options_);
+    from_alternative.from_screened_start = true;
+    if (Offer(std::move(from_alternative), &screen_report_)) {
+      kept = tried;
+      screened_start_ = std::move(alternative);
+    }
+  }
+  if (tried > 0) {
+    screen_report_ += "; " + std::to_string(tried) + " next-best candidate(s) fitted" +
+                      (kept > 0 ? ", the fit from candidate " + std::to_string(kept + 1) + " kept"
+                                : ", none ended lower");
+  }
+}
+
+void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,
+                     std::string* report) {
+  const double before = best_.result.reduced_chi_square;
+  StagedFit candidate = FitStages(screened_start_, unit_, spec_, stages, options_, robust_runs);
+  candidate.from_screened_start = screened_;
+  const double after = candidate.result.reduced_chi_square;
+  const bool kept = Offer(std::move(candidate), report);
+  char line[200];
+  std::snprintf(line, sizeof(line), "%s: median reduced chi-square %.3g against %.3g, %s", what,
+                after, before, kept ? "kept" : "not kept");
+  *report = line;
+}
+
+void Attempts::RobustRefit() {
+  if (Explained() || !options_.robust_refit) return;
+  // A run the model cannot follow may be dragging the others: each run
+  // through a Cauchy loss.
+  Refit("robust refit (each run through a Cauchy loss)", stages_, true, &robust_report_);
+}
+
+void Attempts::WindowedRefit() {
+  if (Explained() || !options_.windowed_refit || stages_.back().windows) return;
+  // The last stage first by multiple shooting. Restarted at every stuck
+  // phase, a slip at another instant cannot carry into the rest of the run,
+  // so a chaotic stick-slip no longer makes the cost rugged around the
+  // optimum; the whole runs are fitted after.
+  std::vector<FitStage> windowed = stages_;
+  FitStage shooting = stages_.back();
+  shooting.windows = true;
+  windowed.insert(windowed.end() - 1, shooting);
+  Refit("windowed refit (the last stage by multiple shooting first)", windowed, false,
+        &windowed_report_);
+}
+
+void Attempts::Rescue() {
+  RefineResult& r = best_.result;
+  if (Explained() || !r.has_values() || options_.rescue_starts <= 0) return;
+  // Stalled far above what the noise explains: the last stage again (from
+  // what it started from in the fit from the given start, earlier stages
+  // included; the kept fit's when that one found nothing) from starts in a
+  // trust box around the given start's values (the component fits, not the
+  // whole bounds), those alone. Only the result is replaced: the kept fit's
+  // record of its start stays.
+  const FitStage& last_stage = stages_.back();
+  const FitSpec last = StageSpec(spec_, last_stage);
+  const Parameters conditioned = WithRigConditions(start_, unit_);
+  const ParameterMap map = MakeParameterMap(conditioned, last);
+  RefineResult rescue = RefineStage(
+      given_has_values_ ? given_before_last_ : best_.before_last, unit_, last, last_stage.windows,
+      true, options_, false,
+      TrustBox(map, conditioned, options_.rescue_starts, options_.rescue_box, spec_.seed),
+      /*extra_starts_only=*/true);
+  JudgeLastStage(last_stage, unit_, spec_, options_, &rescue);
+  const int iterations = r.iterations + rescue.iterations;
+  const int tried = rescue.starts;
+  if (Better(rescue, r)) {
+    rescue.replay_report = r.replay_report;
+    r = rescue;
+    if (kept_report_ != nullptr) *kept_report_ += "; a rescue start then ended lower";
+  }
+  r.rescue_starts = tried;
+  r.iterations = iterations;
+}
+
+}  // namespace pneumaid::refine_internal

@@ -1,0 +1,95 @@
+// Refinement (refine.h), its attempts: the fit through every stage from the
+// given start, then, while the verdict says the runs are not explained, the
+// later attempts in a fixed order, the Better fit kept at each step:
+//   1. the friction screen (refine_friction_screen.h): a start whose
+//      friction is read off the logs, and its next-best candidates (also
+//      when the given fit is explained but leaves friction at a bound);
+//   2. a robust refit (each run through a Cauchy loss);
+//   3. a windowed refit (the last stage by multiple shooting first);
+//   4. rescue starts in a trust box around the given start (the last stage
+//      only).
+// What the kept fit started from and each attempt's one-line report are the
+// caller's to put into the result (refine.cpp).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pneumaid/ident/fit_spec.h"
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/parameters.h"
+
+namespace pneumaid::refine_internal {
+
+// One fit through every stage from a start, judged by the verdict.
+struct StagedFit {
+  RefineResult result;
+  Parameters before_last;              // what the last stage started from
+  std::vector<ExperimentCost> before;  // the first fitted stage's costs at its start
+  double cost_before = 0;
+  bool first_fit_windowed = false;   // `before` and `cost_before` are windows'
+  bool from_screened_start = false;  // else from the caller's start
+};
+
+// The verdict on a fit's last stage: a windowed stage's runs are judged
+// whole, from their logged starts.
+void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options, RefineResult* r);
+
+// Whether fit `a` is better than `b`: explained first, then any with values
+// by the lower median (NaN, no run simulated, counts as infinite), nothing
+// usable last.
+bool Better(const RefineResult& a, const RefineResult& b);
+
+class Attempts {
+ public:
+  // Fits from `start` through `stages`: the given attempt. Every argument
+  // must outlive the object.
+  Attempts(const Parameters& start, const Unit& unit, const FitSpec& spec,
+           const std::vector<FitStage>& stages, const RefineOptions& options);
+
+  // The later attempts, in order; each does nothing once the kept fit is
+  // explained (or when its option is off).
+  void ScreenFriction();
+  void RobustRefit();
+  void WindowedRefit();
+  void Rescue();
+
+  // The fit kept.
+  StagedFit& best() { return best_; }
+  // One line per later attempt (empty: not tried), and how many friction
+  // starts the screen simulated.
+  const std::string& screen_report() const { return screen_report_; }
+  const std::string& robust_report() const { return robust_report_; }
+  const std::string& windowed_report() const { return windowed_report_; }
+  int screened_candidates() const { return screened_candidates_; }
+
+ private:
+  bool Explained() const { return best_.result.status == FitStatus::kConverged; }
+  // Keeps `candidate` when it is Better, `report` then naming the attempt
+  // that found it; the iterations add up either way. True when kept.
+  bool Offer(StagedFit&& candidate, std::string* report);
+  // A fit from the screened start (the given one when the screen moved
+  // nothing) through `stages`, offered; its one-line report.
+  void Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,
+             std::string* report);
+
+  const Parameters& start_;
+  const Unit& unit_;
+  const FitSpec& spec_;
+  const std::vector<FitStage>& stages_;
+  const RefineOptions& options_;
+  StagedFit best_;
+  // The given attempt's: whether it had values, and where its last stage
+  // started (the rescue starts from there).
+  bool given_has_values_ = false;
+  Parameters given_before_last_;
+  Parameters screened_start_;
+  bool screened_ = false;  // screened_start_ differs from start_
+  std::string screen_report_, robust_report_, windowed_report_;
+  int screened_candidates_ = 0;
+  std::string* kept_report_ = nullptr;  // the report of the later attempt kept, if any
+};
+
+}  // namespace pneumaid::refine_internal
