@@ -112,6 +112,58 @@ struct Attempt {
   std::string failure;  // why Ceres failed; empty: usable
 };
 
+// One solve of the segment problem from the attempt's current values, with
+// the weak prior on the free directions and a Huber loss of `huber_scale`
+// per segment (empty: plain least squares); the attempt's costs (its
+// initial one from its first solve), iterations and stop recorded. False
+// (and a->failure) without a usable solution.
+bool SolveOnce(const StrokeData& data, double mass_kg, const FrictionFitOptions& options,
+               const Block (&prior_blocks)[2], const bool (&free_direction)[2],
+               const std::array<double, kDirectionParameters>& sigma,
+               const std::vector<double>& huber_scale, bool first_solve, Attempt* a,
+               SegmentProblem* problem) {
+  problem->stop_time_s = &a->stop_time_s;
+  BuildProblem(data, mass_kg, options, huber_scale, &a->blocks[0], &a->blocks[1], problem);
+  for (int d = 0; d < 2; ++d) {
+    double* block = a->blocks[d].data();
+    if (!free_direction[d]) {
+      problem->problem.SetParameterBlockConstant(block);
+      continue;
+    }
+    problem->problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<PriorResidual, kDirectionParameters, kDirectionParameters>(
+            new PriorResidual{prior_blocks[d], sigma}),
+        nullptr, block);
+  }
+  const ceres::Solver::Summary summary = Solve(options, &problem->problem);
+  if (first_solve) a->initial_cost = summary.initial_cost;
+  a->final_cost = summary.final_cost;
+  a->iterations += static_cast<int>(summary.iterations.size());
+  a->stopped = summary.termination_type != ceres::NO_CONVERGENCE;
+  if (!summary.IsSolutionUsable()) a->failure = summary.message;
+  return summary.IsSolutionUsable();
+}
+
+// Huber's a per segment when some segments fit far worse than the typical
+// one (their mean square above outlier_ratio x the median): the loss turns
+// robust where a segment's squared norm passes a^2 = outlier_ratio x the
+// typical mean square x its rows. Empty when none does; false when a replay
+// fails.
+bool HuberScales(const FrictionFitOptions& options, SegmentProblem* problem,
+                 std::vector<double>* scale, int* outliers) {
+  std::vector<double> mean_squares;
+  if (!SegmentMeanSquares(problem, &mean_squares)) return false;
+  const double typical = Median(mean_squares);
+  *outliers =
+      static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
+        return m > options.outlier_ratio * typical;
+      }));
+  if (*outliers > 0) {
+    for (int n : problem->rows) scale->push_back(std::sqrt(options.outlier_ratio * typical * n));
+  }
+  return true;
+}
+
 Attempt FitFrom(const StrokeData& data, double mass_kg, const FrictionFitOptions& options,
                 const Block (&prior_blocks)[2], const Block (&start)[2],
                 const bool (&free_direction)[2],
@@ -124,56 +176,25 @@ Attempt FitFrom(const StrokeData& data, double mass_kg, const FrictionFitOptions
   for (int d = 0; d < 2; ++d) {
     if (free_direction[d]) free_blocks.push_back(a.blocks[d].data());
   }
-  std::vector<double> huber_scale;  // empty: plain least squares
-  for (int pass = 0; pass < 2; ++pass) {
-    SegmentProblem problem;
-    problem.stop_time_s = &a.stop_time_s;
-    BuildProblem(data, mass_kg, options, huber_scale, &a.blocks[0], &a.blocks[1], &problem);
-    for (int d = 0; d < 2; ++d) {
-      double* block = a.blocks[d].data();
-      if (!free_direction[d]) {
-        problem.problem.SetParameterBlockConstant(block);
-        continue;
-      }
-      problem.problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<PriorResidual, kDirectionParameters,
-                                          kDirectionParameters>(
-              new PriorResidual{prior_blocks[d], sigma}),
-          nullptr, block);
-    }
-    const ceres::Solver::Summary summary = Solve(options, &problem.problem);
-    if (pass == 0) a.initial_cost = summary.initial_cost;
-    a.final_cost = summary.final_cost;
-    a.iterations += static_cast<int>(summary.iterations.size());
-    a.stopped = summary.termination_type != ceres::NO_CONVERGENCE;
-    if (!summary.IsSolutionUsable()) {
-      a.failure = summary.message;
+  SegmentProblem plain_fit, robust_fit;
+  if (!SolveOnce(data, mass_kg, options, prior_blocks, free_direction, sigma, {}, true, &a,
+                 &plain_fit))
+    return a;
+  std::vector<double> huber_scale;
+  if (!HuberScales(options, &plain_fit, &huber_scale, &a.outlier_segments)) {
+    a.failure = "a replay failed at the solution";
+    return a;
+  }
+  SegmentProblem* last = &plain_fit;
+  if (!huber_scale.empty()) {  // the Jacobians are taken after the refit
+    if (!SolveOnce(data, mass_kg, options, prior_blocks, free_direction, sigma, huber_scale, false,
+                   &a, &robust_fit))
       return a;
-    }
-    if (pass == 0) {
-      std::vector<double> mean_squares;
-      if (!SegmentMeanSquares(&problem, &mean_squares)) {
-        a.failure = "a replay failed at the solution";
-        return a;
-      }
-      const double typical = Median(mean_squares);
-      a.outlier_segments =
-          static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
-            return m > options.outlier_ratio * typical;
-          }));
-      if (a.outlier_segments > 0) {
-        // Huber's a: the loss turns robust where a segment's squared norm
-        // passes a^2 = outlier_ratio x the typical mean square x its rows.
-        for (int n : problem.rows)
-          huber_scale.push_back(std::sqrt(options.outlier_ratio * typical * n));
-        continue;  // the Jacobians are taken after the refit
-      }
-    }
-    if (!Evaluate(data, free_blocks, &problem, &a.jacobians)) {
-      a.failure = "a replay failed at the solution";
-      return a;
-    }
-    break;
+    last = &robust_fit;
+  }
+  if (!Evaluate(data, free_blocks, last, &a.jacobians)) {
+    a.failure = "a replay failed at the solution";
+    return a;
   }
   SegmentProblem plain;
   plain.stop_time_s = &a.stop_time_s;

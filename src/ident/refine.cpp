@@ -65,7 +65,7 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   entry["status"] = ToString(r.status);
   entry["reduced_chi_square"] = r.reduced_chi_square;
   entry["acceptable_reduced_chi_square"] = r.acceptable_reduced_chi_square;
-  entry["converged"] = r.status == FitStatus::kConverged;
+  entry["converged"] = r.explained();
   // Fitted, but on a bound of its range: no standard error, so no entry in
   // `uncertainty` (a reader would otherwise take it for the prior's).
   YAML::Node at_bound(YAML::NodeType::Sequence);
@@ -188,13 +188,13 @@ std::string RefineResult::BriefReport() const {
   out << line;
   if (!reason.empty()) out << "  " << reason << "\n";
   if (!misfits.empty()) {
-    std::snprintf(
-        line, sizeof(line),
-        "  verdict: median reduced chi-square over the runs %.3g (acceptable %.3g)%s\n",
-        reduced_chi_square, acceptable_reduced_chi_square,
-        rescue_starts > 0
-            ? (", after " + std::to_string(rescue_starts) + " starts around the start").c_str()
-            : "");
+    std::snprintf(line, sizeof(line),
+                  "  verdict: median reduced chi-square over the runs %.3g (acceptable %.3g)%s\n",
+                  reduced_chi_square, acceptable_reduced_chi_square,
+                  rescue_starts_tried > 0 ? (", after " + std::to_string(rescue_starts_tried) +
+                                             " starts around the start")
+                                                .c_str()
+                                          : "");
     out << line;
   }
   if (!screen_report.empty()) out << "  " << screen_report << "\n";

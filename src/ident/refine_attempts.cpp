@@ -87,9 +87,7 @@ void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
 bool Better(const RefineResult& a, const RefineResult& b) {
   if (!a.has_values()) return false;
   if (!b.has_values()) return true;
-  const bool a_explained = a.status == FitStatus::kConverged;
-  const bool b_explained = b.status == FitStatus::kConverged;
-  if (a_explained != b_explained) return a_explained;
+  if (a.explained() != b.explained()) return a.explained();
   const auto finite_or_huge = [](const RefineResult& r) {
     return std::isnan(r.reduced_chi_square) ? HUGE_VAL : r.reduced_chi_square;
   };
@@ -138,7 +136,7 @@ void Attempts::ScreenFriction() {
                                                options_.screened_alternatives);
   screen_report_ = screen.report;
   screened_candidates_ = screen.candidates;
-  if (screen_report_.empty()) return;  // the screen moved nothing
+  if (!screen.moved) return;
   screened_start_ = std::move(screen.start);
   screened_ = true;
   StagedFit from_screened = FitStages(screened_start_, unit_, spec_, stages_, options_);
@@ -225,7 +223,7 @@ void Attempts::Rescue() {
     r = rescue;
     if (kept_report_ != nullptr) *kept_report_ += "; a rescue start then ended lower";
   }
-  r.rescue_starts = tried;
+  r.rescue_starts_tried = tried;
   r.iterations = iterations;
 }
 

@@ -66,7 +66,7 @@ class Attempts {
   int screened_candidates() const { return screened_candidates_; }
 
  private:
-  bool Explained() const { return best_.result.status == FitStatus::kConverged; }
+  bool Explained() const { return best_.result.explained(); }
   // Keeps `candidate` when it is Better, `report` then naming the attempt
   // that found it; the iterations add up either way. True when kept.
   bool Offer(StagedFit&& candidate, std::string* report);

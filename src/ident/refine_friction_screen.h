@@ -22,7 +22,8 @@ struct FrictionScreen {
   Parameters start;  // the best candidate (`start` itself when none is better)
   double chi_square_before = 0, chi_square_after = 0;  // the verdict's measure
   int candidates = 0;                                  // simulated
-  std::string report;                                  // one line, empty when nothing moved
+  bool moved = false;  // a candidate's median is lower than the start's
+  std::string report;  // one line, empty when nothing moved
   // Up to `alternatives` next-best candidates (lowest median first), each
   // differing from `start` and from one another in some direction's Fs by a
   // factor kDistinctStatic or its vs by kDistinctStribeck.

@@ -153,7 +153,7 @@ TEST(RefineFrictionScreenTest, AStartThatTheFitTakesToAnExplainedEndIsNotScreene
   EXPECT_EQ(result.status, FitStatus::kConverged) << result.reason;
   EXPECT_TRUE(result.screen_report.empty()) << result.screen_report;
   EXPECT_EQ(result.screened_candidates, 0);
-  EXPECT_EQ(result.rescue_starts, 0);
+  EXPECT_EQ(result.rescue_starts_tried, 0);
 }
 
 }  // namespace

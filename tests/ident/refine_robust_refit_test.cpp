@@ -64,7 +64,7 @@ TEST(RefineRobustRefitTest, OneRunTheModelCannotFollowDoesNotDragTheOthers) {
   ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;
   EXPECT_NE(result.robust_report.find(", kept"), std::string::npos) << result.robust_report;
   EXPECT_EQ(result.robust_report.find("rescue"), std::string::npos) << result.robust_report;
-  EXPECT_EQ(result.rescue_starts, 0);
+  EXPECT_EQ(result.rescue_starts_tried, 0);
   ExpectWithinTolerance(result.params, c.truth);
   ASSERT_FALSE(result.misfits.empty());
   EXPECT_EQ(result.misfits.front().run, c.faulty_run);

@@ -187,7 +187,7 @@ TEST(RefineTest, FromBiasedComponentFitsItSaysWhenTheRunsAreNotExplained) {
   } else {
     EXPECT_EQ(result.status, FitStatus::kNotExplained);
     EXPECT_NE(result.status, FitStatus::kConverged);
-    EXPECT_GT(result.rescue_starts, 0);
+    EXPECT_GT(result.rescue_starts_tried, 0);
     EXPECT_NE(result.reason.find("does not explain these logs"), std::string::npos);
     EXPECT_NE(result.reason.find(result.misfits.front().run), std::string::npos);
     EXPECT_NE(result.params.provenance_yaml.find("status: the model does not explain"),
@@ -256,7 +256,7 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
   EXPECT_EQ(EvaluateFit(truth, leaking, LoadFitSpec(kDefaultSpec), options).status,
             FitStatus::kNotExplained);
   EXPECT_GT(missing.reduced_chi_square, missing.acceptable_reduced_chi_square);
-  EXPECT_EQ(missing.rescue_starts, 2);  // the trust box's two
+  EXPECT_EQ(missing.rescue_starts_tried, 2);  // the trust box's two
 }
 
 class RefineSpecTest : public ::testing::Test {

@@ -187,7 +187,10 @@ struct RefineResult : FitResult {
   // first), and how many rescue starts were tried.
   double reduced_chi_square = 0, acceptable_reduced_chi_square = 0;
   std::vector<ChannelMisfit> misfits;
-  int rescue_starts = 0;
+  int rescue_starts_tried = 0;
+  // The verdict "explained": for a refinement the status kConverged means
+  // that the runs are explained, not only that the solver stopped.
+  bool explained() const { return status == FitStatus::kConverged; }
   Parameters params;                   // the refined set (start values elsewhere), with uncertainty
   double correlation_flag = 0.95;      // |correlation| reported as poorly separable
   std::vector<ExperimentCost> fitted;  // before: at the start, after: after the last stage
