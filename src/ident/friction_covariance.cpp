@@ -91,7 +91,8 @@ void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>&
   }
   for (int d = 0; d < 2; ++d) {
     const int fs = d * kDirectionParameters, vs = fs + 3;
-    if (!(*held)[fs].empty() && (*held)[vs].empty()) {
+    const bool fs_fitted = std::find(free.begin(), free.end(), fs) != free.end();
+    if (fs_fitted && !(*held)[fs].empty() && (*held)[vs].empty()) {
       (*held)[vs] =
           std::string("not determined by these logs: Fs, which sets the Stribeck drop, is not; ") +
           what;

@@ -33,7 +33,8 @@ Eigen::MatrixXd RobustCovariance(const std::vector<SegmentJacobian>& jacobians,
                                  const std::array<double, kDirectionParameters>& sigma);
 
 // Marks in `held` (columns 0-3 positive, 4-7 negative) each free coefficient
-// the logs do not determine, with why.
+// the logs do not determine, with why, and the vs of a direction whose
+// fitted Fs they do not determine.
 void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>& free,
                       const Block* const blocks[2], const FrictionFitOptions& options,
                       std::array<std::string, 2 * kDirectionParameters>* held);

@@ -83,7 +83,7 @@ void BuildProblem(const Parameters& conditioned, const ParameterMap& map,
 
 // Levenberg-Marquardt from every start in `starts` (coordinates), each from
 // the logged initial pressures; leaves the lowest usable point in p->theta
-// and p->offsets (the first start's when none is) and records the
+// and p->offsets (the stage's own start when none is) and records the
 // iterations, starts, best start, provisional status and reason in `r`.
 // Returns the best cost (infinite when no start gave a usable solution).
 double SolveFromStarts(const std::vector<std::vector<double>>& starts,

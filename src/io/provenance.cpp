@@ -25,13 +25,13 @@ YAML::Node ProvenanceMap(const std::string& provenance) {
   return kept;
 }
 
-std::string EmitProvenance(const YAML::Node& root) {
+std::string EmitProvenance(const YAML::Node& root, const std::string& what) {
   YAML::Emitter out;
   out.SetMapFormat(YAML::Flow);
   out.SetSeqFormat(YAML::Flow);
   out << root;
   // yaml-cpp reports an emitter error in its state, not by throwing.
-  if (!out.good()) throw std::logic_error("provenance: " + out.GetLastError());
+  if (!out.good()) throw std::logic_error(what + ": " + out.GetLastError());
   return out.c_str();
 }
 
@@ -39,7 +39,7 @@ std::string WithProvenanceEntry(const std::string& provenance, const std::string
                                 const YAML::Node& entry) {
   YAML::Node root = ProvenanceMap(provenance);
   root[key] = entry;
-  return EmitProvenance(root);
+  return EmitProvenance(root, "provenance entry " + key);
 }
 
 bool HasProvenanceEntry(const std::string& provenance, const std::string& key) {

@@ -13,8 +13,9 @@ namespace pneumaid {
 YAML::Node ProvenanceMap(const std::string& provenance);
 
 // A provenance mapping as text, in flow style (values quoted by the emitter
-// where they need it): the one way the library writes provenance.
-std::string EmitProvenance(const YAML::Node& root);
+// where they need it): the one way the library writes provenance. `what`
+// names it in the (logic) error of a yaml-cpp writer failure.
+std::string EmitProvenance(const YAML::Node& root, const std::string& what = "provenance");
 
 // `provenance` with the entry `key` set to `entry` (replacing any earlier
 // one: a mapping has one key of a name), emitted in flow style (values

@@ -30,8 +30,9 @@ struct FittedCoefficient {
   std::string path;           // params-v1 dotted path, e.g. "friction.positive.Fs"
   double start = 0;           // where the fit started (the prior, or a start read off the data)
   double value = 0;           // what the fit gives; for a held coefficient what it was held at
-  double standard_error = 0;  // with model error where the fit estimates it; a held
-                              // coefficient's is what it was held with (0: none)
+  double standard_error = 0;  // with model error where the fit estimates it; for a held
+                              // coefficient 0 (component fits) or the error with the
+                              // prior it was held by (refinement)
   std::string held;           // empty: determined by the data; otherwise why it is not
   bool at_bound = false;      // the value sits on one of the fit's bounds (refinement: then
                               // no standard error, its uncertainty is one-sided)
