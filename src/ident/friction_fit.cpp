@@ -196,11 +196,10 @@ Attempt FitFrom(const StrokeData& data, double mass_kg, const FrictionFitOptions
     a.failure = "a replay failed at the solution";
     return a;
   }
-  SegmentProblem plain;
-  plain.stop_time_s = &a.stop_time_s;
-  BuildProblem(data, mass_kg, options, {}, &a.blocks[0], &a.blocks[1], &plain);
+  // The misfit without the Huber loss, at the values found: the plain
+  // problem's segment and slide rows (its prior rows come after them).
   double misfit[3];
-  if (DirectionMisfits(data, &plain, misfit)) a.misfit = misfit[0] + misfit[1] + misfit[2];
+  if (DirectionMisfits(data, &plain_fit, misfit)) a.misfit = misfit[0] + misfit[1] + misfit[2];
   return a;
 }
 

@@ -14,7 +14,6 @@
 #include "refine_attempts.h"
 #include "refine_covariance.h"
 #include "refine_residual.h"
-#include "refine_solve.h"
 #include "refine_verdict.h"
 
 // Refinement (refine.h): the checks of its inputs, its attempts in order
