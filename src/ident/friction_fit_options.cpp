@@ -16,7 +16,8 @@ bool FrictionFitOptions::IsValid(std::string* error) const {
   if (stuck_force_samples < 3) return fail("stuck_force_samples must be >= 3");
   if (!(end_margin_m >= 0)) return fail("end_margin_m must be >= 0");
   if (!(end_slide_m >= 0)) return fail("end_slide_m must be >= 0");
-  if (substeps < 1) return fail("substeps must be >= 1");
+  if (max_substeps < 1) return fail("max_substeps must be >= 1");
+  if (!(replay_step_s > 0)) return fail("replay_step_s must be > 0");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(outlier_ratio > 1)) return fail("outlier_ratio must be > 1");
   if (!(identifiable_relative_error > 0)) return fail("identifiable_relative_error must be > 0");

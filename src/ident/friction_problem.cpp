@@ -14,7 +14,7 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
                   SegmentProblem* p) {
   for (std::size_t k = 0; k < data.segments.size(); ++k) {
     const Segment& s = data.segments[k];
-    const RodReplayInput replay = ReplayOf(s, mass_kg, options.substeps);
+    const RodReplayInput replay = ReplayOf(s, mass_kg, options);
     const int rows = static_cast<int>(replay.samples) - 1;
     auto* cost = new SegmentCost(&s, replay, rows);
     ceres::LossFunction* loss =

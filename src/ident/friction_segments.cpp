@@ -11,14 +11,16 @@
 
 namespace pneumaid::friction_internal {
 
-RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps) {
+RodReplayInput ReplayOf(const Segment& s, double mass_kg, const FrictionFitOptions& options) {
   RodReplayInput replay;
   replay.force_N = s.force_N->data() + s.begin;
   replay.samples = s.end - s.begin;
   replay.period_s = s.period_s;
   replay.mass_kg = mass_kg;
   replay.initial_position_m = s.initial_position_m;
-  replay.substeps = substeps;
+  // The 1e-9 keeps an interval of exactly k steps from rounding up to k + 1.
+  const double steps = std::ceil(s.period_s / options.replay_step_s - 1e-9);
+  replay.substeps = static_cast<int>(std::clamp(steps, 1.0, double(options.max_substeps)));
   return replay;
 }
 

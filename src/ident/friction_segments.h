@@ -126,8 +126,9 @@ int SegmentsOf(const StrokeData& data, int direction);
 
 int ClustersOf(const StrokeData& data, int direction);
 
-// The replay of a segment.
-RodReplayInput ReplayOf(const Segment& s, double mass_kg, int substeps);
+// The replay of a segment, in RK4 steps as FrictionFitOptions::replay_step_s
+// and max_substeps say.
+RodReplayInput ReplayOf(const Segment& s, double mass_kg, const FrictionFitOptions& options);
 
 // Force-balance samples a direction needs before its slides say anything.
 constexpr std::size_t kMinSlideSamples = 20;

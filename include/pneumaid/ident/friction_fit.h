@@ -101,8 +101,15 @@ struct FrictionFitOptions {
   // the sweep's component fits 62 to 250 /s gave 202 to 207 coefficients
   // within tolerance of 320 (0: 184). 0: no such error.
   double breakaway_timing_per_s = 125.0;
-  // RK4 substeps per sample interval while sliding.
-  int substeps = 8;
+  // RK4 steps while sliding near the Stribeck region: a sample interval is
+  // split into ceil(h / replay_step_s) steps, at most max_substeps (8 at
+  // 500 Hz and below, 4 at 1 kHz, 2 at 2 kHz, 1 at 5 kHz). Above 4 vs a
+  // quarter of them (rod_replay.h). A fixed 8 per interval made a 5 kHz
+  // log's fit 5x slower for the same coefficients (within 0.3 %); 16 at
+  // 250 Hz (the same step as 500 Hz) moved three of the sweep's five 250 Hz
+  // units into other basins (docs/identification.md).
+  double replay_step_s = 2.5e-4;
+  int max_substeps = 8;
   // Ceres Levenberg-Marquardt iterations.
   int max_iterations = 50;
   // A segment whose mean squared residual exceeds this multiple of the median
