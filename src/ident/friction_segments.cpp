@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <tuple>
 
 #include "pneumaid/model/load.h"
 #include "uniform_clock.h"
@@ -23,6 +24,8 @@ RodReplayInput ReplayOf(const Segment& s, double mass_kg, const FrictionFitOptio
   replay.substeps = static_cast<int>(std::clamp(steps, 1.0, double(options.max_substeps)));
   return replay;
 }
+
+namespace {
 
 // Slope [per sample] and curvature (second derivative, per sample^2) of
 // x[from, to) by a least-squares quadratic.
@@ -52,6 +55,8 @@ std::pair<double, double> SlopeAndCurvatureNoise(double sigma, double n) {
   for (int i = 0; i < n; ++i) sqq += std::pow((i - mid) * (i - mid) - m2, 2);
   return {sigma / std::sqrt(sxx), 2 * sigma / std::sqrt(sqq)};
 }
+
+}  // namespace
 
 // Runs [begin, end) of at least `min_samples` samples whose values stay
 // within `band` of each other, and whose motion over the run's first four
@@ -91,6 +96,8 @@ Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, doubl
   }
   return runs;
 }
+
+namespace {
 
 // While the rod sticks the chamber volumes are constant and the force varies
 // smoothly (the valve filling a closed chamber), so its noise is averaged out
@@ -167,10 +174,14 @@ void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
   s->arrest = arrest;
 }
 
+}  // namespace
+
 double Median(std::vector<double> values) {
   std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
   return values[values.size() / 2];
 }
+
+namespace {
 
 // Where the rod may touch an end stop: within `contact_m` of either end.
 // +1 at the extended end, -1 at the retracted one, 0 elsewhere.
@@ -207,81 +218,110 @@ double EscapeVelocityError(const std::vector<double>& x, std::size_t at, std::si
   return acceleration * timing_per_s * period_s * period_s;
 }
 
-void CutSegments(const std::vector<double>& force, const std::vector<double>& x, const Runs& runs,
-                 double band, double half_stroke_m, double contact_m, double period_s,
-                 double sigma_x_m, double drift_m, const FrictionFitOptions& options,
+// One stroke log as CutSegments reads it.
+struct StrokeLog {
+  const std::vector<double>& force_N;  // smoothed where stuck (SmoothStuckForce)
+  const std::vector<double>& x;
+  double period_s;
+  double band_m;         // the stuck band (StuckBand)
+  double half_stroke_m;  // the stroke ends at +-half_stroke_m
+  double contact_m;      // within this of an end the rod may touch the stop
+  double sigma_x_m;      // declared position noise
+  double drift_m;        // the force noise's drift per sample^2 (SetWeights)
+};
+
+// A rod stuck at an end may rest on the stop, whose force is not friction:
+// its segment starts once the force points away from the stop, and only a
+// slide that leaves the stop is replayed, over its first end_slide_m (the
+// chamber at the stop is near its dead volume, and its pressure falls faster
+// than a replay between samples follows). Records the run's breakaway and
+// departure from the stop either way; false when no segment starts here.
+bool StartAtStop(const StrokeLog& log, const Runs& runs, std::size_t k, int contact,
+                 const std::array<bool, 2>& from_stops, Segment* s, StrokeData* data) {
+  const auto [stuck_begin, stuck_end] = runs[k];
+  // Which way the rod first moves beyond the band (a heavy rod moves off
+  // slowly), before it sticks again.
+  const std::size_t next_stuck = k + 1 < runs.size() ? runs[k + 1].first : log.x.size();
+  int leaving = 0;
+  for (std::size_t i = stuck_end; i < next_stuck && leaving == 0; ++i) {
+    const double travel = log.x[i] - log.x[stuck_end - 1];
+    if (std::fabs(travel) > log.band_m) leaving = travel > 0 ? +1 : -1;
+  }
+  if (leaving != 0) {
+    data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
+        leaving * log.force_N[BreakawaySample(log.x, stuck_begin, stuck_end, log.sigma_x_m)]);
+  }
+  if (leaving == -contact) ++data->stop_departures[leaving > 0 ? 0 : 1];
+  std::size_t free_from = s->begin;  // after the last sample pushing into the stop
+  for (std::size_t i = s->begin; i < stuck_end; ++i) {
+    if (contact * log.force_N[i] >= 0) free_from = i + 1;
+  }
+  if (leaving != -contact || !from_stops[leaving > 0 ? 0 : 1] || free_from + 2 > stuck_end)
+    return false;
+  s->begin = free_from;
+  return true;
+}
+
+// Where the replay of the slide from `stuck_end` ends: a few samples into the
+// next stuck run, or cut (true) after max_slide_s (a replay over a long slide
+// integrates any bias of the force twice: the rest of such a slide is left
+// to the force balance, friction_slides.h), where the rod may touch a stop
+// (end-stop forces are not friction), or, from a stop (`contact`), once it
+// is end_slide_m away.
+std::pair<std::size_t, bool> EndOfSlide(const StrokeLog& log, const Runs& runs, std::size_t k,
+                                        int contact, std::size_t min_slide,
+                                        const FrictionFitOptions& options, const Segment& s) {
+  const std::size_t stuck_end = runs[k].second;
+  std::size_t end =
+      k + 1 < runs.size()
+          ? runs[k + 1].first + std::min<std::size_t>(options.arrest_samples,
+                                                      runs[k + 1].second - runs[k + 1].first)
+          : stuck_end;
+  const std::size_t max_slide = std::max<std::size_t>(
+      options.min_stuck_samples, static_cast<std::size_t>(options.max_slide_s / log.period_s));
+  bool cut = false;
+  if (end > stuck_end + max_slide) {
+    end = stuck_end + max_slide;
+    cut = true;
+  }
+  bool left_stop = false;  // a slide from a stop has left its contact zone
+  for (std::size_t i = stuck_end; i < end; ++i) {
+    const int touches = EndContact(log.x[i], log.half_stroke_m, log.contact_m);
+    const bool far_from_stop = contact != 0 && i >= stuck_end + min_slide &&
+                               std::fabs(log.x[i] - s.initial_position_m) > options.end_slide_m;
+    if ((touches != 0 && (touches != contact || left_stop)) || far_from_stop) return {i, true};
+    left_stop = left_stop || touches == 0;
+  }
+  return {end, cut};
+}
+
+// The replay segments of one log: each stuck run starts one (its last
+// max_stuck_samples at most) that runs through the following slide into the
+// next stuck run (EndOfSlide); runs at a stop as StartAtStop says.
+void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOptions& options,
                  const std::array<bool, 2>& from_stops, StrokeData* data) {
+  const std::vector<double>& x = log.x;
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const auto [stuck_begin, stuck_end] = runs[k];
     Segment s{};
-    s.force_N = &force;
+    s.force_N = &log.force_N;
     s.position_m = &x;
-    s.period_s = period_s;
+    s.period_s = log.period_s;
     s.begin = std::max(stuck_begin + 1,
                        stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
-    // A rod stuck at an end may rest on the stop, whose force is not
-    // friction: its segment starts once the force points away from the stop,
-    // and only a slide that leaves the stop is replayed, over its first
-    // end_slide_m (the chamber at the stop is near its dead volume, and its
-    // pressure falls faster than a replay between samples follows).
-    const int contact = EndContact(x[stuck_end - 1], half_stroke_m, contact_m);
-    if (contact != 0) {
-      // Which way the rod first moves beyond the band (a heavy rod moves
-      // off slowly), before it sticks again.
-      const std::size_t next_stuck = k + 1 < runs.size() ? runs[k + 1].first : x.size();
-      int leaving = 0;
-      for (std::size_t i = stuck_end; i < next_stuck && leaving == 0; ++i) {
-        const double travel = x[i] - x[stuck_end - 1];
-        if (std::fabs(travel) > band) leaving = travel > 0 ? +1 : -1;
-      }
-      if (leaving != 0) {
-        data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
-            leaving * force[BreakawaySample(x, stuck_begin, stuck_end, sigma_x_m)]);
-      }
-      if (leaving == -contact) ++data->stop_departures[leaving > 0 ? 0 : 1];
-      std::size_t free_from = s.begin;  // after the last sample pushing into the stop
-      for (std::size_t i = s.begin; i < stuck_end; ++i) {
-        if (contact * force[i] >= 0) free_from = i + 1;
-      }
-      if (leaving != -contact || !from_stops[leaving > 0 ? 0 : 1] || free_from + 2 > stuck_end) {
-        ++data->excluded;
-        continue;
-      }
-      s.begin = free_from;
+    const int contact = EndContact(x[stuck_end - 1], log.half_stroke_m, log.contact_m);
+    if (contact != 0 && !StartAtStop(log, runs, k, contact, from_stops, &s, data)) {
+      ++data->excluded;
+      continue;
     }
     // The run's last sample may already be the first of the slide.
     const std::size_t settled_end = std::max(s.begin + 1, stuck_end - 1);
     s.initial_position_m = std::accumulate(x.begin() + s.begin, x.begin() + settled_end, 0.0) /
                            static_cast<double>(settled_end - s.begin);
-    s.end = k + 1 < runs.size()
-                ? runs[k + 1].first + std::min<std::size_t>(options.arrest_samples,
-                                                            runs[k + 1].second - runs[k + 1].first)
-                : stuck_end;
-    // The slide ends where the rod may touch a stop (end-stop forces are not
-    // friction): the segment is cut there and loses its arrest.
-    // A replay over a long slide integrates any bias of the force twice: the
-    // rest of such a slide is left to the force balance (friction_slides.h).
-    const std::size_t max_slide = std::max<std::size_t>(
-        options.min_stuck_samples, static_cast<std::size_t>(options.max_slide_s / period_s));
-    bool cut = false;
-    if (s.end > stuck_end + max_slide) {
-      s.end = stuck_end + max_slide;
-      cut = true;
-    }
     // A slide from a stop keeps at least two samples after its breakaway.
     const std::size_t min_slide = contact != 0 ? 2 : options.min_stuck_samples;
-    bool left_stop = false;  // a slide from a stop has left its contact zone
-    for (std::size_t i = stuck_end; i < s.end; ++i) {
-      const int touches = EndContact(x[i], half_stroke_m, contact_m);
-      const bool far_from_stop = contact != 0 && i >= stuck_end + min_slide &&
-                                 std::fabs(x[i] - s.initial_position_m) > options.end_slide_m;
-      if ((touches != 0 && (touches != contact || left_stop)) || far_from_stop) {
-        s.end = i;
-        cut = true;
-        break;
-      }
-      left_stop = left_stop || touches == 0;
-    }
+    bool cut = false;
+    std::tie(s.end, cut) = EndOfSlide(log, runs, k, contact, min_slide, options, s);
     if (s.end < stuck_end + min_slide) {
       ++data->excluded;
       continue;
@@ -289,21 +329,25 @@ void CutSegments(const std::vector<double>& force, const std::vector<double>& x,
     // A slide from a stop goes the way the rod was seen leaving it, also when
     // its first end_slide_m stay inside the band.
     const double travel = x[s.end - 1] - s.initial_position_m;
-    s.direction = contact != 0 ? -contact : travel > band ? +1 : (travel < -band ? -1 : 0);
+    s.direction = contact != 0          ? -contact
+                  : travel > log.band_m ? +1
+                                        : (travel < -log.band_m ? -1 : 0);
     s.slide_begin = stuck_end - 1;
     double escape_error_m_per_s = 0;
     if (s.direction != 0) {
-      const std::size_t at = BreakawaySample(x, stuck_begin, stuck_end, sigma_x_m);
-      s.breakaway_force_N = s.direction * force[at];
+      const std::size_t at = BreakawaySample(x, stuck_begin, stuck_end, log.sigma_x_m);
+      s.breakaway_force_N = s.direction * log.force_N[at];
       escape_error_m_per_s =
-          EscapeVelocityError(x, at, s.end, period_s, options.breakaway_timing_per_s);
+          EscapeVelocityError(x, at, s.end, log.period_s, options.breakaway_timing_per_s);
     }
     if (s.direction != 0 && k + 1 < runs.size() && !cut)
-      MarkArrest(x, stuck_end, runs[k + 1], period_s, band, &s);
-    SetWeights(sigma_x_m, drift_m, escape_error_m_per_s, &s);
+      MarkArrest(x, stuck_end, runs[k + 1], log.period_s, log.band_m, &s);
+    SetWeights(log.sigma_x_m, log.drift_m, escape_error_m_per_s, &s);
     data->segments.push_back(s);
   }
 }
+
+}  // namespace
 
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
                           double sigma_x_m, const StrokeSelection& selection,
@@ -359,9 +403,15 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     data.experiments.push_back(&e);
     const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
     const std::size_t first_segment = data.segments.size();
-    CutSegments(data.force_N.back(), data.position_m.back(), runs, band, 0.5 * rig.stroke_m,
-                options.end_margin_m + 4 * sigma_x_m, period, sigma_x_m, drift_m, options,
-                replay_stops, &data);
+    const StrokeLog stroke_log{data.force_N.back(),
+                               data.position_m.back(),
+                               period,
+                               band,
+                               0.5 * rig.stroke_m,
+                               options.end_margin_m + 4 * sigma_x_m,
+                               sigma_x_m,
+                               drift_m};
+    CutSegments(stroke_log, runs, options, replay_stops, &data);
     if (!options.force_balance) continue;
     std::vector<bool> covered(x.size(), false);
     for (const auto& [begin, end] : runs)
