@@ -9,6 +9,10 @@
 
 namespace pneumaid {
 
+bool AtBound(double value, double lower, double upper) {
+  return std::min(value - lower, upper - value) < 1e-6 * (upper - lower);
+}
+
 const char* ToString(FitStatus status) {
   switch (status) {
     case FitStatus::kConverged:

@@ -89,7 +89,7 @@ void SetCoefficients(const Block (&starts)[2], const Block (&values)[2],
     const auto at = std::find(free.begin(), free.end(), c) - free.begin();
     if (held[c].empty() && at < static_cast<long>(free.size())) {
       coefficient.standard_error = std::sqrt(std::max(covariance(at, at), 0.0));
-      coefficient.at_bound = values[d][i] <= kLowerBounds[i] || values[d][i] >= kUpperBounds[i];
+      coefficient.at_bound = AtBound(values[d][i], kLowerBounds[i], kUpperBounds[i]);
       for (std::size_t b = 0; b < free.size(); ++b)
         result->covariance(c, free[b]) = covariance(at, static_cast<Eigen::Index>(b));
     }

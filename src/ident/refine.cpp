@@ -135,11 +135,6 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;
   }
-  if (stages.back().windows && r.has_values()) {
-    r.fitted = WholeRunCosts(r.params, unit, spec, options);
-    r.final_cost = 0;
-    for (const ExperimentCost& e : r.fitted) r.final_cost += e.after;
-  }
   r.initial_cost = cost_before;
   r.screen_report = attempts.screen_report();
   r.screened_candidates = attempts.screened_candidates();

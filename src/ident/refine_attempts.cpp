@@ -78,8 +78,12 @@ StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spe
 
 void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options, RefineResult* r) {
-  if (last.windows && r->has_values()) {
-    r->misfits = WholeRunMisfits(r->params, unit, spec, options);
+  if (last.windows && r->has_values()) {  // windows' costs and misfits: report whole runs
+    const std::vector<RunResiduals> runs = WholeRunResiduals(r->params, unit, spec, options);
+    r->misfits = MisfitsOf(runs, options.misfit_window_s);
+    r->fitted = CostsOf(runs);
+    r->final_cost = 0;
+    for (const ExperimentCost& e : r->fitted) r->final_cost += e.after;
   }
   Judge(options, r);
 }

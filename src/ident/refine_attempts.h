@@ -33,7 +33,8 @@ struct StagedFit {
 };
 
 // The verdict on a fit's last stage: a windowed stage's runs are judged
-// whole, from their logged starts.
+// whole, from their logged starts, and its costs (fitted, final_cost) are
+// those whole runs' (one simulation for both).
 void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options, RefineResult* r);
 

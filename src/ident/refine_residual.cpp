@@ -22,14 +22,18 @@ std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit
   return out;
 }
 
-std::vector<ExperimentCost> WholeRunCosts(const Parameters& params, const Unit& unit,
-                                          const FitSpec& spec, const RefineOptions& options) {
+std::vector<ExperimentCost> CostsOf(const std::vector<RunResiduals>& runs) {
   std::vector<ExperimentCost> costs;
-  for (const RunResiduals& run : WholeRunResiduals(params, unit, spec, options)) {
+  for (const RunResiduals& run : runs) {
     const double cost = 0.5 * run.residuals.squaredNorm();  // NaN where not simulated
     costs.push_back({run.run.id, cost, cost, run.run.residuals()});
   }
   return costs;
+}
+
+std::vector<ExperimentCost> WholeRunCosts(const Parameters& params, const Unit& unit,
+                                          const FitSpec& spec, const RefineOptions& options) {
+  return CostsOf(WholeRunResiduals(params, unit, spec, options));
 }
 
 }  // namespace pneumaid::refine_internal

@@ -250,8 +250,12 @@ struct RunResiduals {
 std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit& unit,
                                             const FitSpec& spec, const RefineOptions& options);
 
-// 0.5 |r|^2 of each whole fitted run at `params` from its logged start (NaN
-// where it cannot be simulated): what a windowed stage's costs are reported as.
+// 0.5 |r|^2 of each run (NaN where it could not be simulated), as both the
+// start's and the fit's cost.
+std::vector<ExperimentCost> CostsOf(const std::vector<RunResiduals>& runs);
+
+// CostsOf the whole fitted runs at `params` from their logged starts: what a
+// windowed stage's costs are reported as.
 std::vector<ExperimentCost> WholeRunCosts(const Parameters& params, const Unit& unit,
                                           const FitSpec& spec, const RefineOptions& options);
 

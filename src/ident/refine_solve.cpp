@@ -225,9 +225,7 @@ Eigen::MatrixXd RecordCoefficients(const Parameters& conditioned, const Paramete
     rp.path = map.free[j].path;
     GetParameter(conditioned, rp.path, &rp.start);
     rp.value = map.ToValue(j, theta[j]);
-    const double span = map.free[j].upper - map.free[j].lower;
-    rp.at_bound =
-        std::min(rp.value - map.free[j].lower, map.free[j].upper - rp.value) < 1e-6 * span;
+    rp.at_bound = AtBound(rp.value, map.free[j].lower, map.free[j].upper);
     r->coefficients.push_back(rp);
   }
   Eigen::MatrixXd with_prior = normal;

@@ -40,14 +40,17 @@ std::vector<ChannelMisfit> RunMisfits(const FitExperiment& e, const Eigen::Vecto
   return out;
 }
 
-std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit& unit,
-                                           const FitSpec& spec, const RefineOptions& options) {
+std::vector<ChannelMisfit> MisfitsOf(const std::vector<RunResiduals>& runs, double window_s) {
   std::vector<ChannelMisfit> out;
-  for (const RunResiduals& run : WholeRunResiduals(params, unit, spec, options)) {
-    for (const ChannelMisfit& m : RunMisfits(run.run, run.residuals, options.misfit_window_s))
-      out.push_back(m);
+  for (const RunResiduals& run : runs) {
+    for (const ChannelMisfit& m : RunMisfits(run.run, run.residuals, window_s)) out.push_back(m);
   }
   return out;
+}
+
+std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit& unit,
+                                           const FitSpec& spec, const RefineOptions& options) {
+  return MisfitsOf(WholeRunResiduals(params, unit, spec, options), options.misfit_window_s);
 }
 
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {

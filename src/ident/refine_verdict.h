@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pneumaid/ident/refine.h"
+#include "refine_residual.h"
 #include "refine_runs.h"
 
 namespace pneumaid::refine_internal {
@@ -17,8 +18,11 @@ namespace pneumaid::refine_internal {
 std::vector<ChannelMisfit> RunMisfits(const FitExperiment& e, const Eigen::VectorXd& residuals,
                                       double window_s);
 
-// The misfits of every whole fitted run at `params`, simulated from its
-// logged start (a windowed last stage's runs are judged whole).
+// The misfits of each channel of each run.
+std::vector<ChannelMisfit> MisfitsOf(const std::vector<RunResiduals>& runs, double window_s);
+
+// MisfitsOf every whole fitted run at `params`, simulated from its logged
+// start.
 std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit& unit,
                                            const FitSpec& spec, const RefineOptions& options);
 

@@ -90,5 +90,17 @@ TEST(FitResultTest, StatusesReadAsTheReportsSayThem) {
   EXPECT_STREQ(error.what(), "the identified set of unit U: not physical: friction.positive.Fs");
 }
 
+// One rule for "at a bound", for every fit: within 1e-6 of the span from
+// either end, exact bounds included, the interior not.
+TEST(FitResultTest, AtABoundIsWithinAMillionthOfTheSpan) {
+  EXPECT_TRUE(AtBound(0.0, 0.0, 200.0));
+  EXPECT_TRUE(AtBound(200.0, 0.0, 200.0));
+  EXPECT_TRUE(AtBound(1e-4 + 1e-7, 1e-4, 1.0));
+  EXPECT_TRUE(AtBound(200.0 - 1e-4, 0.0, 200.0));
+  EXPECT_FALSE(AtBound(1e-3, 0.0, 200.0));
+  EXPECT_FALSE(AtBound(100.0, 0.0, 200.0));
+}
+
 }  // namespace
+
 }  // namespace pneumaid

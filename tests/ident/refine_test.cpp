@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "../../src/ident/refine_residual.h"
 #include "../synth/synth_test_util.h"
 #include "pneumaid/ident/identify.h"
 #include "pneumaid/io/input_error.h"
@@ -327,6 +328,40 @@ TEST_F(RefineSpecTest, ACoefficientOnItsBoundIsNamedInTheProvenance) {
   ASSERT_NE(bounded, nullptr);
   EXPECT_TRUE(bounded->at_bound);
   EXPECT_FALSE(result.Find("friction.negative.Fd")->at_bound);
+}
+
+// A last stage by multiple shooting fits windows, but its costs and verdict
+// are the whole runs' (one simulation of them gives both): the reported cost
+// is the whole run's at the fitted values, the verdict that of EvaluateFit.
+TEST_F(RefineSpecTest, AWindowedLastStageReportsTheWholeRunsCostAndVerdict) {
+  FitSpec spec = TwoParameters();
+  spec.stages = ParseFitSpec(R"(format: pneumaid-fit/1
+parameters:
+  friction.positive.Fd: {min: 0.05, max: 5}
+  friction.negative.Fd: {min: 0.5, max: 20}
+experiments: {fit: [stroke-100], hold_out: []}
+stages:
+  - {windows: true, parameters: all}
+)",
+                             "windowed.yaml")
+                    .stages;
+  ASSERT_TRUE(spec.stages.size() == 1 && spec.stages[0].windows);
+  Parameters start;
+  start.friction.negative.dynamic_force_N *= 0.9;
+  const RefineResult result = Refine(start, *unit_, spec, RefineOptions{});
+  std::cout << result.BriefReport();
+  ASSERT_TRUE(result.has_values()) << result.reason;
+  const std::vector<ExperimentCost> whole =
+      refine_internal::WholeRunCosts(result.params, *unit_, spec, RefineOptions{});
+  ASSERT_EQ(result.fitted.size(), 1u);
+  ASSERT_EQ(whole.size(), 1u);
+  EXPECT_EQ(result.fitted[0].id, "stroke-100");
+  EXPECT_EQ(result.fitted[0].residuals, whole[0].residuals);
+  EXPECT_DOUBLE_EQ(result.fitted[0].after, whole[0].after);
+  EXPECT_DOUBLE_EQ(result.final_cost, whole[0].after);
+  const RefineResult judged = EvaluateFit(result.params, *unit_, spec, RefineOptions{});
+  EXPECT_DOUBLE_EQ(result.reduced_chi_square, judged.reduced_chi_square);
+  for (const ChannelMisfit& m : result.misfits) EXPECT_EQ(m.run, "stroke-100");
 }
 
 TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {

@@ -40,6 +40,11 @@ struct FittedCoefficient {
   bool determined() const { return held.empty(); }
 };
 
+// The one rule for FittedCoefficient::at_bound: `value` lies within 1e-6 of
+// the span of [lower, upper] from either end (a solver stops on a bound up to
+// its rounding, or on the bound of a mapped coordinate up to the map's).
+bool AtBound(double value, double lower, double upper);
+
 struct FitResult {
   FitStatus status = FitStatus::kNotFitted;
   std::string reason;  // why not converged / not fitted; otherwise warnings, or empty
