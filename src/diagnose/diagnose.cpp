@@ -271,7 +271,7 @@ void Score(const std::vector<Outcome>& reference, const std::vector<Outcome>& ca
   score->bic_change = n * std::log(cand_train / ref_train) + k * std::log(n);
   char why[300];
   if (!gap_above_noise) {
-    score->verdict = "no channel's gap is above its declared noise";
+    score->verdict = "no channel's gap is above its noise";
   } else if (!(score->held_back_gain >= options.min_held_back_gain)) {
     std::snprintf(why, sizeof(why), "held-back gain %.1f %% < %.0f %%", 100 * score->held_back_gain,
                   100 * options.min_held_back_gain);

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "pneumaid/io/channel_noise.h"
+
 namespace pneumaid::diagnose_internal {
 namespace {
 
@@ -129,7 +131,7 @@ DiscrepancyMap MapDiscrepancy(const ValidationReport& report, const Unit& unit,
   std::map<std::pair<std::string, int>, Accumulator> by_regime;
   std::map<std::string, Accumulator> by_channel;
   for (const TrajectoryChannel& channel : kComparedChannels)
-    map.noise[channel.name] = unit.manifest.DeclaredSigma(channel.name, 0.0);
+    map.noise[channel.name] = NoiseSigma(unit, channel.name);
   for (const ExperimentValidation& e : report.experiments) {
     if (!e.simulation.ok()) continue;
     const std::vector<unsigned> regimes = Regimes(e.measured, half_stroke_m, options);

@@ -346,7 +346,7 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
 
 FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
                               const FrictionFitOptions& options) {
-  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
+  const double sigma_m = PositionNoise(unit);
   const double band = StuckBand(options, sigma_m);
   StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
   // A breakaway from a stop is replayed through the fast pressure transient

@@ -48,7 +48,7 @@ SlideFrictionStart FrictionFromSlides(const Unit& unit, const std::vector<std::s
     out.why = "no runs";
     return out;
   }
-  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
+  const double sigma_m = PositionNoise(unit);
   StrokeSelection selection;
   selection.runs = runs;
   selection.slides_under_segments = true;

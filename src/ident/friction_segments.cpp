@@ -7,6 +7,7 @@
 #include <numeric>
 #include <tuple>
 
+#include "pneumaid/io/channel_noise.h"
 #include "pneumaid/model/load.h"
 #include "uniform_clock.h"
 
@@ -226,7 +227,7 @@ struct StrokeLog {
   double band_m;         // the stuck band (StuckBand)
   double half_stroke_m;  // the stroke ends at +-half_stroke_m
   double contact_m;      // within this of an end the rod may touch the stop
-  double sigma_x_m;      // declared position noise
+  double sigma_x_m;      // position noise (PositionNoise)
   double drift_m;        // the force noise's drift per sample^2 (SetWeights)
 };
 
@@ -349,12 +350,14 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
 
 }  // namespace
 
+double PositionNoise(const Unit& unit) { return std::max(NoiseSigma(unit, "x"), 1e-7); }
+
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
                           double sigma_x_m, const StrokeSelection& selection,
                           const std::array<bool, 2>& from_stops) {
   const RigConstants& rig = unit.manifest.rig;
-  const double force_sigma_N = std::hypot(unit.manifest.DeclaredSigma("p1", 0.0) * rig.area_1_m2(),
-                                          unit.manifest.DeclaredSigma("p2", 0.0) * rig.area_2_m2());
+  const double force_sigma_N = std::hypot(NoiseSigma(unit, "p1") * rig.area_1_m2(),
+                                          NoiseSigma(unit, "p2") * rig.area_2_m2());
   const double weight_N =
       rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
   const auto selected = [&selection](const Experiment& e) {
@@ -457,7 +460,7 @@ namespace pneumaid {
 std::vector<FrictionMapSample> FrictionVelocityMap(const Unit& unit,
                                                    const FrictionFitOptions& options) {
   using namespace friction_internal;
-  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
+  const double sigma_m = PositionNoise(unit);
   FrictionFitOptions with_slides = options;
   with_slides.force_balance = true;
   StrokeSelection every_slide;

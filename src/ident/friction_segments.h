@@ -91,7 +91,12 @@ struct StrokeData {
   std::string skipped;  // logs that could not be used, why
 };
 
-// The stuck band of FrictionFitOptions widened by the declared position noise.
+// The position noise the friction fit reads the logs with: NoiseOf x
+// (declared, or estimated from the logs), at least 0.1 um (a noise-free log
+// still has its numbers' rounding).
+double PositionNoise(const Unit& unit);
+
+// The stuck band of FrictionFitOptions widened by the position noise.
 inline double StuckBand(const FrictionFitOptions& options, double sigma_x_m) {
   return options.stuck_band_m + 6.0 * sigma_x_m;
 }

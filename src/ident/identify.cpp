@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "../io/provenance_map.h"
+#include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
@@ -151,6 +152,7 @@ bool IdentifyOptions::IsValid(std::string* error) const {
 
 std::string IdentifyReport::BriefReport() const {
   std::ostringstream out;
+  if (!noise_note.empty()) out << noise_note << "\n";
   out << valve.BriefReport() << pipeline.BriefReport() << friction.BriefReport();
   out << "Fitted: " << fitted.size() << " parameters";
   for (const auto& path : fitted) out << "\n  " << path;
@@ -167,6 +169,8 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   Parameters params = WithUnitConstants(prior, unit);
   params.uncertainty.clear();
   *report = IdentifyReport{};
+  report->noise_note = EstimatedNoiseNote(
+      unit, {"x", "p1", "p2", "p_up", "p_down", "q", "q_in", "q_out"});  // what the fits read
   if (WillFit(Component::kValve, ExperimentKind::kValve, "valve.", unit, options, report)) {
     report->valve = FitValve(unit, prior.valve, options.valve);
     Record(report->valve, &params, report);

@@ -11,6 +11,7 @@
 #include "determination.h"
 #include "held_levels.h"
 #include "pneumaid/eval/lag.h"
+#include "pneumaid/io/channel_noise.h"
 #include "quiet_solver.h"
 #include "tube_from_meters.h"
 
@@ -109,24 +110,6 @@ double BestLevels(const TubeLog& log, double delta, std::vector<double>* flow) {
   return 0.5 * cost;
 }
 
-// A channel's noise when the manifest declares none: the spread of its
-// sample-to-sample differences (robust: a level change is a few outliers).
-double NoiseFromDifferences(const std::vector<double>& v) {
-  std::vector<double> d;
-  double squares = 0, largest = 0;
-  for (std::size_t i = 1; i < v.size(); ++i) {
-    d.push_back(std::fabs(v[i] - v[i - 1]));
-    squares += d.back() * d.back();
-    largest = std::max(largest, std::fabs(v[i]));
-  }
-  if (d.empty()) return 0.0;
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  const double robust = 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
-  // A quantised or noise-free meter repeats most readings (median difference
-  // 0): then the RMS difference, and never below 1e-6 of the signal.
-  return std::max({robust, robust > 0 ? 0.0 : std::sqrt(squares / d.size() / 2), 1e-6 * largest});
-}
-
 // How much wider than the noise alone the errors are when the model misses
 // the data: the reduced chi-square, times the variance inflation of residuals
 // correlated from sample to sample (AR(1): (1 + r) / (1 - r), r the lag-one
@@ -168,9 +151,8 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   fit.levels = log.levels = static_cast<int>(held.size());
   if (n < 20) return not_fitted("fewer than 20 samples");
   if (held.size() < 2) return not_fitted("the command never changes: a step response is needed");
-  log.sigma_in = std::max(manifest.DeclaredSigma("q_in", NoiseFromDifferences(*log.q_in)), 1e-12);
-  log.sigma_out =
-      std::max(manifest.DeclaredSigma("q_out", NoiseFromDifferences(*log.q_out)), 1e-12);
+  log.sigma_in = std::max(NoiseOf(manifest, "q_in", {log.q_in}).sigma, 1e-12);
+  log.sigma_out = std::max(NoiseOf(manifest, "q_out", {log.q_out}).sigma, 1e-12);
   if (log.levels > options.max_levels) {
     internal::FitTubeFromMeters(e, manifest, options, log.sigma_in, log.sigma_out, &fit);
     return fit;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "../io/provenance_map.h"
+#include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/provenance.h"
 #include "pneumaid/model/parameter_table.h"
@@ -83,6 +84,15 @@ void CheckInputs(const FitSpec& spec, const RefineOptions& options) {
   }
 }
 
+// RefineResult::noise_note: of the spec's channels that take the unit's noise.
+std::string NoiseNote(const FitSpec& spec, const Unit& unit) {
+  std::vector<std::string> from_unit;
+  for (const auto& [channel, given] : spec.channels) {
+    if (!(given.sigma > 0)) from_unit.push_back(channel);
+  }
+  return EstimatedNoiseNote(unit, from_unit);
+}
+
 }  // namespace
 
 bool RefineOptions::IsValid(std::string* error) const {
@@ -155,6 +165,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const auto held_out = Select(unit, spec.hold_out, spec, false);
   r.held_out_before = HeldOut(conditioned, unit, held_out, options);
   r.held_out_after = HeldOut(r.has_values() ? r.params : conditioned, unit, held_out, options);
+  r.noise_note = NoiseNote(spec, unit);
   r.stages = static_cast<int>(stages.size());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;
@@ -191,6 +202,7 @@ std::string RefineResult::BriefReport() const {
                                           : "");
     out << line;
   }
+  if (!noise_note.empty()) out << "  " << noise_note << "\n";
   if (!screen_report.empty()) out << "  " << screen_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";

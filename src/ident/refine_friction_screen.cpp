@@ -48,7 +48,7 @@ class Screen {
   void ReadSlides() {
     FrictionFitOptions friction;
     friction.force_balance = true;
-    const double sigma_m = unit_.manifest.DeclaredSigma("x", 1e-5);
+    const double sigma_m = friction_internal::PositionNoise(unit_);
     friction_internal::StrokeSelection selection;
     for (const Experiment* e : Select(unit_, spec_.fit, spec_, false))
       selection.runs.push_back(e->entry.id);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/validate/validate.h"
 
@@ -52,26 +53,29 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
   return chosen;
 }
 
-// A channel's noise sigma [SI]: the spec's when it gives one, else the one
-// declared under the manifest's `sensors` (0 when neither does).
-double ChannelSigma(const FitSpec& spec, const Unit& unit, const std::string& channel) {
-  const auto given = spec.channels.find(channel);
-  return given != spec.channels.end() && given->second.sigma > 0
-             ? given->second.sigma
-             : unit.manifest.DeclaredSigma(channel, 0.0);
+std::map<std::string, double> ChannelSigmas(const FitSpec& spec, const Unit& unit) {
+  std::map<std::string, double> sigmas;
+  for (const Channel& row : kChannelTable) {
+    const auto given = spec.channels.find(row.name);
+    if (given == spec.channels.end()) continue;
+    sigmas[row.name] = given->second.sigma > 0 ? given->second.sigma : NoiseSigma(unit, row.name);
+  }
+  return sigmas;
 }
 
-// The noise sigmas of one logged sample of p1 and p2, when the spec estimates
-// starts and both are known; {0, 0} (the start is taken as logged) otherwise.
-std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Unit& unit) {
-  const double p1 = ChannelSigma(spec, unit, "p1"), p2 = ChannelSigma(spec, unit, "p2");
+std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec,
+                                                   const std::map<std::string, double>& sigmas) {
+  const auto sigma = [&sigmas](const char* channel) {
+    const auto found = sigmas.find(channel);
+    return found == sigmas.end() ? 0.0 : found->second;
+  };
+  const double p1 = sigma("p1"), p2 = sigma("p2");
   if (!spec.fit_initial_pressures || !(p1 > 0 && p2 > 0)) return {0, 0};
   return {p1, p2};
 }
 
-// `sample_sigma_Pa`: StartSampleSigma(spec, unit).
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
-                      double half_stroke_m,
+                      double half_stroke_m, const std::map<std::string, double>& sigmas,
                       const std::array<double, kStartOffsets>& sample_sigma_Pa) {
   FitExperiment out;
   out.id = e.entry.id;
@@ -84,13 +88,11 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
   for (const Channel& row : kChannelTable) {
     const auto wanted = spec.channels.find(row.name);
     if (wanted == spec.channels.end() || (out.measured.*row.values).empty()) continue;
-    const double sigma = ChannelSigma(spec, unit, row.name);
+    const double sigma = sigmas.at(row.name);
     if (!(sigma > 0)) {
       throw InputError(spec.source, 0, 0,
-                       "channel " + row.name +
-                           ": no sigma given and none declared under sensors "
-                           "in " +
-                           unit.manifest_path());
+                       "channel " + row.name + ": no sigma given, none declared under sensors in " +
+                           unit.manifest_path() + ", and its logs never change");
     }
     Channel c = row;
     c.factor = wanted->second.weight / sigma;
@@ -179,11 +181,12 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   }
   if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
-  const double band = 4.0 * unit.manifest.DeclaredSigma("x", 5e-6) + 10e-6;
-  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit);
+  const double band = 4.0 * NoiseSigma(unit, "x") + 10e-6;
+  const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
+  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, sigmas);
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
-    FitExperiment run = Prepare(*e, unit, spec, half_stroke, sample_sigma);
+    FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma);
     if (!windows) {
       runs.push_back(std::move(run));
       continue;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -66,17 +67,21 @@ extern const Channel kChannelTable[5];
 std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
                                       const FitSpec& spec, bool must_match);
 
-// A channel's noise sigma [SI]: the spec's when it gives one, else the one
-// declared under the manifest's `sensors` (0 when neither does).
-double ChannelSigma(const FitSpec& spec, const Unit& unit, const std::string& channel);
+// The noise sigma [SI] of each channel of the residual table that the spec
+// fits: the spec's when it gives one, else the unit's (NoiseOf: declared under
+// the manifest's `sensors`, or estimated from its logs; 0 when neither can be
+// had).
+std::map<std::string, double> ChannelSigmas(const FitSpec& spec, const Unit& unit);
 
 // The noise sigmas of one logged sample of p1 and p2, when the spec estimates
 // starts and both are known; {0, 0} (the start is taken as logged) otherwise.
-std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Unit& unit);
+std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec,
+                                                   const std::map<std::string, double>& sigmas);
 
-// One logged run as the fit sees it. `sample_sigma_Pa`: StartSampleSigma(spec, unit).
+// One logged run as the fit sees it. `sigmas`: ChannelSigmas(spec, unit);
+// `sample_sigma_Pa`: StartSampleSigma(spec, sigmas).
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
-                      double half_stroke_m,
+                      double half_stroke_m, const std::map<std::string, double>& sigmas,
                       const std::array<double, kStartOffsets>& sample_sigma_Pa);
 
 // Multiple shooting (FitStage::windows): the run cut where the rod is stuck,

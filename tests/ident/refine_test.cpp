@@ -10,6 +10,7 @@
 #include "../../src/ident/refine_residual.h"
 #include "../synth/synth_test_util.h"
 #include "pneumaid/ident/identify.h"
+#include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/provenance.h"
@@ -161,6 +162,45 @@ TEST(RefineTest, TheDefaultRefinementRecoversAHorizontalCylindersFriction) {
   // at 1e-6, this unit's stick-slip turns the integrators' difference into a
   // misfit that pulls delta, q_max and negative Fd 2.8 to 3.9 standard
   // errors off (fitted at 1e-6, all ten stay within 2.3).
+}
+
+// pneumaid-rig/1 makes `sensors` optional: a rig that declares its meters'
+// lags but no noise is identified and refined with the noise of its own logs
+// (before, the refinement refused the unit: "no sigma given"). Written with
+// model mismatch (smooth stick, the rig at rtol 1e-8) and the protocol's 10 um
+// ADC step on 5 um of position noise. The estimates are what the rig's
+// instruments put on the readings; the fits recover the truth as with the
+// noise declared, and both reports name what was estimated.
+TEST(RefineTest, AUnitThatDeclaresNoNoiseIsFittedWithTheNoiseOfItsOwnLogs) {
+  Parameters truth =
+      LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
+  truth.friction.positive = {8.0, 1.5, 4.0, 0.015};
+  truth.friction.negative = {12.0, 3.0, 7.0, 0.008};
+  Protocol protocol = testing::RefinementProtocol({0.45, 0.6, 0.8, 1.0}, true);
+  protocol.mismatch.regularized_friction = true;
+  protocol.mismatch.stick_velocity_m_per_s = 1e-4;
+  protocol.mismatch.relative_tolerance = 1e-8;
+  Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 23, "N"), "refine_no_noise");
+  for (auto& [column, sensor] : unit.manifest.sensors) sensor.sigma.reset();
+  for (const std::string column : {"x", "p1", "p2", "q", "q_in", "q_out"}) {
+    const SensorModel& rig = protocol.sensors.at(column);
+    // A flow meter's noise is declared in standard volume flow; read as mass.
+    const double to_si = column[0] == 'q' ? unit.manifest.rig.air_density_kg_per_m3 : 1.0;
+    const double off = to_si * std::hypot(rig.sigma, rig.quantization / std::sqrt(12.0));
+    const ChannelNoise noise = NoiseOf(unit, column);
+    EXPECT_FALSE(noise.declared) << column;
+    EXPECT_NEAR(noise.sigma, off, 0.15 * off) << column;
+  }
+  IdentifyReport report;
+  const Parameters identified = Identify(unit, truth, IdentifyOptions{}, &report);
+  EXPECT_EQ(report.noise_note.rfind("noise not declared, estimated from the logs: x ", 0), 0u)
+      << report.noise_note;
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineResult result = Refine(identified, unit, spec, RefineOptions{});
+  ExpectRecovered(result, truth, spec);
+  EXPECT_NE(result.noise_note.find("p1 "), std::string::npos) << result.noise_note;
+  EXPECT_NE(result.BriefReport().find(result.noise_note), std::string::npos);
+  EXPECT_TRUE(result.explained());
 }
 
 // Component fits made blind to the outlet flow meters' 30 ms lag (not declared

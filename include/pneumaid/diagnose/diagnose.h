@@ -39,7 +39,8 @@ struct DiagnoseOptions {
   // change (a measurement effect: its instrument's) ...
   double min_signature_share = 0.5;
   // ... and the gap it closes is above the noise: some channel's mean square
-  // with the base model exceeds the declared noise variance by this factor.
+  // with the base model exceeds the noise variance (NoiseOf: declared, or
+  // estimated from the logs) by this factor.
   double min_gap_over_noise = 4.0;
   // Windows for "where": their length, and how many of the worst are listed.
   double window_s = 0.2;
@@ -60,7 +61,7 @@ struct RegimeResidual {
   long samples = 0;
   double rmse = 0;                // SI
   double mean = 0;                // SI, measured - simulated (the sign of the gap)
-  double reduced_chi_square = 0;  // mean square / declared noise variance (0: no noise declared)
+  double reduced_chi_square = 0;  // mean square / noise variance (0: no noise to be had)
 };
 
 struct ResidualWindow {
@@ -75,7 +76,7 @@ struct DiscrepancyMap {
   std::vector<RegimeResidual> regimes;  // every channel x regime with samples
   std::vector<ResidualWindow> worst;    // worst windows, in units of the channel's noise
   std::map<std::string, double> rmse;   // per channel, pooled over the runs (SI)
-  std::map<std::string, double> noise;  // declared noise sigma per channel (SI, 0: none)
+  std::map<std::string, double> noise;  // noise sigma per channel (SI, NoiseOf; 0: none)
 };
 
 // One candidate effect, fitted and scored.

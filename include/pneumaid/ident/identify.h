@@ -40,6 +40,10 @@ struct IdentifyReport {
   FrictionFitResult friction;
   std::vector<std::string> fitted;  // parameter paths
   std::vector<std::string> priors;  // parameter paths taken from the prior, with why
+  // The channels whose noise the unit does not declare, with the estimates
+  // from the logs that the fits used (EstimatedNoiseNote); empty when all are
+  // declared.
+  std::string noise_note;
   std::string BriefReport() const;
 };
 

@@ -206,6 +206,10 @@ struct RefineResult : FitResult {
   // the logged value's standard errors and in Pa.
   int estimated_starts = 0;
   double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
+  // The fitted channels whose noise neither the spec gives nor the unit
+  // declares, with the estimates from the logs that weighted them
+  // (EstimatedNoiseNote); empty when every one is given or declared.
+  std::string noise_note;
   // What a friction_replay stage found (empty without one).
   std::string replay_report;
   // What the friction screen (RefineOptions::screen_friction_starts) found

@@ -1,0 +1,47 @@
+// The noise of a unit's channel: what the manifest declares under `sensors`,
+// else an estimate from the unit's own logs of that column. `sensors` is
+// optional in pneumaid-rig/1 (a channel without an entry is "of unknown
+// noise"), so every fit and report reads a channel's noise here, the one home
+// of that rule, instead of choosing a fallback of its own.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "pneumaid/io/rig_data.h"
+
+namespace pneumaid {
+
+struct ChannelNoise {
+  double sigma = 0;         // noise std in SI units of the column as read; 0: none to be had
+  bool declared = false;    // from the manifest's `sensors`; false: estimated from the logs
+  double quantum = 0;       // the logs' ADC step when they lie on one (estimated only), else 0
+  std::size_t samples = 0;  // the logged samples the estimate read (0 when declared)
+};
+
+// A column's noise estimated from its samples alone: the robust spread of the
+// fourth differences (a slow signal cancels; a transient, a step or an impact
+// is an outlier to a trimmed mean), at least the rounding of an ADC step
+// (q / sqrt 12) when every reading lies on one. Within 15 % of
+// sqrt(sigma^2 + q^2 / 12) but where the noise is a small fraction of the step
+// (the rounding of a resting signal is then a fixed offset that the logs
+// cannot show). 0 for fewer than 5 samples or a column that never changes.
+ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& columns);
+
+// The noise `manifest` declares for `column`, or the estimate from `logs` (the
+// column's samples in some of the unit's logs).
+ChannelNoise NoiseOf(const Manifest& manifest, const std::string& column,
+                     const std::vector<const std::vector<double>*>& logs);
+
+// NoiseOf the column, estimated from every log of the unit that has it.
+ChannelNoise NoiseOf(const Unit& unit, const std::string& column);
+
+// NoiseOf(unit, column).sigma.
+double NoiseSigma(const Unit& unit, const std::string& column);
+
+// The undeclared channels of `columns` that the unit logs, with their
+// estimates, as one line for a report ("noise not declared, estimated from
+// the logs: x 5.2e-06 m, p1 310 Pa"); empty when every one is declared.
+std::string EstimatedNoiseNote(const Unit& unit, const std::vector<std::string>& columns);
+
+}  // namespace pneumaid
