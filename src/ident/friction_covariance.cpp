@@ -100,6 +100,22 @@ void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>&
   }
 }
 
+void WidenByDisagreement(const Block (&read)[2], const Block (&read_error)[2],
+                         const Block (&prior)[2], const Block* const fitted[2],
+                         const std::vector<int>& free, Eigen::MatrixXd* covariance) {
+  for (Eigen::Index a = 0; a < static_cast<Eigen::Index>(free.size()); ++a) {
+    const int d = free[a] / kDirectionParameters, i = free[a] % kDirectionParameters;
+    if (read[d][i] == prior[d][i]) continue;
+    const double error2 = std::max((*covariance)(a, a), 0.0);
+    const double distance = (*fitted[d])[i] - read[d][i];
+    const double chi2 = distance * distance / (error2 + read_error[d][i] * read_error[d][i]);
+    if (!(error2 > 0) || !(chi2 > 1)) continue;
+    const double scale = std::sqrt(chi2);
+    covariance->row(a) *= scale;
+    covariance->col(a) *= scale;
+  }
+}
+
 // `free` and `covariance` restricted to the columns not `held`.
 void KeepDetermined(const std::array<std::string, 2 * kDirectionParameters>& held,
                     std::vector<int>* free, Eigen::MatrixXd* covariance) {

@@ -39,6 +39,19 @@ void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>&
                       const Block* const blocks[2], const FrictionFitOptions& options,
                       std::array<std::string, 2 * kDirectionParameters>* held);
 
+// Widens the error of each `free` coefficient (columns of `covariance`) whose
+// distance from its reading off the logs (`read`, friction_starts.h: Fs from
+// the breakaways, Fd, b and vs from the smooth slides' force balance) is more
+// than the two readings' errors together (`read_error`: the breakaways'
+// median's for Fs; 0 where a reading has none), by that chi-square's root
+// (refine_covariance's scale factor between two readings of the same logs):
+// the disagreement is a model error that the linearised covariance does not
+// see (a Stribeck valley, stick the model does not have). A reading the logs
+// did not give (equal to `prior`) is not one.
+void WidenByDisagreement(const Block (&read)[2], const Block (&read_error)[2],
+                         const Block (&prior)[2], const Block* const fitted[2],
+                         const std::vector<int>& free, Eigen::MatrixXd* covariance);
+
 // `free` and `covariance` restricted to the columns not `held`.
 void KeepDetermined(const std::array<std::string, 2 * kDirectionParameters>& held,
                     std::vector<int>* free, Eigen::MatrixXd* covariance);

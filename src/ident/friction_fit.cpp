@@ -320,6 +320,9 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
       }
     }
     KeepDetermined(held, &free, &covariance);
+    const Block read_error[2] = {{BreakawayMedianError(data, +1), 0, 0, 0},
+                                 {BreakawayMedianError(data, -1), 0, 0, 0}};
+    WidenByDisagreement(logs_start, read_error, prior_blocks, blocks, free, &covariance);
   }
   result.segments = static_cast<int>(data.segments.size());
   double squares = 0;

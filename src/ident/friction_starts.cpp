@@ -9,14 +9,35 @@ namespace pneumaid::friction_internal {
 // Median over the slides of `direction` of the force where the rod left its
 // rest (BreakawaySample), a starting point for Fs; without three such
 // slides, the median breakaway force at the stroke ends.
-double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
+namespace {
+
+// The breakaway forces BreakawayMedian reads: the slides' of `direction`, or
+// with fewer than three those at the stroke ends; empty with fewer than three.
+std::vector<double> Breakaways(const StrokeData& data, int direction) {
   std::vector<double> forces;
   for (const Segment& s : data.segments) {
     if (s.direction == direction) forces.push_back(s.breakaway_force_N);
   }
-  if (forces.size() >= 3) return Median(forces);
+  if (forces.size() >= 3) return forces;
   const std::vector<double>& at_ends = data.end_breakaway_N[direction > 0 ? 0 : 1];
-  return at_ends.size() >= 3 ? Median(at_ends) : fallback;
+  return at_ends.size() >= 3 ? at_ends : std::vector<double>{};
+}
+
+}  // namespace
+
+double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
+  const std::vector<double> forces = Breakaways(data, direction);
+  return forces.empty() ? fallback : Median(forces);
+}
+
+double BreakawayMedianError(const StrokeData& data, int direction) {
+  const std::vector<double> forces = Breakaways(data, direction);
+  if (forces.empty()) return 0;
+  const double median = Median(forces);
+  std::vector<double> deviations;
+  for (double f : forces) deviations.push_back(std::fabs(f - median));
+  // A median's error is sqrt(pi / 2) of a mean's; MAD -> sigma by 1.4826.
+  return 1.2533 * 1.4826 * Median(deviations) / std::sqrt(static_cast<double>(forces.size()));
 }
 
 // (Fd, b) of one direction from its force-balance samples with Fs and vs

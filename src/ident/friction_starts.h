@@ -12,6 +12,10 @@ namespace pneumaid::friction_internal {
 // `direction` (the stroke ends' breakaways with fewer than three).
 double BreakawayMedian(const StrokeData& data, int direction, double fallback);
 
+// The standard error of that median from the breakaways' robust spread (0
+// where there is none: the fallback).
+double BreakawayMedianError(const StrokeData& data, int direction);
+
 // (Fd, b) of one direction from its force-balance samples with Fs and vs
 // given (Fd in [0, Fs], b >= 0); the weighted squared misfit, HUGE_VAL (and
 // fd, b untouched) with fewer than kMinSlideSamples samples.

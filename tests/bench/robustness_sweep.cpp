@@ -278,6 +278,33 @@ int HeldOutProbe(const Parameters& truth, const Unit& unit, const ValidationOpti
   return pass;
 }
 
+// How honest a fit's standard errors are: of the coefficients checked, how
+// many lie within 3 and within 1 standard error of the truth, and those
+// farther than 3: path (z: value, truth, se).
+struct ErrorCoverage {
+  int checked = 0, within_3 = 0, within_1 = 0;
+  std::string outside_3;
+
+  void Add(const std::string& path, double value, double truth, double standard_error) {
+    if (!(standard_error > 0)) return;
+    ++checked;
+    const double z = std::fabs(value - truth) / standard_error;
+    within_3 += z <= 3;
+    within_1 += z <= 1;
+    if (z > 3) {
+      char item[160];
+      std::snprintf(item, sizeof(item), " %s (%.3g: %.4g, truth %.4g, se %.2g)", path.c_str(), z,
+                    value, truth, standard_error);
+      outside_3 += item;
+    }
+  }
+  void Add(const ErrorCoverage& other) {
+    checked += other.checked;
+    within_3 += other.within_3;
+    within_1 += other.within_1;
+  }
+};
+
 struct UnitResult {
   std::string id, summary, status;
   std::string friction;  // identified and refined friction, one line
@@ -287,8 +314,7 @@ struct UnitResult {
   double held_out_mm = 0, held_out_limit_mm = 0;  // worst validation run, and its limit
   bool held_out_ok = false;
   int probe_pass = -1;  // --held-out-probe: friction sets that pass the rule
-  int errors_checked = 0, errors_within_3 = 0, errors_within_1 = 0;
-  std::string outside_3;  // the refined coefficients farther than 3 SE: path (z)
+  ErrorCoverage refined_errors, identify_errors;  // the refined coefficients' paths
   std::string failure;
 };
 
@@ -331,18 +357,12 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
                    (refined.windowed_report.empty() ? "" : "\n  " + refined.windowed_report);
     const Parameters& t = d.truth;
     for (const FittedCoefficient& rp : refined.coefficients) {
-      double truth = 0;
-      if (!(rp.standard_error > 0) || !GetParameter(t, rp.path, &truth)) continue;
-      ++out.errors_checked;
-      const double z = std::fabs(rp.value - truth) / rp.standard_error;
-      out.errors_within_3 += z <= 3;
-      out.errors_within_1 += z <= 1;
-      if (z > 3) {
-        char item[160];
-        std::snprintf(item, sizeof(item), " %s (%.3g: %.4g, truth %.4g, se %.2g)", rp.path.c_str(),
-                      z, rp.value, truth, rp.standard_error);
-        out.outside_3 += item;
-      }
+      double truth = 0, value = 0;
+      if (!GetParameter(t, rp.path, &truth)) continue;
+      out.refined_errors.Add(rp.path, rp.value, truth, rp.standard_error);
+      const auto error = identified.uncertainty.find(rp.path);
+      if (error != identified.uncertainty.end() && GetParameter(identified, rp.path, &value))
+        out.identify_errors.Add(rp.path, value, truth, error->second);
     }
     ValidationOptions v;
     for (const auto& e : unit.experiments)
@@ -494,9 +514,12 @@ int main(int argc, char** argv) {
             r.status.c_str(), r.chi_square, r.truth_chi_square,
             misses.empty() ? " none" : misses.c_str(),
             identify_misses.empty() ? " none" : identify_misses.c_str(), r.held_out_mm,
-            r.held_out_limit_mm, r.held_out_ok ? "" : " MISSED", r.errors_within_3,
-            r.errors_checked, r.identify_s, r.refine_s);
-        if (!r.outside_3.empty()) std::printf("  outside 3 SE (z):%s\n", r.outside_3.c_str());
+            r.held_out_limit_mm, r.held_out_ok ? "" : " MISSED", r.refined_errors.within_3,
+            r.refined_errors.checked, r.identify_s, r.refine_s);
+        if (!r.refined_errors.outside_3.empty())
+          std::printf("  outside 3 SE (z):%s\n", r.refined_errors.outside_3.c_str());
+        if (!r.identify_errors.outside_3.empty())
+          std::printf("  identify outside 3 SE (z):%s\n", r.identify_errors.outside_3.c_str());
         if (r.probe_pass >= 0) {
           std::printf("  held-out probe: %d/%d friction sets within half the tolerances pass\n",
                       r.probe_pass, probe_sets);
@@ -524,14 +547,14 @@ int main(int argc, char** argv) {
     const bool valve_tube = name.rfind("kvp", 0) == 0 || name == "delta";
     enough = enough && (!valve_tube || min_units_valve_tube < 0 || good >= min_units_valve_tube);
   }
-  int held = 0, checked = 0, within = 0, within_1 = 0, explained = 0;
+  int held = 0, explained = 0;
+  ErrorCoverage refined_errors, identify_errors;
   std::vector<double> identify, refine;
   for (const auto& r : results) {
     if (!r.failure.empty()) continue;
     held += r.held_out_ok;
-    checked += r.errors_checked;
-    within += r.errors_within_3;
-    within_1 += r.errors_within_1;
+    refined_errors.Add(r.refined_errors);
+    identify_errors.Add(r.identify_errors);
     explained += r.explained;
     identify.push_back(r.identify_s);
     refine.push_back(r.refine_s);
@@ -552,10 +575,13 @@ int main(int argc, char** argv) {
   }
   // Errors honest both ways: a normal error puts 68 % within one standard
   // error; far more says the errors are wider than the fits' spread.
-  std::printf(
-      "  refined coefficients within 3 standard errors: %d/%d (%.0f %%); within 1: %d (%.0f %%)\n",
-      within, checked, checked ? 100.0 * within / checked : 0.0, within_1,
-      checked ? 100.0 * within_1 / checked : 0.0);
+  for (const auto& [what, e] : {std::make_pair("refined", &refined_errors),
+                                std::make_pair("identified", &identify_errors)}) {
+    std::printf(
+        "  %s coefficients within 3 standard errors: %d/%d (%.0f %%); within 1: %d (%.0f %%)\n",
+        what, e->within_3, e->checked, e->checked ? 100.0 * e->within_3 / e->checked : 0.0,
+        e->within_1, e->checked ? 100.0 * e->within_1 / e->checked : 0.0);
+  }
   std::printf("  refinement verdict 'explained': %d/%d\n", explained, count);
   std::vector<double> at_truth;
   for (const auto& r : results)

@@ -465,6 +465,91 @@ TEST(FrictionFitTest, AFastLogIsReplayedInStepsOfTheSameLengthAsASlowOne) {
   }
 }
 
+// Under mismatch (smooth stick, the rig at rtol 1e-8) the linearised errors
+// see the noise but not the model's error: a Stribeck valley or a stick the
+// model does not have moves Fs and vs by many of them (on the robustness
+// sweep, seed 12, 79 % of identify's coefficients lay within 3 errors of the
+// truth, 44 % within 1). An error is widened where the fit disagrees with its
+// reading off the logs by more than both errors (sweep: 91 % and 62 %). Six
+// units of other tests' kinds, light to heavy, 500 Hz to 5 kHz, mid-stroke
+// stick-slip to stop-to-stop strokes: 43 of the 48 determined coefficients
+// within 3 errors of the truth (without the widening 37, 77 %), and the
+// errors not so wide that nearly all are within 1 (25 of 48).
+TEST(FrictionFitTest, ErrorsCoverTheTruthUnderModelMismatch) {
+  struct Case {
+    Parameters truth;
+    std::uint64_t seed;
+    double rate_Hz;
+    std::vector<double> levels;
+    int cycles;
+    double margin_m;
+  };
+  const std::vector<Case> cases = {
+      {HorizontalTruth(1.5, {8.0, 2.0, 6.0, 0.012}, {12.0, 4.0, 12.0, 0.006}),
+       7,
+       2000,
+       {0.6, 1.0},
+       1,
+       -1},
+      {VerticalTruth(0.75, {11.3, 0.2, 14.7, 0.018}, {15.2, 4.4, 8.8, 0.004}),
+       11,
+       5000,
+       {0.45, 0.7, 0.95},
+       2,
+       0.0},
+      {HorizontalTruth(0.14, {6.1, 1.77, 4.4, 0.0133}, {5.0, 0.77, 13.7, 0.0025}),
+       1,
+       1000,
+       {0.31, 0.36, 0.4},
+       3,
+       0.0},
+      {HorizontalTruth(0.14, {20.0, 0.71, 12.5, 0.0236}, {16.0, 4.96, 9.0, 0.0224}),
+       2,
+       2000,
+       {0.5, 0.7, 0.9},
+       1,
+       0.0},
+      {VerticalTruth(1.15, {19.9, 1.12, 12.2, 0.0045}, {10.7, 0.67, 7.3, 0.0022}),
+       3,
+       500,
+       {0.5, 0.7, 0.9},
+       2,
+       0.005},
+      {HorizontalTruth(0.15, {10.0, 0.5, 5.0, 0.01}, {6.0, 5.95, 3.0, 0.02}),
+       6,
+       1000,
+       {0.5, 0.7, 1.0},
+       2,
+       -1},
+  };
+  int inside = 0, within_1 = 0, total = 0;
+  for (const Case& c : cases) {
+    const Unit unit = MismatchedStrokes(c.truth, c.seed, c.rate_Hz, c.levels, c.cycles, c.margin_m);
+    const FrictionFitResult fit = FitFriction(unit, FrictionParams{}, FrictionFitOptions{});
+    ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
+    for (const char* direction : {"positive", "negative"}) {
+      const StribeckParams& exact = std::string(direction) == "positive"
+                                        ? c.truth.friction.positive
+                                        : c.truth.friction.negative;
+      const auto real = Values(exact);
+      for (int i = 0; i < 4; ++i) {
+        const FittedCoefficient& k = Coefficient(fit, direction, kNames[i]);
+        if (!k.determined()) continue;
+        const double z = (k.value - real[i]) / k.standard_error;
+        std::cout << "seed " << c.seed << " " << direction << " " << kNames[i] << " " << k.value
+                  << " +- " << k.standard_error << " (truth " << real[i] << "), z " << z << "\n";
+        inside += std::fabs(z) <= 3;
+        within_1 += std::fabs(z) <= 1;
+        ++total;
+      }
+    }
+  }
+  std::cout << "within 3 SE: " << inside << "/" << total << ", within 1: " << within_1 << "\n";
+  EXPECT_GE(total, 40);
+  EXPECT_GE(inside, 0.85 * total);
+  EXPECT_LE(within_1, 0.8 * total);
+}
+
 TEST(FrictionFitTest, InvalidOptionsAreNamed) {
   FrictionFitOptions options;
   options.max_substeps = 0;
