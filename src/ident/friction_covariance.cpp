@@ -107,9 +107,10 @@ void WidenByDisagreement(const Block (&read)[2], const Block (&read_error)[2],
     const int d = free[a] / kDirectionParameters, i = free[a] % kDirectionParameters;
     if (read[d][i] == prior[d][i]) continue;
     const double error2 = std::max((*covariance)(a, a), 0.0);
+    if (!(error2 > 0)) continue;
     const double distance = (*fitted[d])[i] - read[d][i];
     const double chi2 = distance * distance / (error2 + read_error[d][i] * read_error[d][i]);
-    if (!(error2 > 0) || !(chi2 > 1)) continue;
+    if (!(chi2 > 1)) continue;
     const double scale = std::sqrt(chi2);
     covariance->row(a) *= scale;
     covariance->col(a) *= scale;

@@ -46,8 +46,9 @@ void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>&
 // median's for Fs; 0 where a reading has none), by that chi-square's root
 // (refine_covariance's scale factor between two readings of the same logs):
 // the disagreement is a model error that the linearised covariance does not
-// see (a Stribeck valley, stick the model does not have). A reading the logs
-// did not give (equal to `prior`) is not one.
+// see (a Stribeck valley, stick the model does not have). With no error of
+// its own (Fd, b, vs) a reading is a floor of the widened error. A reading the
+// logs did not give (equal to `prior`) is not one.
 void WidenByDisagreement(const Block (&read)[2], const Block (&read_error)[2],
                          const Block (&prior)[2], const Block* const fitted[2],
                          const std::vector<int>& free, Eigen::MatrixXd* covariance);

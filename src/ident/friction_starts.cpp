@@ -6,9 +6,6 @@
 
 namespace pneumaid::friction_internal {
 
-// Median over the slides of `direction` of the force where the rod left its
-// rest (BreakawaySample), a starting point for Fs; without three such
-// slides, the median breakaway force at the stroke ends.
 namespace {
 
 // The breakaway forces BreakawayMedian reads: the slides' of `direction`, or
@@ -25,6 +22,9 @@ std::vector<double> Breakaways(const StrokeData& data, int direction) {
 
 }  // namespace
 
+// Median over the slides of `direction` of the force where the rod left its
+// rest (BreakawaySample), a starting point for Fs; without three such
+// slides, the median breakaway force at the stroke ends.
 double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
   const std::vector<double> forces = Breakaways(data, direction);
   return forces.empty() ? fallback : Median(forces);

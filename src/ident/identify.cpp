@@ -169,8 +169,9 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   Parameters params = WithUnitConstants(prior, unit);
   params.uncertainty.clear();
   *report = IdentifyReport{};
-  report->noise_note = EstimatedNoiseNote(
-      unit, {"x", "p1", "p2", "p_up", "p_down", "q", "q_in", "q_out"});  // what the fits read
+  // The channels whose noise the fits read through NoiseOf (the valve fit
+  // weights its levels by their own residual spread where q is undeclared).
+  report->noise_note = EstimatedNoiseNote(unit, {"x", "p1", "p2", "q_in", "q_out"});
   if (WillFit(Component::kValve, ExperimentKind::kValve, "valve.", unit, options, report)) {
     report->valve = FitValve(unit, prior.valve, options.valve);
     Record(report->valve, &params, report);

@@ -63,11 +63,11 @@ std::map<std::string, double> ChannelSigmas(const FitSpec& spec, const Unit& uni
   return sigmas;
 }
 
-std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec,
+std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Unit& unit,
                                                    const std::map<std::string, double>& sigmas) {
-  const auto sigma = [&sigmas](const char* channel) {
+  const auto sigma = [&](const char* channel) {  // a pressure the spec does not fit: the unit's
     const auto found = sigmas.find(channel);
-    return found == sigmas.end() ? 0.0 : found->second;
+    return found == sigmas.end() ? NoiseSigma(unit, channel) : found->second;
   };
   const double p1 = sigma("p1"), p2 = sigma("p2");
   if (!spec.fit_initial_pressures || !(p1 > 0 && p2 > 0)) return {0, 0};
@@ -181,9 +181,9 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   }
   if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
-  const double band = 4.0 * NoiseSigma(unit, "x") + 10e-6;
   const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
-  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, sigmas);
+  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);
+  const double band = windows ? 4.0 * NoiseSigma(unit, "x") + 10e-6 : 0.0;
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
     FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma);

@@ -73,13 +73,14 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
 // had).
 std::map<std::string, double> ChannelSigmas(const FitSpec& spec, const Unit& unit);
 
-// The noise sigmas of one logged sample of p1 and p2, when the spec estimates
-// starts and both are known; {0, 0} (the start is taken as logged) otherwise.
-std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec,
+// The noise sigmas of one logged sample of p1 and p2 (`sigmas` where the spec
+// fits them, else the unit's NoiseSigma), when the spec estimates starts and
+// both are known; {0, 0} (the start is taken as logged) otherwise.
+std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Unit& unit,
                                                    const std::map<std::string, double>& sigmas);
 
 // One logged run as the fit sees it. `sigmas`: ChannelSigmas(spec, unit);
-// `sample_sigma_Pa`: StartSampleSigma(spec, sigmas).
+// `sample_sigma_Pa`: StartSampleSigma(spec, unit, sigmas).
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
                       double half_stroke_m, const std::map<std::string, double>& sigmas,
                       const std::array<double, kStartOffsets>& sample_sigma_Pa);

@@ -89,7 +89,7 @@ void Judge(const RefineOptions& options, RefineResult* r) {
   char text[400];
   std::snprintf(text, sizeof(text),
                 "the model does not explain these logs: the runs' median reduced chi-square is "
-                "%.3g, above the acceptable %.3g (1 is the declared noise alone)",
+                "%.3g, above the acceptable %.3g (1 is the sensor noise alone)",
                 r->reduced_chi_square, options.acceptable_reduced_chi_square);
   r->reason = text;
   for (std::size_t k = 0; k < r->misfits.size() && k < 3; ++k) {

@@ -93,6 +93,9 @@ void StaircasePlateaus(const Experiment& e, const Levels& levels,
   for (std::size_t i = 0; i < n; ++i) {
     if (used[i]) squares += std::pow(columns.row(static_cast<Eigen::Index>(i)).dot(flow) - q[i], 2);
   }
+  // Undeclared: the solve's own residual spread, not NoiseOf's estimate from
+  // the readings (io/channel_noise.h): a level's K_vp error then carries
+  // whatever of the log the held levels do not model, not the noise alone.
   const double q_sigma = unit.manifest.DeclaredSigma(
       "q", std::sqrt(squares / std::max<double>(1.0, static_cast<double>(rows) - m)));
   const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
@@ -269,6 +272,7 @@ void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& ori
   if (solver.info() != Eigen::Success) return;
   const Eigen::VectorXd kvp = solver.solve(rhs);
   const double squares = std::max(0.0, qq - 2 * kvp.dot(rhs) + kvp.dot(normal * kvp));
+  // Undeclared: the solve's residual spread, as for the held levels above.
   const double q_sigma = unit.manifest.DeclaredSigma(
       "q", std::sqrt(squares / std::max(1.0, static_cast<double>(n) - m)));
   const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));

@@ -13,8 +13,10 @@ namespace {
 constexpr std::size_t kMaxDifferences = 50000;
 
 // The ADC step the readings lie on: the smallest non-zero step between two
-// readings when every step is a whole multiple of it (to 1e-4 of it: the
-// readings went through a unit conversion); 0 when they lie on none.
+// readings, when at least 99 % of the steps are whole multiples of it (to
+// 1e-4 of it: the readings went through a unit conversion; a glitch or an
+// interpolated sample may not be) and it occurs at least ten times (a single
+// jump or a handful of set points is no ADC); 0 otherwise.
 double Quantum(const std::vector<const std::vector<double>*>& columns, std::size_t stride) {
   double smallest = HUGE_VAL;
   for (const std::vector<double>* v : columns) {
@@ -24,13 +26,17 @@ double Quantum(const std::vector<const std::vector<double>*>& columns, std::size
     }
   }
   if (!std::isfinite(smallest)) return 0;
+  std::size_t steps = 0, off_grid = 0, unit_steps = 0;
   for (const std::vector<double>* v : columns) {
     for (std::size_t i = 1; i < v->size(); i += stride) {
-      const double steps = std::fabs((*v)[i] - (*v)[i - 1]) / smallest;
-      if (std::fabs(steps - std::round(steps)) > 1e-4) return 0;
+      const double multiple = std::fabs((*v)[i] - (*v)[i - 1]) / smallest;
+      if (multiple == 0) continue;
+      ++steps;
+      off_grid += std::fabs(multiple - std::round(multiple)) > 1e-4;
+      unit_steps += std::round(multiple) == 1;
     }
   }
-  return smallest;
+  return 100 * off_grid <= steps && unit_steps >= 10 ? smallest : 0.0;
 }
 
 const char* SiUnit(const std::string& column) {
@@ -66,7 +72,16 @@ ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& column
   std::vector<double> magnitude(d4.size());
   std::transform(d4.begin(), d4.end(), magnitude.begin(), [](double d) { return std::fabs(d); });
   std::nth_element(magnitude.begin(), magnitude.begin() + magnitude.size() / 2, magnitude.end());
-  const double median = magnitude[magnitude.size() / 2];
+  double median = magnitude[magnitude.size() / 2];
+  if (median == 0) {  // at rest more than half the time: the scale of the moves
+    std::vector<double> moves;
+    for (double m : magnitude)
+      if (m > 0) moves.push_back(m);
+    if (!moves.empty()) {
+      std::nth_element(moves.begin(), moves.begin() + moves.size() / 2, moves.end());
+      median = moves[moves.size() / 2];
+    }
+  }
   // A trimmed second moment rather than the median alone: on readings that
   // lie on a coarse ADC step the median of |d4| is a whole number of steps.
   // Beyond the cut: transients, steps, impacts (the signal, not its noise).
@@ -87,6 +102,11 @@ ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& column
   // less noise than the step repeats its reading). Where the noise is at least
   // about half the step the differences see noise and rounding both.
   noise.sigma = std::sqrt(std::max(spread, noise.quantum * noise.quantum / 12));
+  // A log written with about six significant digits is known no better.
+  double largest = 0;
+  for (const std::vector<double>* v : columns)
+    for (double value : *v) largest = std::max(largest, std::fabs(value));
+  if (noise.sigma > 0) noise.sigma = std::max(noise.sigma, 1e-6 * largest);
   return noise;
 }
 

@@ -6,16 +6,20 @@
 #include <numeric>
 #include <sstream>
 
+#include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
 
 namespace pneumaid {
 namespace {
 
-std::map<std::string, double> DeclaredNoise(const Manifest& manifest) {
+// The noise of each compared channel (NoiseOf: declared, else estimated from
+// the unit's logs); none where neither gives one.
+std::map<std::string, double> ChannelNoises(const Unit& unit) {
   std::map<std::string, double> noise;
-  for (const auto& [name, sensor] : manifest.sensors) {
-    if (sensor.sigma) noise[name] = *sensor.sigma;
+  for (const char* channel : {"x", "p1", "p2", "q1", "q2"}) {
+    const double sigma = NoiseSigma(unit, channel);
+    if (sigma > 0) noise[channel] = sigma;
   }
   return noise;
 }
@@ -60,7 +64,7 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
   Trajectory comparable = out.simulated;
   if (m.q1_kg_per_s.empty()) comparable.q1_kg_per_s.clear();
   if (m.q2_kg_per_s.empty()) comparable.q2_kg_per_s.clear();
-  out.channels = CompareRuns(m, comparable, DeclaredNoise(unit.manifest));
+  out.channels = CompareRuns(m, comparable, ChannelNoises(unit));
   out.missed = MissedThresholds(out.channels, options);
   return out;
 }

@@ -404,6 +404,27 @@ stages:
   for (const ChannelMisfit& m : result.misfits) EXPECT_EQ(m.run, "stroke-100");
 }
 
+// A spec that fits the position alone still estimates each run's initial
+// pressures (initial_pressures: fit) with the unit's pressure noise: the
+// pressures it does not fit are the unit's (declared here), not missing.
+TEST_F(RefineSpecTest, StartsAreEstimatedWithThePressureNoiseOfAChannelNotFitted) {
+  const FitSpec spec = ParseFitSpec(R"(format: pneumaid-fit/1
+parameters:
+  friction.negative.Fd: {min: 0.5, max: 20}
+channels: {x: {}}
+experiments: {fit: [stroke-100], hold_out: []}
+initial_pressures: fit
+)",
+                                    "position-only.yaml");
+  ASSERT_TRUE(spec.fit_initial_pressures);
+  ASSERT_EQ(spec.channels.count("p1"), 0u);
+  Parameters start;
+  start.friction.negative.dynamic_force_N *= 0.95;
+  const RefineResult result = Refine(start, *unit_, spec, RefineOptions{});
+  ASSERT_TRUE(result.has_values()) << result.reason;
+  EXPECT_EQ(result.estimated_starts, 1);
+}
+
 TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   FitSpec spec = TwoParameters();
   spec.fit = {"stroke-999"};

@@ -63,7 +63,7 @@ TEST(ChannelNoiseTest, AnAdcStepAddsItsRoundingToTheNoise) {
   }
 }
 
-// A noise-free signal on an ADC step repeats its readings: the second
+// A noise-free signal on an ADC step repeats its readings: the fourth
 // differences are mostly 0, and the noise is the rounding's.
 TEST(ChannelNoiseTest, ANoiseFreeQuantisedSignalHasItsRoundingAsNoise) {
   const std::vector<double> x = Position(0, 1e-5, 1);
@@ -83,6 +83,34 @@ TEST(ChannelNoiseTest, LogsArePooledWithoutTheirBoundaries) {
   const ChannelNoise noise = EstimateNoise({&a, &short_log, &b});
   EXPECT_EQ(noise.samples, a.size() + b.size() - 8);
   EXPECT_NEAR(noise.sigma, 300, 15);
+}
+
+// A column at rest more than half the time (its fourth differences mostly
+// exactly 0) still has a noise: the scale of its moves. A single jump of a
+// noise-free column, or a few set points, is no ADC step.
+TEST(ChannelNoiseTest, AColumnMostlyAtRestOrWithOneJumpIsNoAdc) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 300.0);
+  std::vector<double> resting(4000, 4e5);
+  for (std::size_t i = 3000; i < resting.size(); ++i) resting[i] += noise(rng);
+  const ChannelNoise moving = EstimateNoise({&resting});
+  EXPECT_GT(moving.sigma, 0.0);
+  EXPECT_EQ(moving.quantum, 0.0);
+  std::vector<double> jump(1000, 0.0);
+  for (std::size_t i = 500; i < jump.size(); ++i) jump[i] = 1e-3;
+  EXPECT_EQ(EstimateNoise({&jump}).quantum, 0.0);
+  std::vector<double> set_points(1000, 2e5);
+  for (std::size_t i = 0; i < set_points.size(); ++i) set_points[i] += 1e5 * (i / 200);
+  EXPECT_EQ(EstimateNoise({&set_points}).quantum, 0.0);
+}
+
+// A noise-free smooth log is known to the digits it was written with: at
+// least 1e-6 of its largest reading.
+TEST(ChannelNoiseTest, ANoiseFreeLogIsKnownToSixDigits) {
+  std::vector<double> smooth(2000);
+  for (std::size_t i = 0; i < smooth.size(); ++i)
+    smooth[i] = 3e5 + 1e5 * std::sin(1e-3 * static_cast<double>(i));
+  EXPECT_NEAR(EstimateNoise({&smooth}).sigma, 1e-6 * 4e5, 0.01 * 1e-6 * 4e5);
 }
 
 TEST(ChannelNoiseTest, NothingToEstimateFromIsZero) {

@@ -21,11 +21,14 @@ struct ChannelNoise {
 
 // A column's noise estimated from its samples alone: the robust spread of the
 // fourth differences (a slow signal cancels; a transient, a step or an impact
-// is an outlier to a trimmed mean), at least the rounding of an ADC step
-// (q / sqrt 12) when every reading lies on one. Within 15 % of
-// sqrt(sigma^2 + q^2 / 12) but where the noise is a small fraction of the step
-// (the rounding of a resting signal is then a fixed offset that the logs
-// cannot show). 0 for fewer than 5 samples or a column that never changes.
+// is an outlier to a trimmed mean; a signal at rest more than half the time
+// is scaled by its moves), at least the rounding of an ADC step (q / sqrt 12)
+// when the readings lie on one (99 % of the steps, ten single steps at
+// least), and at least 1e-6 of the largest reading (about six significant
+// digits written). Within 15 % of sqrt(sigma^2 + q^2 / 12) but where the noise
+// is a small fraction of the step (the rounding of a resting signal is then a
+// fixed offset that the logs cannot show). 0 for fewer than 5 samples or a
+// column that never changes.
 ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& columns);
 
 // The noise `manifest` declares for `column`, or the estimate from `logs` (the
