@@ -219,11 +219,11 @@ void WidenByStartDisagreement(const Parameters& start, RefineResult* r) {
     // coefficient but friction): the excess of the difference over both
     // errors is a between-method variance added to the refined one
     // (DerSimonian-Laird's tau^2). The friction replay reads the same stroke
-    // logs: the scale factor only.
+    // logs: the refined error grows to the distance, |d| / se > sqrt(chi2).
     const bool independent = c.path.rfind("friction.", 0) != 0;
     const double scale =
         independent ? std::sqrt(1.0 + std::max(0.0, difference * difference - se2 - start2) / se2)
-                    : std::sqrt(chi2);
+                    : std::fabs(difference) / c.standard_error;
     c.standard_error *= scale;
     r->params.uncertainty[c.path] = c.standard_error;
     if (with_covariance) {

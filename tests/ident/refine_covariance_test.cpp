@@ -196,11 +196,11 @@ TEST(RunClusteredErrorsTest, ACoefficientAtABoundHasNoStandardError) {
 }
 
 // Two experiments that disagree: the refined value 10 +- 0.1 against the
-// component fit's 9 +- 0.2 is chi2 = 1 / 0.05 = 20, so the refined error
-// grows by sqrt(20) (the PDG scale factor), its covariance row and column
-// with it. A coefficient within its errors of the start, one at a bound and
-// one the start carries no error for are left as they are.
-// Friction against the replay of the same logs (the scale factor);
+// component fit's 9 +- 0.2 is chi2 = 1 / 0.05 = 20 > 1, so the refined error
+// grows to the distance, 1 (a factor 10), its covariance row and column with
+// it. A coefficient within its errors of the start, one at a bound and one
+// the start carries no error for are left as they are.
+// Friction against the replay of the same logs (the distance);
 // pipeline.delta against the tube tests, an experiment of its own (the
 // between-method variance).
 TEST(StartDisagreementTest, DisagreeingExperimentsWidenTheRefinedError) {
@@ -223,20 +223,21 @@ TEST(StartDisagreementTest, DisagreeingExperimentsWidenTheRefinedError) {
   r.covariance = Eigen::MatrixXd::Constant(5, 5, 0.005);
   r.covariance.diagonal().setConstant(0.01);
   WidenByStartDisagreement(start, &r);
-  // chi2 = 1 / (0.01 + 0.04) = 20: scaled by sqrt(20).
-  EXPECT_NEAR(r.coefficients[0].standard_error, 0.1 * std::sqrt(20.0), 1e-12);
-  EXPECT_NEAR(r.params.uncertainty.at(paths[0]), 0.1 * std::sqrt(20.0), 1e-12);
-  EXPECT_NEAR(r.covariance(0, 0), 0.01 * 20.0, 1e-12);
-  EXPECT_NEAR(r.covariance(0, 1), 0.005 * std::sqrt(20.0), 1e-12);
-  EXPECT_NEAR(r.covariance(1, 0), 0.005 * std::sqrt(20.0), 1e-12);
+  // chi2 = 1 / (0.01 + 0.04) = 20 > 1: the error grows to the distance, 1.
+  EXPECT_NEAR(r.coefficients[0].standard_error, 1.0, 1e-12);
+  EXPECT_NEAR(r.params.uncertainty.at(paths[0]), 1.0, 1e-12);
+  EXPECT_NEAR(r.covariance(0, 0), 1.0, 1e-12);
+  EXPECT_NEAR(r.covariance(0, 1), 0.005 * 10.0, 1e-12);
+  EXPECT_NEAR(r.covariance(1, 0), 0.005 * 10.0, 1e-12);
   // tau^2 = 1 - 0.01 - 0.04 added to 0.01: se' = sqrt(1 - 0.04), more than
-  // the scale factor would give; the start's value lies within 1.1 se'.
+  // the PDG scale factor sqrt(chi2) would give; the start's value lies
+  // within 1.1 se'.
   const double widened = std::sqrt(0.96);
   EXPECT_NEAR(r.coefficients[4].standard_error, widened, 1e-12);
   EXPECT_NEAR(r.params.uncertainty.at("pipeline.delta"), widened, 1e-12);
   EXPECT_NEAR(r.covariance(4, 4), widened * widened, 1e-12);
   EXPECT_NEAR(r.covariance(4, 1), 0.005 * widened / 0.1, 1e-12);
-  EXPECT_NEAR(r.covariance(0, 4), 0.005 * std::sqrt(20.0) * widened / 0.1, 1e-12);
+  EXPECT_NEAR(r.covariance(0, 4), 0.005 * 10.0 * widened / 0.1, 1e-12);
   EXPECT_GT(widened, 0.1 * std::sqrt(20.0));
   for (int i = 1; i < 4; ++i) {
     EXPECT_EQ(r.coefficients[i].standard_error, 0.1) << paths[i];
