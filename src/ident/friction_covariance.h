@@ -44,7 +44,8 @@ void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>&
 // the breakaways, Fd, b and vs from the smooth slides' force balance) is more
 // than the two readings' errors together (`read_error`: the breakaways'
 // median's for Fs; 0 where a reading has none), by that chi-square's root
-// (refine_covariance's scale factor between two readings of the same logs):
+// (the Particle Data Group's scale factor between two readings of the same
+// logs):
 // the disagreement is a model error that the linearised covariance does not
 // see (a Stribeck valley, stick the model does not have). With no error of
 // its own (Fd, b, vs) a reading is a floor of the widened error. A reading the
