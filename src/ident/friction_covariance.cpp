@@ -100,16 +100,16 @@ void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>&
   }
 }
 
-void WidenByDisagreement(const Block (&read)[2], const Block (&read_error)[2],
-                         const Block (&prior)[2], const Block* const fitted[2],
+void WidenByDisagreement(const LogsReading (&reading)[2], const Block* const fitted[2],
                          const std::vector<int>& free, Eigen::MatrixXd* covariance) {
   for (Eigen::Index a = 0; a < static_cast<Eigen::Index>(free.size()); ++a) {
     const int d = free[a] / kDirectionParameters, i = free[a] % kDirectionParameters;
-    if (read[d][i] == prior[d][i]) continue;
+    if (!reading[d].read[i]) continue;
     const double error2 = std::max((*covariance)(a, a), 0.0);
     if (!(error2 > 0)) continue;
-    const double distance = (*fitted[d])[i] - read[d][i];
-    const double chi2 = distance * distance / (error2 + read_error[d][i] * read_error[d][i]);
+    const double distance = (*fitted[d])[i] - reading[d].value[i];
+    const double read_error = reading[d].error[i];
+    const double chi2 = distance * distance / (error2 + read_error * read_error);
     if (!(chi2 > 1)) continue;
     const double scale = std::sqrt(chi2);
     covariance->row(a) *= scale;

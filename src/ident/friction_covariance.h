@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "friction_segments.h"
+#include "friction_starts.h"
 #include "pneumaid/ident/friction_fit.h"
 
 namespace pneumaid::friction_internal {
@@ -40,18 +41,15 @@ void MarkUndetermined(const Eigen::MatrixXd& covariance, const std::vector<int>&
                       std::array<std::string, 2 * kDirectionParameters>* held);
 
 // Widens the error of each `free` coefficient (columns of `covariance`) whose
-// distance from its reading off the logs (`read`, friction_starts.h: Fs from
-// the breakaways, Fd, b and vs from the smooth slides' force balance) is more
-// than the two readings' errors together (`read_error`: the breakaways'
-// median's for Fs; 0 where a reading has none), by that chi-square's root
-// (the Particle Data Group's scale factor between two readings of the same
-// logs):
+// distance from its reading off the logs (friction_starts.h, ReadOffLogs: Fs
+// from the breakaways, Fd, b and vs from the smooth slides' force balance)
+// is more than the two errors together, by that chi-square's root (the
+// Particle Data Group's scale factor between two readings of the same logs):
 // the disagreement is a model error that the linearised covariance does not
 // see (a Stribeck valley, stick the model does not have). With no error of
-// its own (Fd, b, vs) a reading is a floor of the widened error. A reading the
-// logs did not give (equal to `prior`) is not one.
-void WidenByDisagreement(const Block (&read)[2], const Block (&read_error)[2],
-                         const Block (&prior)[2], const Block* const fitted[2],
+// its own (Fd, b, vs) a reading is a floor of the widened error; a
+// coefficient the logs did not read is left as it is.
+void WidenByDisagreement(const LogsReading (&reading)[2], const Block* const fitted[2],
                          const std::vector<int>& free, Eigen::MatrixXd* covariance);
 
 // `free` and `covariance` restricted to the columns not `held`.

@@ -230,11 +230,9 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
   }
   // Starts from the data: Fs from the breakaways, Fd, b, vs from the force
   // balance of the smooth slides; the prior where the logs give none.
-  Block positive = prior_blocks[0], negative = prior_blocks[1];
-  positive[0] = BreakawayMedian(data, +1, positive[0]);
-  negative[0] = BreakawayMedian(data, -1, negative[0]);
-  ForceBalanceStart(data, +1, &positive);
-  ForceBalanceStart(data, -1, &negative);
+  LogsReading reading[2] = {ReadOffLogs(data, +1, prior_blocks[0]),
+                            ReadOffLogs(data, -1, prior_blocks[1])};
+  Block positive = reading[0].value, negative = reading[1].value;
   for (Block* block : {&positive, &negative}) {  // Ceres refuses a start outside
     for (int i = 0; i < kDirectionParameters; ++i)
       (*block)[i] = std::clamp((*block)[i], kLowerBounds[i], kUpperBounds[i]);
@@ -256,6 +254,7 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
       held[d * kDirectionParameters + i] = "no slide this way";
     *blocks[d] = prior_blocks[d];
     logs_start[d] = prior_blocks[d];
+    reading[d].read.fill(false);
   }
   std::vector<SegmentJacobian> jacobians;
   std::vector<int> free;  // the columns fitted (then: determined)
@@ -320,9 +319,7 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
       }
     }
     KeepDetermined(held, &free, &covariance);
-    const Block read_error[2] = {{BreakawayMedianError(data, +1), 0, 0, 0},
-                                 {BreakawayMedianError(data, -1), 0, 0, 0}};
-    WidenByDisagreement(logs_start, read_error, prior_blocks, blocks, free, &covariance);
+    WidenByDisagreement(reading, blocks, free, &covariance);
   }
   result.segments = static_cast<int>(data.segments.size());
   double squares = 0;

@@ -8,7 +8,7 @@ namespace pneumaid::friction_internal {
 
 namespace {
 
-// The breakaway forces BreakawayMedian reads: the slides' of `direction`, or
+// The breakaway forces ReadOffLogs reads Fs from: the slides' of `direction`, or
 // with fewer than three those at the stroke ends; empty with fewer than three.
 std::vector<double> Breakaways(const StrokeData& data, int direction) {
   std::vector<double> forces;
@@ -20,25 +20,16 @@ std::vector<double> Breakaways(const StrokeData& data, int direction) {
   return at_ends.size() >= 3 ? at_ends : std::vector<double>{};
 }
 
-}  // namespace
-
-// Median over the slides of `direction` of the force where the rod left its
-// rest (BreakawaySample), a starting point for Fs; without three such
-// slides, the median breakaway force at the stroke ends.
-double BreakawayMedian(const StrokeData& data, int direction, double fallback) {
-  const std::vector<double> forces = Breakaways(data, direction);
-  return forces.empty() ? fallback : Median(forces);
-}
-
-double BreakawayMedianError(const StrokeData& data, int direction) {
-  const std::vector<double> forces = Breakaways(data, direction);
-  if (forces.empty()) return 0;
-  const double median = Median(forces);
+// The standard error of the median of `forces` (not empty) from their
+// robust spread.
+double MedianError(const std::vector<double>& forces, double median) {
   std::vector<double> deviations;
   for (double f : forces) deviations.push_back(std::fabs(f - median));
   // A median's error is sqrt(pi / 2) of a mean's; MAD -> sigma by 1.4826.
   return 1.2533 * 1.4826 * Median(deviations) / std::sqrt(static_cast<double>(forces.size()));
 }
+
+}  // namespace
 
 // (Fd, b) of one direction from its force-balance samples with Fs and vs
 // given: the magnitude Fs e + Fd (1 - e) + b v, e = exp(-(v/vs)^2), is
@@ -80,7 +71,7 @@ double FitSliding(const std::vector<internal::SlideCluster>& clusters, int direc
 // Fd, b, vs of one direction from its force-balance samples with Fs given
 // (the breakaways): the best point of a vs grid (1 mm/s to 0.1 m/s), (Fd, b)
 // solved exactly at each. Leaves `block` as it is with too few samples.
-void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
+bool ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
   const double fs = (*block)[0];
   double best = HUGE_VAL;
   for (int g = 0; g <= 24; ++g) {
@@ -89,6 +80,20 @@ void ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
     const double cost = FitSliding(data.clusters, direction, fs, vs, &fd, &b);
     if (cost < best) best = cost, *block = {fs, fd, b, vs};
   }
+  return best < HUGE_VAL;
+}
+
+LogsReading ReadOffLogs(const StrokeData& data, int direction, const Block& fallback) {
+  LogsReading r;
+  r.value = fallback;
+  const std::vector<double> forces = Breakaways(data, direction);
+  if (!forces.empty()) {
+    r.value[0] = Median(forces);
+    r.error[0] = MedianError(forces, r.value[0]);
+    r.read[0] = true;
+  }
+  r.read[1] = r.read[2] = r.read[3] = ForceBalanceStart(data, direction, &r.value);
+  return r;
 }
 
 }  // namespace pneumaid::friction_internal

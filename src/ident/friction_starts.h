@@ -1,6 +1,7 @@
 // Starting points of the friction fit read off the stroke logs: Fs from the
 // breakaways, Fd, b and vs from the force balance of the smooth slides.
 #pragma once
+#include <array>
 #include <vector>
 
 #include "friction_segments.h"
@@ -8,13 +9,26 @@
 
 namespace pneumaid::friction_internal {
 
-// A starting point for Fs: the median force at breakaway of the slides of
-// `direction` (the stroke ends' breakaways with fewer than three).
-double BreakawayMedian(const StrokeData& data, int direction, double fallback);
+// What the stroke logs tell of one direction's coefficients before any fit:
+// the friction fit's start, and the readings its errors are checked against
+// (friction_covariance.h, WidenByDisagreement).
+struct LogsReading {
+  Block value{};                                  // Fs, Fd, b, vs; the fallback's where not read
+  std::array<bool, kDirectionParameters> read{};  // read off the logs
+  Block error{};  // standard error (Fs: the breakaways' median's); 0: none known
+};
 
-// The standard error of that median from the breakaways' robust spread (0
-// where there is none: the fallback).
-double BreakawayMedianError(const StrokeData& data, int direction);
+// Fs: the median force at breakaway of the slides of `direction` (the stroke
+// ends' breakaways with fewer than three), its error from their robust spread
+// (1.2533 x 1.4826 MAD / sqrt n); then Fd, b and vs from the force balance of
+// the smooth slides at that Fs (ForceBalanceStart); `fallback` where the logs
+// give nothing. The force
+// balance gives no error: its samples are correlated within a slide, and its
+// vs can rest on the Stribeck term's tail alone (slides logged from 2 to 3 vs
+// up: 1 % of the drop there). Not read there, vs took 4 of the sweep's
+// identified coefficients outside 3 errors of the truth and moved three
+// refinements into worse basins (docs/identification.md).
+LogsReading ReadOffLogs(const StrokeData& data, int direction, const Block& fallback);
 
 // (Fd, b) of one direction from its force-balance samples with Fs and vs
 // given (Fd in [0, Fs], b >= 0); the weighted squared misfit, HUGE_VAL (and
@@ -22,9 +36,10 @@ double BreakawayMedianError(const StrokeData& data, int direction);
 double FitSliding(const std::vector<internal::SlideCluster>& clusters, int direction, double fs,
                   double vs, double* fd, double* b);
 
-// Fd, b, vs of one direction from its force-balance samples, Fs given (the
-// breakaways): the best point of a vs grid, (Fd, b) solved exactly at each.
-// Leaves `block` as it is with fewer than kMinSlideSamples samples.
-void ForceBalanceStart(const StrokeData& data, int direction, Block* block);
+// Fd, b, vs of one direction from its force-balance samples with Fs given
+// (the breakaways): the best point of a vs grid, (Fd, b) solved exactly at each.
+// Leaves `block` as it is, and returns false, with fewer than
+// kMinSlideSamples samples.
+bool ForceBalanceStart(const StrokeData& data, int direction, Block* block);
 
 }  // namespace pneumaid::friction_internal

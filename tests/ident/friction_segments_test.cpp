@@ -18,8 +18,8 @@
 namespace pneumaid {
 namespace {
 
-using friction_internal::BreakawayMedian;
 using friction_internal::PrepareStrokes;
+using friction_internal::ReadOffLogs;
 using friction_internal::Segment;
 using friction_internal::StrokeData;
 using friction_internal::StuckBand;
@@ -113,8 +113,8 @@ TEST(FrictionSegmentsTest, TheBreakawayIsReadWhereTheRodLeavesItsRest) {
   const StrokeData data = Prepare(unit, FrictionFitOptions{});
   // Within 15 % (the rod escapes while the force still rises, for a sample
   // or two at 500 Hz: 12.2 N for 10.7).
-  EXPECT_NEAR(BreakawayMedian(data, +1, 0.0), 19.9, 0.15 * 19.9);
-  EXPECT_NEAR(BreakawayMedian(data, -1, 0.0), 10.7, 0.15 * 10.7);
+  EXPECT_NEAR(ReadOffLogs(data, +1, {}).value[0], 19.9, 0.15 * 19.9);
+  EXPECT_NEAR(ReadOffLogs(data, -1, {}).value[0], 10.7, 0.15 * 10.7);
 }
 
 // A forward replay's weights fall with the time since breakaway faster when
