@@ -70,7 +70,8 @@ double FitSliding(const std::vector<internal::SlideCluster>& clusters, int direc
 
 // Fd, b, vs of one direction from its force-balance samples with Fs given
 // (the breakaways): the best point of a vs grid (1 mm/s to 0.1 m/s), (Fd, b)
-// solved exactly at each. Leaves `block` as it is with too few samples.
+// solved exactly at each. Leaves `block` as it is, and returns false, with
+// too few samples.
 bool ForceBalanceStart(const StrokeData& data, int direction, Block* block) {
   const double fs = (*block)[0];
   double best = HUGE_VAL;

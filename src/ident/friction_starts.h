@@ -22,12 +22,14 @@ struct LogsReading {
 // ends' breakaways with fewer than three), its error from their robust spread
 // (1.2533 x 1.4826 MAD / sqrt n); then Fd, b and vs from the force balance of
 // the smooth slides at that Fs (ForceBalanceStart); `fallback` where the logs
-// give nothing. The force
-// balance gives no error: its samples are correlated within a slide, and its
-// vs can rest on the Stribeck term's tail alone (slides logged from 2 to 3 vs
-// up: 1 % of the drop there). Not read there, vs took 4 of the sweep's
-// identified coefficients outside 3 errors of the truth and moved three
-// refinements into worse basins (docs/identification.md).
+// give nothing. A value read is the reading as the logs give it, also where it
+// lies outside the fit's bounds (the fit clamps its start) and also where it
+// equals the fallback. The force balance gives no error: its samples are
+// correlated within a slide, and its vs can rest on the Stribeck term's tail
+// alone (2 % of the drop at 2 vs). Taking vs as not read where no slide
+// reaches below 2 vs put identify's coefficients within 3 errors of the truth
+// at 87 % instead of 91 % on the sweep and moved three refinements into worse
+// basins (docs/identification.md).
 LogsReading ReadOffLogs(const StrokeData& data, int direction, const Block& fallback);
 
 // (Fd, b) of one direction from its force-balance samples with Fs and vs

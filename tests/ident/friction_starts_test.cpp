@@ -83,7 +83,42 @@ TEST(FrictionStartsTest, SlidesAboveTheStribeckRegionGiveTheSlidingFriction) {
   for (int i = 0; i < 4; ++i) EXPECT_TRUE(r.read[i]) << i;
   EXPECT_NEAR(r.value[1], kFd, 0.1 * kFd);
   EXPECT_NEAR(r.value[2], kB, 0.1 * kB);
-  EXPECT_EQ(r.error[1], 0.0);
+}
+
+// Breakaways without smooth slides read Fs alone; slides without breakaways
+// read Fd, b and vs at the fallback's Fs.
+TEST(FrictionStartsTest, BreakawaysAndSlidesAreReadEachOnItsOwn) {
+  StrokeData breakaways;
+  AddBreakaways(+1, &breakaways);
+  const LogsReading fs_only = ReadOffLogs(breakaways, +1, kFallback);
+  EXPECT_TRUE(fs_only.read[0]);
+  EXPECT_NEAR(fs_only.value[0], kFs, 1e-9);
+  for (int i = 1; i < 4; ++i) {
+    EXPECT_FALSE(fs_only.read[i]) << i;
+    EXPECT_EQ(fs_only.value[i], kFallback[i]) << i;
+  }
+  StrokeData slides;
+  slides.clusters.push_back(Slide(+1, 0.5e-3, 0.1, 4));
+  const LogsReading sliding = ReadOffLogs(slides, +1, kFallback);
+  EXPECT_FALSE(sliding.read[0]);
+  EXPECT_EQ(sliding.value[0], kFallback[0]);
+  EXPECT_EQ(sliding.error[0], 0.0);
+  for (int i = 1; i < 4; ++i) EXPECT_TRUE(sliding.read[i]) << i;
+}
+
+// With fewer than three breakaways mid-stroke, Fs is the median of the
+// breakaways at the stroke ends.
+TEST(FrictionStartsTest, FewBreakawaysMidStrokeReadFsAtTheStops) {
+  StrokeData data;
+  friction_internal::Segment one{};
+  one.direction = -1;
+  one.breakaway_force_N = 30.0;  // one mid-stroke breakaway: too few
+  data.segments.push_back(one);
+  data.end_breakaway_N[1] = {8.0, 9.0, 9.5, 10.0, 40.0};
+  const LogsReading r = ReadOffLogs(data, -1, kFallback);
+  EXPECT_TRUE(r.read[0]);
+  EXPECT_DOUBLE_EQ(r.value[0], 9.5);
+  EXPECT_NEAR(r.error[0], 1.2533 * 1.4826 * 0.5 / std::sqrt(5.0), 1e-12);
 }
 
 // A direction without breakaways or slides reads nothing: the fallback, no error.
