@@ -9,6 +9,8 @@
 #include <cmath>
 #include <random>
 
+#include "pneumaid/model/friction.h"
+
 namespace pneumaid {
 namespace {
 
@@ -18,6 +20,11 @@ using friction_internal::ReadOffLogs;
 using friction_internal::StrokeData;
 
 constexpr double kFs = 12.0, kFd = 2.0, kB = 8.0, kVs = 5e-3;
+
+// The model's Stribeck magnitude (model/friction.h) of coefficients `c` at speed `v`.
+double Stribeck(const Block& c, double v) {
+  return StribeckMagnitude(v, MakeStribeckCoefficients<double>(friction_internal::Unpack(c)));
+}
 
 // One smooth slide per speed band: the force balance of a rod sliding at
 // speeds from `slowest` to `fastest` [m/s] in `direction`, the friction the
@@ -29,9 +36,8 @@ internal::SlideCluster Slide(int direction, double slowest, double fastest, unsi
   c.direction = direction;
   for (int i = 0; i < 200; ++i) {
     const double v = slowest * std::pow(fastest / slowest, i / 199.0);
-    const double s = v / kVs;
     c.speed_m_per_s.push_back(v);
-    c.friction_N.push_back(kFd + kB * v + (kFs - kFd) * std::exp(-s * s) + noise(random));
+    c.friction_N.push_back(Stribeck({kFs, kFd, kB, kVs}, v) + noise(random));
     c.weight.push_back(1 / 0.05);
     c.sample.push_back(static_cast<std::size_t>(i));
   }
@@ -46,11 +52,6 @@ void AddBreakaways(int direction, StrokeData* data) {
     s.breakaway_force_N = kFs + 0.1 * (k - 2);
     data->segments.push_back(s);
   }
-}
-
-double Stribeck(const Block& c, double v) {
-  const double s = v / c[3];
-  return c[1] + c[2] * v + (c[0] - c[1]) * std::exp(-s * s);
 }
 
 const Block kFallback = {10.0, 5.0, 5.0, 0.01};
