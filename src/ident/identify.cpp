@@ -87,11 +87,14 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
 
 // Whether `component` is fitted: requested and its kind of experiment
 // logged. Otherwise its parameters (under `prefix`) stay the prior's, with
-// why; InputError when it was asked for by name and the unit has no such log.
+// why (in the report's priors, and as `result`'s reason, which its
+// BriefReport prints); InputError when it was asked for by name and the unit
+// has no such log.
 bool WillFit(Component component, ExperimentKind kind, const std::string& prefix, const Unit& unit,
-             const IdentifyOptions& options, IdentifyReport* report) {
+             const IdentifyOptions& options, IdentifyReport* report, FitResult* result) {
   if (!options.components.count(component)) {
     AddPriorsUnder(prefix, "not requested", report);
+    result->reason = "not requested";
     return false;
   }
   if (HasKind(unit, kind)) return true;
@@ -103,12 +106,14 @@ bool WillFit(Component component, ExperimentKind kind, const std::string& prefix
         "components: " + what + " was asked for, but the unit has no " + log + " to fit");
   }
   AddPriorsUnder(prefix, "no " + log, report);
+  result->reason = "no " + log;
   return false;
 }
 
 void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
                       Parameters* params, IdentifyReport* report) {
-  if (!WillFit(Component::kPipeline, ExperimentKind::kPipeline, "pipeline.", unit, options, report))
+  if (!WillFit(Component::kPipeline, ExperimentKind::kPipeline, "pipeline.", unit, options, report,
+               &report->pipeline))
     return;
   PipelineFitOptions pipeline_options = options.pipeline;
   pipeline_options.initial_delta_per_s = prior.pipeline.delta_per_s;
@@ -126,7 +131,8 @@ void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyO
 
 void IdentifyFriction(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
                       Parameters* params, IdentifyReport* report) {
-  if (!WillFit(Component::kFriction, ExperimentKind::kStroke, "friction.", unit, options, report))
+  if (!WillFit(Component::kFriction, ExperimentKind::kStroke, "friction.", unit, options, report,
+               &report->friction))
     return;
   report->friction = FitFriction(unit, prior.friction, options.friction);
   Record(report->friction, params, report);
@@ -172,7 +178,8 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   // The channels whose noise the fits read through NoiseOf (the valve fit
   // weights its levels by their own residual spread where q is undeclared).
   report->noise_note = EstimatedNoiseNote(unit, {"x", "p1", "p2", "q_in", "q_out"});
-  if (WillFit(Component::kValve, ExperimentKind::kValve, "valve.", unit, options, report)) {
+  if (WillFit(Component::kValve, ExperimentKind::kValve, "valve.", unit, options, report,
+              &report->valve)) {
     report->valve = FitValve(unit, prior.valve, options.valve);
     Record(report->valve, &params, report);
   }

@@ -317,7 +317,9 @@ PipelineFitResult FitPipeline(const Unit& unit, const PipelineFitOptions& option
 std::string PipelineFitResult::BriefReport() const {
   std::ostringstream out;
   char line[200];
-  out << "Pipeline delta fit: " << tubes.size() << " tube logs, " << ToString(status) << "\n";
+  out << "Pipeline delta fit: " << tubes.size() << " tube logs, " << ToString(status);
+  if (tubes.empty() && !reason.empty()) out << " (" << reason << ")";
+  out << "\n";
   for (const auto& tube : tubes) {
     if (!tube.has_values()) {
       out << "  " << tube.experiment << ": not fitted (" << tube.reason << ")\n";

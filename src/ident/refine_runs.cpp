@@ -47,7 +47,10 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
     const bool is_kind = name == "stroke" || name == "validation";
     if (!matched && (must_match || !is_kind)) {
       throw InputError(spec.source, 0, 0,
-                       "no experiment or kind '" + name + "' in " + unit.manifest_path());
+                       is_kind ? "fit: " + unit.manifest_path() + " has no " + name +
+                                     " experiment: the refinement has no run to fit"
+                               : "fit: no experiment '" + name + "' (an id or a kind) in " +
+                                     unit.manifest_path());
     }
   }
   return chosen;

@@ -414,6 +414,10 @@ std::string ValveFitResult::BriefReport() const {
   const auto nodes = std::count_if(plateaus.begin(), plateaus.end(), [](const ValvePlateau& p) {
     return p.support_half_width_V > 0;
   });
+  if (!has_values() && plateaus.empty()) {  // not attempted, or no valve log read
+    out << "Valve K_vp fit: " << ToString(status) << " (" << reason << ")\n";
+    return out.str();
+  }
   out << "Valve K_vp fit: " << plateaus.size() - nodes << " plateaus";
   if (nodes > 0) out << ", " << nodes << " nodes of a continuous command";
   out << "\n";

@@ -60,6 +60,16 @@ TEST(IdentifyTest, ComponentsWithoutDataAreRefusedWhenAskedForAndPriorsOtherwise
   EXPECT_TRUE(Lists(report.priors, "friction.positive.Fs (no stroke experiment)"));
   // The unit logs a valve test: the valve is the prior's because only friction was asked for.
   EXPECT_TRUE(Lists(report.priors, "valve.increasing.a (not requested)"));
+  // The report says why in one line per component not fitted (it said "not
+  // fitted ()" and listed the valve's branches and no plateaus).
+  const std::string brief = report.BriefReport();
+  EXPECT_NE(brief.find("Friction fit: not fitted (no stroke experiment)\n"), std::string::npos)
+      << brief;
+  EXPECT_NE(brief.find("Valve K_vp fit: not fitted (not requested)\n"), std::string::npos) << brief;
+  EXPECT_NE(brief.find("Pipeline delta fit: 0 tube logs, not fitted (not requested)\n"),
+            std::string::npos)
+      << brief;
+  EXPECT_EQ(brief.find("()"), std::string::npos) << brief;
   // No confident number from nothing: a prior carries no standard error.
   EXPECT_EQ(without_strokes.uncertainty.count("friction.positive.Fs"), 0u);
   options.components_explicit = true;
@@ -70,6 +80,8 @@ TEST(IdentifyTest, ComponentsWithoutDataAreRefusedWhenAskedForAndPriorsOtherwise
   options.components_explicit = false;  // by default: the prior, reported as such
   const Parameters p = Identify(no_valve, defaults, options, &report);
   EXPECT_TRUE(Lists(report.priors, "valve.increasing.a (no valve experiment)"));
+  EXPECT_NE(report.BriefReport().find("Valve K_vp fit: not fitted (no valve experiment)\n"),
+            std::string::npos);
   EXPECT_EQ(p.valve.increasing.a, defaults.valve.increasing.a);
 }
 

@@ -432,6 +432,18 @@ TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   spec = TwoParameters();
   spec.fit = {"valve"};  // not simulable, and not present
   EXPECT_THROW(Refine(Parameters{}, *unit_, spec, RefineOptions{}), InputError);
+  // A kind the unit does not log: the message says that there is no run.
+  Unit no_strokes = *unit_;
+  no_strokes.experiments.clear();
+  spec = TwoParameters();
+  spec.fit = {"stroke"};
+  try {
+    Refine(Parameters{}, no_strokes, spec, RefineOptions{});
+    ADD_FAILURE() << "a unit without stroke logs was refined on its strokes";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("has no stroke experiment"), std::string::npos)
+        << error.what();
+  }
   spec = TwoParameters();
   spec.hold_out = {"stroke-100"};  // both fitted and held out
   EXPECT_THROW(Refine(Parameters{}, *unit_, spec, RefineOptions{}), InputError);
