@@ -7,6 +7,7 @@
 #include <numeric>
 #include <tuple>
 
+#include "meter_lag.h"
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/model/load.h"
 #include "uniform_clock.h"
@@ -356,8 +357,15 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
                           double sigma_x_m, const StrokeSelection& selection,
                           const std::array<bool, 2>& from_stops) {
   const RigConstants& rig = unit.manifest.rig;
-  const double force_sigma_N = std::hypot(NoiseSigma(unit, "p1") * rig.area_1_m2(),
-                                          NoiseSigma(unit, "p2") * rig.area_2_m2());
+  // The force's noise: the pressures', each grown by the inverse of its
+  // declared lag at the log's sampling interval (PlanLagInverse).
+  const auto force_sigma_N = [&unit, &rig](double period_s) {
+    const auto gain = [&](const char* column) {
+      return internal::PlanLagInverse(period_s, unit.manifest.DeclaredTau(column, 0.0)).noise_gain;
+    };
+    return std::hypot(NoiseSigma(unit, "p1") * rig.area_1_m2() * gain("p1"),
+                      NoiseSigma(unit, "p2") * rig.area_2_m2() * gain("p2"));
+  };
   const double weight_N =
       rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
   const auto selected = [&selection](const Experiment& e) {
@@ -387,6 +395,11 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
       data.skipped += logged.entry.id + " (too few samples) ";
       continue;
     }
+    // A lag the manifest declares for a pressure the replays read: undone.
+    if (auto undone = internal::WithLagsUndone(*log, unit.manifest, {"p1", "p2"})) {
+      data.resampled.push_back(std::move(undone));
+      log = data.resampled.back().get();
+    }
     const Experiment& e = *log;
     const auto &p1 = e.column("p1"), &p2 = e.column("p2");
     std::vector<double> force(p1.size());
@@ -404,7 +417,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
     data.experiments.push_back(&e);
-    const double drift_m = force_sigma_N * period * period / rig.load_mass_kg;
+    const double drift_m = force_sigma_N(period) * period * period / rig.load_mass_kg;
     const std::size_t first_segment = data.segments.size();
     const StrokeLog stroke_log{data.force_N.back(),
                                data.position_m.back(),
@@ -428,7 +441,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     sampling.period_s = period;
     sampling.mass_kg = rig.load_mass_kg;
     sampling.sigma_x_m = sigma_x_m;
-    sampling.sigma_force_N = std::max(force_sigma_N, 1e-3);
+    sampling.sigma_force_N = std::max(force_sigma_N(period), 1e-3);
     sampling.half_stroke_m = 0.5 * rig.stroke_m;
     sampling.end_zone_m = options.end_margin_m + 4 * sigma_x_m;
     sampling.window_s = options.smoothing_window_s;

@@ -78,7 +78,9 @@ using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
 struct StrokeData {
   std::vector<std::vector<double>> force_N, position_m;
   std::vector<const Experiment*> experiments;  // the log of each
-  // Logs not sampled uniformly, read on a uniform clock (ResampledUniformly).
+  // Logs read otherwise than written: on a uniform clock when not sampled
+  // uniformly (ResampledUniformly), with the declared lags of p1 and p2
+  // undone (WithLagsUndone).
   std::vector<std::shared_ptr<const Experiment>> resampled;
   std::vector<Segment> segments;
   std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers
