@@ -357,8 +357,12 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
                           double sigma_x_m, const StrokeSelection& selection,
                           const std::array<bool, 2>& from_stops) {
   const RigConstants& rig = unit.manifest.rig;
-  // The force's noise: the pressures', each grown by the inverse of its
-  // declared lag at the log's sampling interval (PlanLagInverse).
+  // The force's noise per sample: the pressures', each grown by the inverse
+  // of its declared lag at the log's sampling interval (PlanLagInverse). Its
+  // drift over a slide is the reading's: the inverse passes a constant as it
+  // is, and its sum over many samples keeps the reading's noise.
+  const double reading_sigma_N = std::hypot(NoiseSigma(unit, "p1") * rig.area_1_m2(),
+                                            NoiseSigma(unit, "p2") * rig.area_2_m2());
   const auto force_sigma_N = [&unit, &rig](double period_s) {
     const auto gain = [&](const char* column) {
       return internal::PlanLagInverse(period_s, unit.manifest.DeclaredTau(column, 0.0)).noise_gain;
@@ -417,7 +421,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
     data.experiments.push_back(&e);
-    const double drift_m = force_sigma_N(period) * period * period / rig.load_mass_kg;
+    const double drift_m = reading_sigma_N * period * period / rig.load_mass_kg;
     const std::size_t first_segment = data.segments.size();
     const StrokeLog stroke_log{data.force_N.back(),
                                data.position_m.back(),

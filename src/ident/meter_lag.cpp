@@ -10,24 +10,30 @@ LagInverse PlanLagInverse(double period_s, double tau_s) {
   LagInverse plan;
   if (!(tau_s > 0) || !(period_s > 0)) return plan;
   const double keep = std::exp(-period_s / tau_s);
-  const double exact_gain = std::sqrt(1 + keep * keep) / (1 - keep);
-  // The mean of m successive inverse values telescopes to a difference over
-  // m samples: its noise gain is about the exact one's over m.
-  plan.samples = std::max(1, static_cast<int>(std::ceil(exact_gain / kMaxLagNoiseGain)));
-  plan.noise_gain = std::max(1.0, exact_gain / plan.samples);
+  const double exact = std::sqrt(1 + keep * keep) / -std::expm1(-period_s / tau_s);
+  const auto gain = [exact](int m) { return std::sqrt(exact * exact + m - 1) / m; };
+  int m = 1;
+  // At most a mean over the whole lag's worth of samples and then some: the
+  // gain falls below 1.5 by m = 2 G, so the loop ends; the cap guards a lag
+  // absurdly longer than the sampling interval.
+  while (gain(m) > kMaxLagNoiseGain && m < 1000001) m += 2;
+  plan.samples = m;
+  plan.noise_gain = std::max(1.0, gain(m));
   return plan;
 }
 
 std::vector<double> LagUndone(const std::vector<double>& t_s, const std::vector<double>& reading,
                               double tau_s) {
-  const std::size_t n = std::min(t_s.size(), reading.size());
-  if (!(tau_s > 0) || n < 2) return reading;
+  const std::size_t n = reading.size();
+  if (!(tau_s > 0) || n < 2 || t_s.size() != n) return reading;
   // The exact inverse: y[i] = k y[i-1] + (1 - k) u[i-1] (the input held
   // between samples), so u[i-1] = (y[i] - k y[i-1]) / (1 - k).
   std::vector<double> exact(n);
   for (std::size_t i = 1; i < n; ++i) {
-    const double keep = std::exp(-(t_s[i] - t_s[i - 1]) / tau_s);
-    exact[i - 1] = (reading[i] - keep * reading[i - 1]) / (1 - keep);
+    const double dt = t_s[i] - t_s[i - 1];
+    exact[i - 1] =
+        dt > 0 ? (reading[i] - std::exp(-dt / tau_s) * reading[i - 1]) / -std::expm1(-dt / tau_s)
+               : reading[i - 1];
   }
   exact[n - 1] = exact[n - 2];
   std::vector<double> intervals(n - 1);
@@ -35,15 +41,17 @@ std::vector<double> LagUndone(const std::vector<double>& t_s, const std::vector<
   std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
   const int m = PlanLagInverse(intervals[intervals.size() / 2], tau_s).samples;
   if (m <= 1) return exact;
-  // A moving mean of m samples centred on each (running sums).
-  std::vector<double> sum(n + 1, 0.0);
-  for (std::size_t i = 0; i < n; ++i) sum[i + 1] = sum[i] + exact[i];
+  // A centred mean of m (odd) samples, narrower but centred at the ends;
+  // the last sample, which no later reading inverts, is the one before's.
+  std::vector<double> sum(n, 0.0);
+  for (std::size_t i = 0; i + 1 < n; ++i) sum[i + 1] = sum[i] + exact[i];
   std::vector<double> out(n);
-  const std::size_t before = static_cast<std::size_t>(m - 1) / 2, after = m / 2;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t lo = i >= before ? i - before : 0, hi = std::min(n - 1, i + after);
-    out[i] = (sum[hi + 1] - sum[lo]) / static_cast<double>(hi - lo + 1);
+  const std::size_t half = static_cast<std::size_t>(m / 2);
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const std::size_t h = std::min({half, i, n - 2 - i});
+    out[i] = (sum[i + h + 1] - sum[i - h]) / static_cast<double>(2 * h + 1);
   }
+  out[n - 1] = out[n - 2];
   return out;
 }
 
