@@ -100,10 +100,14 @@ void StaircasePlateaus(const Experiment& e, const Levels& levels,
       "q", std::sqrt(squares / std::max<double>(1.0, static_cast<double>(rows) - m)));
   const Eigen::MatrixXd inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
   double previous_u = 0.0;  // the level before, for the branch
+  bool decreasing = false;
   for (std::size_t k = 0; k < m; ++k) {
     const auto [begin, end] = levels[k];
     const double level = Mean(u, begin, end);
-    const bool decreasing = level < previous_u;
+    // A level within half the threshold of the one before (a held command
+    // the logger's noise split) stays on its branch.
+    if (std::fabs(level - previous_u) > 0.5 * options.level_change_V)
+      decreasing = level < previous_u;
     previous_u = level;
     if (level <= 0) continue;  // a closed valve says nothing about K_vp
     if (used_per_level[k] < options.min_plateau_samples) continue;

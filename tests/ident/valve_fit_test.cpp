@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <random>
 
 #include "../synth/synth_test_util.h"
 #include "kvp_test_util.h"
@@ -194,6 +196,43 @@ TEST(ValveFitTest, ShortHoldsAtALowRateAreReadThroughTheMetersLag) {
   const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
   std::cout << fit.BriefReport();
   EXPECT_EQ(fit.plateaus.size(), 39u);
+  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
+    EXPECT_LT(WorstKvpError(fitted->params, *real, 0.70, 0.75), 0.01);
+  }
+}
+
+// A rig that logs the command it measured, not the one it set: 2 mV of noise
+// on u (seeded) over a staircase held 0.3 s at 2 kHz. Levels compared with
+// their first sample split one time in four, and the second half, a hair
+// below the first, was read as the decreasing branch: on a sweep unit 61
+// plateaus for 49, the increasing branch's cost 6.6e4 for 16 and u_sat 0.94
+// for 0.63. Read as held levels (two samples in a row off the level's mean)
+// the staircase keeps its 39 plateaus (and the closed valve's two holds, which
+// the noise clipped at 0 V opens by a millivolt: flow nil, as K_vp there) and
+// each plateau its branch; compared with the first sample, 52 plateaus here,
+// 4 of them on the wrong branch.
+TEST(ValveFitTest, ALoggedCommandWithNoiseIsReadAsItsHeldLevels) {
+  Parameters truth;
+  Unit unit = SyntheticValveUnit(truth, 17, 0.05, 0.3, 2000);
+  std::mt19937 rng(17);
+  std::normal_distribution<double> noise(0.0, 2e-3);
+  for (Experiment& e : unit.experiments) {
+    for (double& u : e.columns.at("u")) u = std::clamp(u + noise(rng), 0.0, 1.0);
+  }
+  const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  EXPECT_LE(fit.plateaus.size(), 41u);
+  // The rising half's plateaus (the staircase is up to 1 V, then down) are
+  // the increasing branch's, the falling half's the decreasing one's.
+  bool passed_top = false;
+  int wrong_branch = 0;
+  for (const ValvePlateau& p : fit.plateaus) {
+    passed_top = passed_top || p.u_V > 0.99;
+    wrong_branch += p.u_V > 0.01 && p.u_V < 0.99 && p.decreasing != passed_top;
+  }
+  EXPECT_EQ(wrong_branch, 0);
   for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
                                      std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
     ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
