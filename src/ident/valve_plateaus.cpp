@@ -208,9 +208,10 @@ void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& ori
   std::vector<Contribution> x(n);
   std::vector<double> support(nodes, 0.0);
   BranchLatch latch(SimulationOptions{}.hysteresis_threshold_V);  // as the simulator latches
+  const std::vector<double> as_set = internal::CommandAsSet(u);   // not its logged noise
   double scale = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    latch.Update(u[i]);
+    latch.Update(as_set[i]);
     const double opening = std::clamp(u[i], 0.0, 1.0);
     if (opening <= 0 || !(p_up[i] > 0)) continue;
     const double per_kvp = orifice.flow_scale * p_up[i] * FlowShape(p_down[i] / p_up[i], orifice);

@@ -240,6 +240,36 @@ TEST(ValveFitTest, ALoggedCommandWithNoiseIsReadAsItsHeldLevels) {
   }
 }
 
+// The same for a ramp (0 -> 1 -> 0 V over 2 x 5 s at 2 kHz, a valve
+// saturating at 0.62 V): the branch is latched on the command as set, its
+// logged noise averaged out (CommandAsSet). Latched on each logged sample, a
+// sweep unit's decreasing branch fitted at a cost of 2.8e4 for 91 with u_sat
+// 0.94 for 0.62.
+TEST(ValveFitTest, ALoggedRampWithNoiseIsLatchedOnTheCommandAsSet) {
+  Parameters truth;
+  truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.62;
+  Unit unit = SyntheticValveUnit(truth, 18, 0.05, 0.3, 2000, 0, 5.0);
+  std::mt19937 rng(18);
+  std::normal_distribution<double> noise(0.0, 2e-3);
+  for (Experiment& e : unit.experiments) {
+    for (double& u : e.columns.at("u")) u = std::clamp(u + noise(rng), 0.0, 1.0);
+  }
+  ValveParams prior = Perturbed(truth.valve);
+  prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
+  const ValveFitResult fit = FitValve(unit, prior, ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  ExpectSaturationInGap(fit, truth.valve, 0.61, 0.63);
+  // Each branch's nodes fitted to about their noise (latched on the logged
+  // samples: reduced chi-squares of 474 and 61 here).
+  for (const bool decreasing : {false, true}) {
+    const BranchFit& branch = decreasing ? fit.decreasing : fit.increasing;
+    const auto nodes =
+        std::count_if(fit.plateaus.begin(), fit.plateaus.end(),
+                      [&](const ValvePlateau& p) { return p.decreasing == decreasing; });
+    EXPECT_LT(2 * branch.final_cost / static_cast<double>(nodes), 5.0) << decreasing;
+  }
+}
+
 // A staircase that stops below saturation shows none: u_sat stays the prior's
 // and the report says why.
 TEST(ValveFitTest, AStaircaseWithoutSaturationKeepsThePriorsSaturation) {
