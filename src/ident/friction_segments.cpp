@@ -361,14 +361,14 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
   // of its declared lag at the log's sampling interval (PlanLagInverse). Its
   // drift over a slide is the reading's: the inverse passes a constant as it
   // is, and its sum over many samples keeps the reading's noise.
-  const double reading_sigma_N = std::hypot(NoiseSigma(unit, "p1") * rig.area_1_m2(),
-                                            NoiseSigma(unit, "p2") * rig.area_2_m2());
-  const auto force_sigma_N = [&unit, &rig](double period_s) {
+  const double p1_sigma_N = NoiseSigma(unit, "p1") * rig.area_1_m2();
+  const double p2_sigma_N = NoiseSigma(unit, "p2") * rig.area_2_m2();
+  const double reading_sigma_N = std::hypot(p1_sigma_N, p2_sigma_N);
+  const auto force_sigma_N = [&](double period_s) {
     const auto gain = [&](const char* column) {
       return internal::PlanLagInverse(period_s, unit.manifest.DeclaredTau(column, 0.0)).noise_gain;
     };
-    return std::hypot(NoiseSigma(unit, "p1") * rig.area_1_m2() * gain("p1"),
-                      NoiseSigma(unit, "p2") * rig.area_2_m2() * gain("p2"));
+    return std::hypot(p1_sigma_N * gain("p1"), p2_sigma_N * gain("p2"));
   };
   const double weight_N =
       rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;

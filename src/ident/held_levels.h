@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "centred_mean.h"
+
 namespace pneumaid::internal {
 
 // [begin, end) sample ranges of the runs whose command stays within
@@ -59,14 +61,7 @@ inline std::vector<double> CommandAsSet(const std::vector<double>& u) {
   const double ratio = sigma_V / 5e-4;
   const std::size_t half =
       std::min<std::size_t>(static_cast<std::size_t>(std::ceil(0.5 * ratio * ratio)), u.size() / 2);
-  std::vector<double> sum(u.size() + 1, 0.0);
-  for (std::size_t i = 0; i < u.size(); ++i) sum[i + 1] = sum[i] + u[i];
-  std::vector<double> out(u.size());
-  for (std::size_t i = 0; i < u.size(); ++i) {
-    const std::size_t h = std::min({half, i, u.size() - 1 - i});
-    out[i] = (sum[i + h + 1] - sum[i - h]) / static_cast<double>(2 * h + 1);
-  }
-  return out;
+  return CentredMean(u, half, u.size());
 }
 
 }  // namespace pneumaid::internal

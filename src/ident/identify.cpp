@@ -92,11 +92,12 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
 // has no such log.
 bool WillFit(Component component, ExperimentKind kind, const std::string& prefix, const Unit& unit,
              const IdentifyOptions& options, IdentifyReport* report, FitResult* result) {
-  if (!options.components.count(component)) {
-    AddPriorsUnder(prefix, "not requested", report);
-    result->reason = "not requested";
+  const auto held_at_prior = [&](const std::string& why) {
+    AddPriorsUnder(prefix, why, report);
+    result->reason = why;
     return false;
-  }
+  };
+  if (!options.components.count(component)) return held_at_prior("not requested");
   if (HasKind(unit, kind)) return true;
   const std::string what = std::string(ToString(component));
   const std::string log = std::string(ToString(kind)) + " experiment";
@@ -105,9 +106,7 @@ bool WillFit(Component component, ExperimentKind kind, const std::string& prefix
         unit.manifest_path(), 0, 0,
         "components: " + what + " was asked for, but the unit has no " + log + " to fit");
   }
-  AddPriorsUnder(prefix, "no " + log, report);
-  result->reason = "no " + log;
-  return false;
+  return held_at_prior("no " + log);
 }
 
 void IdentifyPipeline(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <cstddef>
 
+#include "centred_mean.h"
+#include "uniform_clock.h"
+
 namespace pneumaid::internal {
 
 LagInverse PlanLagInverse(double period_s, double tau_s) {
@@ -36,22 +39,11 @@ std::vector<double> LagUndone(const std::vector<double>& t_s, const std::vector<
                : reading[i - 1];
   }
   exact[n - 1] = exact[n - 2];
-  std::vector<double> intervals(n - 1);
-  for (std::size_t i = 1; i < n; ++i) intervals[i - 1] = t_s[i] - t_s[i - 1];
-  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
-  const int m = PlanLagInverse(intervals[intervals.size() / 2], tau_s).samples;
+  const int m = PlanLagInverse(MedianInterval(t_s), tau_s).samples;
   if (m <= 1) return exact;
-  // A centred mean of m (odd) samples, narrower but centred at the ends;
-  // the last sample, which no later reading inverts, is the one before's.
-  std::vector<double> sum(n, 0.0);
-  for (std::size_t i = 0; i + 1 < n; ++i) sum[i + 1] = sum[i] + exact[i];
-  std::vector<double> out(n);
-  const std::size_t half = static_cast<std::size_t>(m / 2);
-  for (std::size_t i = 0; i + 1 < n; ++i) {
-    const std::size_t h = std::min({half, i, n - 2 - i});
-    out[i] = (sum[i + h + 1] - sum[i - h]) / static_cast<double>(2 * h + 1);
-  }
-  out[n - 1] = out[n - 2];
+  // The last sample, which no later reading inverts, is the one before's.
+  std::vector<double> out = CentredMean(exact, static_cast<std::size_t>(m / 2), n - 1);
+  out.push_back(out.back());
   return out;
 }
 

@@ -14,6 +14,14 @@ double UniformPeriod(const std::vector<double>& t) {
   return period;
 }
 
+double MedianInterval(const std::vector<double>& t) {
+  if (t.size() < 2) return 0;
+  std::vector<double> intervals(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];
+  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+  return intervals[intervals.size() / 2];
+}
+
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {
   const auto& t = e.column("t");
   auto out = std::make_shared<Experiment>();
@@ -22,10 +30,7 @@ std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {
   out->sha256 = e.sha256;
   out->time_origin_s = e.time_origin_s;
   if (t.size() < 2) return out;
-  std::vector<double> intervals(t.size() - 1);
-  for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];
-  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
-  const double period = intervals[intervals.size() / 2];
+  const double period = MedianInterval(t);
   const auto samples =
       static_cast<std::size_t>(std::floor((t.back() - t.front()) / period + 1e-9)) + 1;
   std::vector<double> clock(samples);

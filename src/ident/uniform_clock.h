@@ -14,6 +14,9 @@ namespace pneumaid::internal {
 // mean, else 0.
 double UniformPeriod(const std::vector<double>& t);
 
+// The median of t's intervals (0 with fewer than two samples).
+double MedianInterval(const std::vector<double>& t);
+
 // `e` on a uniform clock at its median sampling interval: each column
 // interpolated linearly between its samples, the command (`u`) held from
 // each sample.

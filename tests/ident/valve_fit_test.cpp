@@ -203,6 +203,16 @@ TEST(ValveFitTest, ShortHoldsAtALowRateAreReadThroughTheMetersLag) {
   }
 }
 
+// 2 mV of Gaussian noise (seeded) on every log's command, clipped to the
+// valve's [0, 1] V: a rig that logs the command it measured.
+void AddCommandNoise(std::uint64_t seed, Unit* unit) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 2e-3);
+  for (Experiment& e : unit->experiments) {
+    for (double& u : e.columns.at("u")) u = std::clamp(u + noise(rng), 0.0, 1.0);
+  }
+}
+
 // A rig that logs the command it measured, not the one it set: 2 mV of noise
 // on u (seeded) over a staircase held 0.3 s at 2 kHz. Levels compared with
 // their first sample split one time in four, and the second half, a hair
@@ -216,11 +226,7 @@ TEST(ValveFitTest, ShortHoldsAtALowRateAreReadThroughTheMetersLag) {
 TEST(ValveFitTest, ALoggedCommandWithNoiseIsReadAsItsHeldLevels) {
   Parameters truth;
   Unit unit = SyntheticValveUnit(truth, 17, 0.05, 0.3, 2000);
-  std::mt19937 rng(17);
-  std::normal_distribution<double> noise(0.0, 2e-3);
-  for (Experiment& e : unit.experiments) {
-    for (double& u : e.columns.at("u")) u = std::clamp(u + noise(rng), 0.0, 1.0);
-  }
+  AddCommandNoise(17, &unit);
   const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
   std::cout << fit.BriefReport();
   EXPECT_LE(fit.plateaus.size(), 41u);
@@ -249,11 +255,7 @@ TEST(ValveFitTest, ALoggedRampWithNoiseIsLatchedOnTheCommandAsSet) {
   Parameters truth;
   truth.valve.increasing.u_sat_V = truth.valve.decreasing.u_sat_V = 0.62;
   Unit unit = SyntheticValveUnit(truth, 18, 0.05, 0.3, 2000, 0, 5.0);
-  std::mt19937 rng(18);
-  std::normal_distribution<double> noise(0.0, 2e-3);
-  for (Experiment& e : unit.experiments) {
-    for (double& u : e.columns.at("u")) u = std::clamp(u + noise(rng), 0.0, 1.0);
-  }
+  AddCommandNoise(18, &unit);
   ValveParams prior = Perturbed(truth.valve);
   prior.increasing.u_sat_V = prior.decreasing.u_sat_V = 0.75;
   const ValveFitResult fit = FitValve(unit, prior, ValveFitOptions{});
