@@ -346,9 +346,7 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
 
 FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
                               const FrictionFitOptions& options) {
-  const double sigma_m = PositionNoise(unit);
-  const double band = StuckBand(options, sigma_m);
-  StrokeData data = PrepareStrokes(unit, options, band, sigma_m);
+  StrokeData data = PrepareStrokes(unit, options);
   // A breakaway from a stop is replayed through the fast pressure transient
   // of a chamber near its dead volume (FrictionFitOptions::end_slide_m):
   // only a direction with too few slides that break away mid-stroke
@@ -359,7 +357,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     return options.end_slide_m > 0 && data.stop_departures[d] > 0;
   };
   if ((from_stops[0] && departs(0)) || (from_stops[1] && departs(1))) {
-    data = PrepareStrokes(unit, options, band, sigma_m, {}, from_stops);
+    data = PrepareStrokes(unit, options, {}, from_stops);
   }
   FrictionFitResult result = FitStrokes(unit, data, prior, options);
   // ... and one whose Fs its slides mid-stroke do not determine, fitted again.
@@ -371,7 +369,7 @@ FrictionFitResult FitFriction(const Unit& unit, const FrictionParams& prior,
     if (!from_stops[d] && departs(d) && undetermined) from_stops[d] = again_needed = true;
   }
   if (!again_needed) return result;
-  const StrokeData with_stops = PrepareStrokes(unit, options, band, sigma_m, {}, from_stops);
+  const StrokeData with_stops = PrepareStrokes(unit, options, {}, from_stops);
   FrictionFitResult again = FitStrokes(unit, with_stops, prior, options);
   // Kept unless it failed or ran out of iterations where the first did not.
   const bool first_converged = result.status == FitStatus::kConverged;

@@ -48,14 +48,12 @@ SlideFrictionStart FrictionFromSlides(const Unit& unit, const std::vector<std::s
     out.why = "no runs";
     return out;
   }
-  const double sigma_m = PositionNoise(unit);
   StrokeSelection selection;
   selection.runs = runs;
   selection.slides_under_segments = true;
   FrictionFitOptions with_slides = options;
   with_slides.force_balance = true;
-  const StrokeData data =
-      PrepareStrokes(unit, with_slides, StuckBand(options, sigma_m), sigma_m, selection);
+  const StrokeData data = PrepareStrokes(unit, with_slides, selection);
   const double p_atm = unit.manifest.rig.atmospheric_pressure_Pa;
   std::vector<PressureSlideResidual> slides;
   int samples[2] = {0, 0};

@@ -353,23 +353,20 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
 
 double PositionNoise(const Unit& unit) { return std::max(NoiseSigma(unit, "x"), 1e-7); }
 
-StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m, const StrokeSelection& selection,
-                          const std::array<bool, 2>& from_stops) {
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
+                          const StrokeSelection& selection, const std::array<bool, 2>& from_stops) {
   const RigConstants& rig = unit.manifest.rig;
-  // The force's noise per sample: the pressures', each grown by the inverse
-  // of its declared lag at the log's sampling interval (PlanLagInverse). Its
-  // drift over a slide is the reading's: the inverse passes a constant as it
-  // is, and its sum over many samples keeps the reading's noise.
+  // A reading's noise per sample at a log's sampling interval: grown by the
+  // inverse of its declared lag (PlanLagInverse). A drift over a slide is the
+  // reading's: the inverse passes a constant as it is, and its sum over many
+  // samples keeps the reading's noise.
+  const auto gain = [&](const char* column, double period_s) {
+    return internal::PlanLagInverse(period_s, unit.manifest.DeclaredTau(column, 0.0)).noise_gain;
+  };
+  const double reading_sigma_x_m = PositionNoise(unit);
   const double p1_sigma_N = NoiseSigma(unit, "p1") * rig.area_1_m2();
   const double p2_sigma_N = NoiseSigma(unit, "p2") * rig.area_2_m2();
   const double reading_sigma_N = std::hypot(p1_sigma_N, p2_sigma_N);
-  const auto force_sigma_N = [&](double period_s) {
-    const auto gain = [&](const char* column) {
-      return internal::PlanLagInverse(period_s, unit.manifest.DeclaredTau(column, 0.0)).noise_gain;
-    };
-    return std::hypot(p1_sigma_N * gain("p1"), p2_sigma_N * gain("p2"));
-  };
   const double weight_N =
       rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
   const auto selected = [&selection](const Experiment& e) {
@@ -399,12 +396,14 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
       data.skipped += logged.entry.id + " (too few samples) ";
       continue;
     }
-    // A lag the manifest declares for a pressure the replays read: undone.
-    if (auto undone = internal::WithLagsUndone(*log, unit.manifest, {"p1", "p2"})) {
+    // A lag the manifest declares for a reading the replays read: undone.
+    if (auto undone = internal::WithLagsUndone(*log, unit.manifest, {"x", "p1", "p2"})) {
       data.resampled.push_back(std::move(undone));
       log = data.resampled.back().get();
     }
     const Experiment& e = *log;
+    const double sigma_x_m = reading_sigma_x_m * gain("x", period);
+    const double band = StuckBand(options, sigma_x_m);
     const auto &p1 = e.column("p1"), &p2 = e.column("p2");
     std::vector<double> force(p1.size());
     for (std::size_t i = 0; i < force.size(); ++i) {
@@ -445,7 +444,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, d
     sampling.period_s = period;
     sampling.mass_kg = rig.load_mass_kg;
     sampling.sigma_x_m = sigma_x_m;
-    sampling.sigma_force_N = std::max(force_sigma_N(period), 1e-3);
+    sampling.sigma_force_N = std::max(
+        std::hypot(p1_sigma_N * gain("p1", period), p2_sigma_N * gain("p2", period)), 1e-3);
     sampling.half_stroke_m = 0.5 * rig.stroke_m;
     sampling.end_zone_m = options.end_margin_m + 4 * sigma_x_m;
     sampling.window_s = options.smoothing_window_s;
@@ -477,13 +477,11 @@ namespace pneumaid {
 std::vector<FrictionMapSample> FrictionVelocityMap(const Unit& unit,
                                                    const FrictionFitOptions& options) {
   using namespace friction_internal;
-  const double sigma_m = PositionNoise(unit);
   FrictionFitOptions with_slides = options;
   with_slides.force_balance = true;
   StrokeSelection every_slide;
   every_slide.slides_under_segments = true;
-  const StrokeData data =
-      PrepareStrokes(unit, with_slides, StuckBand(options, sigma_m), sigma_m, every_slide);
+  const StrokeData data = PrepareStrokes(unit, with_slides, every_slide);
   std::vector<FrictionMapSample> map;
   for (const internal::SlideCluster& c : data.clusters) {
     for (std::size_t i = 0; i < c.speed_m_per_s.size(); ++i)

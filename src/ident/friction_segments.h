@@ -121,11 +121,13 @@ struct StrokeSelection {
 
 // Per log its driving force and position, the replay segments cut from them
 // and the force-balance slides no segment covers (`SlideCluster::log` indexes
-// `experiments`).
+// `experiments`). Declared lags of x, p1 and p2 are undone (meter_lag.h); the
+// position noise (PositionNoise, grown by the lag inverse's gain at the log's
+// interval) sets each log's StuckBand, end zones and replay weights.
 // Slides that leave an end stop are replayed in the directions `from_stops`
 // names (positive first; FrictionFitOptions::end_slide_m > 0).
-StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options, double band,
-                          double sigma_x_m, const StrokeSelection& selection = {},
+StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
+                          const StrokeSelection& selection = {},
                           const std::array<bool, 2>& from_stops = {false, false});
 
 // Replayed segments and force-balance slides of one direction.

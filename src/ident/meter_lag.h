@@ -1,8 +1,10 @@
 // Logs read through the declared meter lags undone: the friction fit drives
-// its replays with the logged pressures and reads breakaways off them, so an
-// instrument's lag (the manifest's sensors: tau) would pass for friction (a
-// 2 ms lag on both pressures of a 0.15 kg rod at 1 kHz took its positive and
-// negative Fs 12 and 24 % low). Everything that reads the strokes through
+// its replays with the logged pressures, reads breakaways off them and
+// compares the replayed rod with the logged position, so an instrument's lag
+// (the manifest's sensors: tau) would pass for friction (a 2 ms lag on both
+// pressures of a 0.15 kg rod at 1 kHz took its positive and negative Fs 12
+// and 24 % low; a 3 ms lag on x left its replays 0.23 mm RMS off the log,
+// 0.016 with the lag undone). Everything that reads the strokes through
 // PrepareStrokes reads them so: the friction fit, the refinement's friction
 // screen (the slides' force balance) and FrictionFromSlides. The refinement's
 // own residuals lag the simulation instead.

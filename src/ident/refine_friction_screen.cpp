@@ -48,13 +48,11 @@ class Screen {
   void ReadSlides() {
     FrictionFitOptions friction;
     friction.force_balance = true;
-    const double sigma_m = friction_internal::PositionNoise(unit_);
     friction_internal::StrokeSelection selection;
     for (const Experiment* e : Select(unit_, spec_.fit, spec_, false))
       selection.runs.push_back(e->entry.id);
     selection.slides_under_segments = true;  // nothing here replays the segments
-    data_ = friction_internal::PrepareStrokes(
-        unit_, friction, friction_internal::StuckBand(friction, sigma_m), sigma_m, selection);
+    data_ = friction_internal::PrepareStrokes(unit_, friction, selection);
   }
 
   // First each direction's Fd and b from its slides at the start's Fs and

@@ -66,17 +66,12 @@ Protocol Strokes(int cycles, double rate_Hz, std::vector<double> levels, double 
   return protocol;
 }
 
-StrokeData Prepare(const Unit& unit, const FrictionFitOptions& options) {
-  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
-  return PrepareStrokes(unit, options, StuckBand(options, sigma_m), sigma_m);
-}
-
 // A slide replayed backward from its arrest must arrive there in its own
 // direction; one that turned back on the way is replayed forward only.
 TEST(FrictionSegmentsTest, ASlideThatTurnsBackBeforeItStopsIsReplayedForwardOnly) {
   const Unit unit = TurningStrokes(2000, 0.44);
   const FrictionFitOptions options;
-  const StrokeData data = Prepare(unit, options);
+  const StrokeData data = PrepareStrokes(unit, options);
   const double band = StuckBand(options, unit.manifest.DeclaredSigma("x", 1e-5));
   int turning = 0, two_sided = 0;
   for (const Segment& s : data.segments) {
@@ -110,7 +105,7 @@ TEST(FrictionSegmentsTest, TheBreakawayIsReadWhereTheRodLeavesItsRest) {
   protocol.mismatch.relative_tolerance = 1e-8;
   const Unit unit =
       testing::WriteAndReadUnit(Synthesize(truth, protocol, 3, "B"), "friction_segments_breakaway");
-  const StrokeData data = Prepare(unit, FrictionFitOptions{});
+  const StrokeData data = PrepareStrokes(unit, FrictionFitOptions{});
   // Within 15 % (the rod escapes while the force still rises, for a sample
   // or two at 500 Hz: 12.2 N for 10.7).
   EXPECT_NEAR(ReadOffLogs(data, +1, {}).value[0], 19.9, 0.15 * 19.9);
@@ -124,8 +119,8 @@ TEST(FrictionSegmentsTest, TheBreakawaysTimingErrorWidensOnlyTheForwardReplay) {
   const Unit unit = TurningStrokes(500, 0.44);
   FrictionFitOptions untimed;
   untimed.breakaway_timing_per_s = 0;
-  const StrokeData with = Prepare(unit, FrictionFitOptions{});
-  const StrokeData without = Prepare(unit, untimed);
+  const StrokeData with = PrepareStrokes(unit, FrictionFitOptions{});
+  const StrokeData without = PrepareStrokes(unit, untimed);
   ASSERT_EQ(with.segments.size(), without.segments.size());
   int widened = 0;
   for (std::size_t k = 0; k < with.segments.size(); ++k) {
@@ -153,11 +148,10 @@ TEST(FrictionSegmentsTest, ASlideFromAStopIsReplayedFromWhereTheForceLeavesTheSt
   const Protocol protocol = Strokes(1, 2000, {0.45, 0.95}, 0.0);
   const Unit unit =
       testing::WriteAndReadUnit(Synthesize(truth, protocol, 3, "E"), "friction_segments_stops");
-  const double sigma_m = unit.manifest.DeclaredSigma("x", 1e-5);
+  const double sigma_m = friction_internal::PositionNoise(unit);
   const FrictionFitOptions options;
-  const double band = StuckBand(options, sigma_m);
   const double zone = options.end_margin_m + 4 * sigma_m, half = 0.5 * truth.cylinder.stroke_m;
-  const StrokeData data = PrepareStrokes(unit, options, band, sigma_m, {}, {true, true});
+  const StrokeData data = PrepareStrokes(unit, options, {}, {true, true});
   int from_stops = 0;
   for (const Segment& s : data.segments) {
     const std::vector<double>& x = *s.position_m;
@@ -175,8 +169,7 @@ TEST(FrictionSegmentsTest, ASlideFromAStopIsReplayedFromWhereTheForceLeavesTheSt
   EXPECT_GE(from_stops, 2);
   FrictionFitOptions no_stops;
   no_stops.end_slide_m = 0;
-  for (const Segment& s :
-       PrepareStrokes(unit, no_stops, band, sigma_m, {}, {true, true}).segments) {
+  for (const Segment& s : PrepareStrokes(unit, no_stops, {}, {true, true}).segments) {
     EXPECT_LT(std::fabs((*s.position_m)[s.slide_begin]), half - zone);
   }
 }

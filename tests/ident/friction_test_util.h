@@ -20,6 +20,17 @@ inline Protocol StrokeProtocol(int cycles) {
   return protocol;
 }
 
+// StrokeProtocol at `levels`, written with model mismatch: stick as a
+// smooth law (creep below 0.1 mm/s), the rig integrated at rtol 1e-8.
+inline Protocol MismatchedStrokeProtocol(int cycles, std::vector<double> levels) {
+  Protocol protocol = StrokeProtocol(cycles);
+  protocol.stroke_levels_V = std::move(levels);
+  protocol.mismatch.regularized_friction = true;
+  protocol.mismatch.stick_velocity_m_per_s = 1e-4;
+  protocol.mismatch.relative_tolerance = 1e-8;
+  return protocol;
+}
+
 // Every coefficient `fraction` off the truth, in the direction that makes
 // breakaway later and sliding friction different.
 inline FrictionParams FractionOff(const FrictionParams& truth, double fraction) {
