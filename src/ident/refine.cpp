@@ -110,6 +110,8 @@ bool RefineOptions::IsValid(std::string* error) const {
     return fail("acceptable_reduced_chi_square must be >= 1");
   if (rescue_starts < 0) return fail("rescue_starts must be >= 0");
   if (screened_alternatives < 0) return fail("screened_alternatives must be >= 0");
+  if (coordinate_rounds < 0) return fail("coordinate_rounds must be >= 0");
+  if (!(coordinate_span > 1)) return fail("coordinate_span must be > 1");
   if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");
   if (!(misfit_window_s > 0)) return fail("misfit_window_s must be > 0");
   if (!(clustered_error_block_s >= 0)) return fail("clustered_error_block_s must be >= 0");
@@ -130,6 +132,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   Attempts attempts(start, unit, spec, stages, options);
   attempts.ScreenFriction();
+  attempts.CoordinateStart();
   attempts.RobustRefit();
   attempts.WindowedRefit();
   attempts.Rescue();
@@ -148,6 +151,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   r.initial_cost = cost_before;
   r.screen_report = attempts.screen_report();
   r.screened_candidates = attempts.screened_candidates();
+  r.coordinate_report = attempts.coordinate_report();
   r.robust_report = attempts.robust_report();
   r.windowed_report = attempts.windowed_report();
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
@@ -204,6 +208,7 @@ std::string RefineResult::BriefReport() const {
   }
   if (!noise_note.empty()) out << "  " << noise_note << "\n";
   if (!screen_report.empty()) out << "  " << screen_report << "\n";
+  if (!coordinate_report.empty()) out << "  " << coordinate_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;

@@ -7,6 +7,7 @@
 
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/validate/logged_run.h"
+#include "refine_coordinate_start.h"
 #include "refine_friction_screen.h"
 #include "refine_parameters.h"
 #include "refine_solve.h"
@@ -165,6 +166,28 @@ void Attempts::ScreenFriction() {
                       (kept > 0 ? ", the fit from candidate " + std::to_string(kept + 1) + " kept"
                                 : ", none ended lower");
   }
+}
+
+void Attempts::CoordinateStart() {
+  if (Explained() || options_.coordinate_rounds <= 0) return;
+  // Neither start explains the runs: the given one with one friction
+  // coefficient at a time moved (the others the component fits').
+  refine_internal::CoordinateStart moved =
+      SearchFrictionCoordinates(start_, unit_, spec_, options_);
+  if (!moved.moved) return;
+  const double before = best_.result.reduced_chi_square;
+  StagedFit candidate = FitStages(moved.start, unit_, spec_, stages_, options_);
+  candidate.from_screened_start = true;
+  const double after = candidate.result.reduced_chi_square;
+  const bool kept = Offer(std::move(candidate), &coordinate_report_);
+  if (kept) {
+    screened_start_ = std::move(moved.start);
+    screened_ = true;
+  }
+  char line[160];
+  std::snprintf(line, sizeof(line), "; the fit from it: %.3g against %.3g, %s", after, before,
+                kept ? "kept" : "not kept");
+  coordinate_report_ = moved.report + line;
 }
 
 void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,

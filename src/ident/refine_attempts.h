@@ -4,9 +4,11 @@
 //   1. the friction screen (refine_friction_screen.h): a start whose
 //      friction is read off the logs, and its next-best candidates (also
 //      when the given fit is explained but leaves friction at a bound);
-//   2. a robust refit (each run through a Cauchy loss);
-//   3. a windowed refit (the last stage by multiple shooting first);
-//   4. rescue starts in a trust box around the given start (the last stage
+//   2. a start one friction coefficient away from the given one
+//      (refine_coordinate_start.h);
+//   3. a robust refit (each run through a Cauchy loss);
+//   4. a windowed refit (the last stage by multiple shooting first);
+//   5. rescue starts in a trust box around the given start (the last stage
 //      only).
 // What the kept fit started from and each attempt's one-line report are the
 // caller's to put into the result (refine.cpp).
@@ -53,6 +55,7 @@ class Attempts {
   // The later attempts, in order; each does nothing once the kept fit is
   // explained (or when its option is off).
   void ScreenFriction();
+  void CoordinateStart();
   void RobustRefit();
   void WindowedRefit();
   void Rescue();
@@ -62,6 +65,7 @@ class Attempts {
   // One line per later attempt (empty: not tried), and how many friction
   // starts the screen simulated.
   const std::string& screen_report() const { return screen_report_; }
+  const std::string& coordinate_report() const { return coordinate_report_; }
   const std::string& robust_report() const { return robust_report_; }
   const std::string& windowed_report() const { return windowed_report_; }
   int screened_candidates() const { return screened_candidates_; }
@@ -88,7 +92,7 @@ class Attempts {
   Parameters given_before_last_;
   Parameters screened_start_;
   bool screened_ = false;  // screened_start_ differs from start_
-  std::string screen_report_, robust_report_, windowed_report_;
+  std::string screen_report_, coordinate_report_, robust_report_, windowed_report_;
   int screened_candidates_ = 0;
   std::string* kept_report_ = nullptr;  // the report of the later attempt kept, if any
 };

@@ -190,8 +190,8 @@ class Screen {
   std::vector<std::pair<double, Parameters>> simulated_;  // for the alternatives
 };
 
-// A coefficient `p` moved from `start` loses its standard error (the
-// component fit's no longer applies).
+}  // namespace
+
 void ForgetMoved(const Parameters& start, const FitSpec& spec, Parameters* p) {
   for (const FreeParameter& free : spec.parameters) {
     double before = 0, after = 0;
@@ -201,8 +201,6 @@ void ForgetMoved(const Parameters& start, const FitSpec& spec, Parameters* p) {
     }
   }
 }
-
-}  // namespace
 
 FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
                                     const RefineOptions& options, bool even_if_explained,

@@ -353,6 +353,7 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     out.friction = "identify " + FrictionLine(identified.friction) + ", refine " +
                    FrictionLine(fit.friction) +
                    (refined.screen_report.empty() ? "" : "\n  " + refined.screen_report) +
+                   (refined.coordinate_report.empty() ? "" : "\n  " + refined.coordinate_report) +
                    (refined.robust_report.empty() ? "" : "\n  " + refined.robust_report) +
                    (refined.windowed_report.empty() ? "" : "\n  " + refined.windowed_report);
     const Parameters& t = d.truth;

@@ -103,6 +103,16 @@ struct RefineOptions {
   // under stick-slip the best simulated candidate is not always in the basin
   // that explains the runs, the second or third can be.
   int screened_alternatives = 2;
+  // When the fits from the given and the screened starts are not explained:
+  // a start one friction coefficient away from the given one. Up to this many
+  // rounds, each scanning every free friction coefficient on its own within
+  // a factor coordinate_span of its value (16 points, the others held) and
+  // taking the one best move; the fit is run again from there and kept when
+  // Better. Where the component fits are right but for one coefficient (a
+  // Stribeck velocity 17 % low), the screen above moves the right ones too
+  // (docs/refinement.md). 0: off.
+  int coordinate_rounds = 2;
+  double coordinate_span = 1.5;
   // Standard errors robust over runs: each parameter's error is widened to
   // the run-clustered sandwich's (how much the fitted runs, windows summed
   // per run, disagree about it) where that is larger than the misfit-scaled
@@ -217,6 +227,10 @@ struct RefineResult : FitResult {
   // not screened).
   std::string screen_report;
   int screened_candidates = 0;
+  // What the coordinate start (RefineOptions::coordinate_rounds) moved, what
+  // the fit from it ended at and whether it was kept (empty when it did not
+  // run).
+  std::string coordinate_report;
   // What the robust refit (RefineOptions::robust_refit) ended at and whether
   // it was kept (empty when it did not run).
   std::string robust_report;
