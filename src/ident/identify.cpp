@@ -176,7 +176,7 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   *report = IdentifyReport{};
   // The channels whose noise the fits read through NoiseOf (the valve fit
   // weights its levels by their own residual spread where q is undeclared).
-  report->noise_note = EstimatedNoiseNote(unit, {"x", "p1", "p2", "q_in", "q_out"});
+  report->noise_note = ChannelNoiseNote(unit, {"x", "p1", "p2", "q_in", "q_out"});
   if (WillFit(Component::kValve, ExperimentKind::kValve, "valve.", unit, options, report,
               &report->valve)) {
     report->valve = FitValve(unit, prior.valve, options.valve);

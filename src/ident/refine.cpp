@@ -90,7 +90,7 @@ std::string NoiseNote(const FitSpec& spec, const Unit& unit) {
   for (const auto& [channel, given] : spec.channels) {
     if (!(given.sigma > 0)) from_unit.push_back(channel);
   }
-  return EstimatedNoiseNote(unit, from_unit);
+  return ChannelNoiseNote(unit, from_unit);
 }
 
 }  // namespace

@@ -120,30 +120,54 @@ ChannelNoise NoiseOf(const Manifest& manifest, const std::string& column,
   return noise;
 }
 
-ChannelNoise NoiseOf(const Unit& unit, const std::string& column) {
+namespace {
+
+// The column's samples in every log of the unit that has it.
+std::vector<const std::vector<double>*> LoggedColumns(const Unit& unit, const std::string& column) {
   std::vector<const std::vector<double>*> logs;
   for (const Experiment& e : unit.experiments) {
     const std::vector<double>& values = e.column(column);
     if (!values.empty()) logs.push_back(&values);
   }
-  return NoiseOf(unit.manifest, column, logs);
+  return logs;
+}
+
+}  // namespace
+
+ChannelNoise NoiseOf(const Unit& unit, const std::string& column) {
+  return NoiseOf(unit.manifest, column, LoggedColumns(unit, column));
 }
 
 double NoiseSigma(const Unit& unit, const std::string& column) {
   return NoiseOf(unit, column).sigma;
 }
 
-std::string EstimatedNoiseNote(const Unit& unit, const std::vector<std::string>& columns) {
-  std::string listed;
+std::string ChannelNoiseNote(const Unit& unit, const std::vector<std::string>& columns) {
+  std::string estimated, contradicted;
   for (const std::string& column : columns) {
     const ChannelNoise noise = NoiseOf(unit, column);
-    if (noise.declared || noise.samples == 0) continue;
-    char item[96];
-    std::snprintf(item, sizeof(item), "%s%s %.3g %s", listed.empty() ? "" : ", ", column.c_str(),
-                  noise.sigma, SiUnit(column));
-    listed += item;
+    char item[160];
+    if (!noise.declared) {
+      if (noise.samples == 0) continue;
+      std::snprintf(item, sizeof(item), "%s%s %.3g %s", estimated.empty() ? "" : ", ",
+                    column.c_str(), noise.sigma, SiUnit(column));
+      estimated += item;
+      continue;
+    }
+    const ChannelNoise logged = EstimateNoise(LoggedColumns(unit, column));
+    if (!(logged.sigma > kDeclaredNoiseContradicted * noise.sigma)) continue;
+    std::snprintf(item, sizeof(item), "%s%s %.3g %s declared, the logs %.3g",
+                  contradicted.empty() ? "" : ", ", column.c_str(), noise.sigma, SiUnit(column),
+                  logged.sigma);
+    contradicted += item;
   }
-  return listed.empty() ? "" : "noise not declared, estimated from the logs: " + listed;
+  std::string note;
+  if (!estimated.empty()) note = "noise not declared, estimated from the logs: " + estimated;
+  if (!contradicted.empty()) {
+    note += (note.empty() ? "" : "; ") + std::string("declared noise below what the logs show: ") +
+            contradicted + " (the fits and the verdict weigh by the declared)";
+  }
+  return note;
 }
 
 }  // namespace pneumaid

@@ -41,8 +41,8 @@ struct IdentifyReport {
   std::vector<std::string> fitted;  // parameter paths
   std::vector<std::string> priors;  // parameter paths taken from the prior, with why
   // The channels whose noise the unit does not declare, with the estimates
-  // from the logs that the fits used (EstimatedNoiseNote); empty when all are
-  // declared.
+  // from the logs that the fits used, and the declared ones whose logs show
+  // far more (ChannelNoiseNote); empty when neither.
   std::string noise_note;
   std::string BriefReport() const;
 };

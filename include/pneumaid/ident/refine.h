@@ -216,9 +216,10 @@ struct RefineResult : FitResult {
   // the logged value's standard errors and in Pa.
   int estimated_starts = 0;
   double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
-  // The fitted channels whose noise neither the spec gives nor the unit
-  // declares, with the estimates from the logs that weighted them
-  // (EstimatedNoiseNote); empty when every one is given or declared.
+  // Of the fitted channels whose noise the spec does not give: those the unit
+  // does not declare, with the estimates from the logs that weighted them, and
+  // the declared ones whose logs show far more (ChannelNoiseNote); empty when
+  // neither.
   std::string noise_note;
   // What a friction_replay stage found (empty without one).
   std::string replay_report;

@@ -42,9 +42,17 @@ ChannelNoise NoiseOf(const Unit& unit, const std::string& column);
 // NoiseOf(unit, column).sigma.
 double NoiseSigma(const Unit& unit, const std::string& column);
 
-// The undeclared channels of `columns` that the unit logs, with their
-// estimates, as one line for a report ("noise not declared, estimated from
-// the logs: x 5.2e-06 m, p1 310 Pa"); empty when every one is declared.
-std::string EstimatedNoiseNote(const Unit& unit, const std::vector<std::string>& columns);
+// A declared noise whose logs show more than this many times as much: the
+// declaration is likely wrong (a datasheet's figure, another range), and a
+// fit weighted by it cannot pass the verdict. Reported, not overridden.
+constexpr double kDeclaredNoiseContradicted = 2.0;
+
+// One line for a report on the noise of `columns` that the unit logs: the
+// undeclared ones with their estimates ("noise not declared, estimated from
+// the logs: x 5.2e-06 m, p1 310 Pa"), then the declared ones whose logs show
+// more than kDeclaredNoiseContradicted times as much ("declared noise below
+// what the logs show: p1 100 Pa declared, the logs 305 ..."); empty when
+// neither.
+std::string ChannelNoiseNote(const Unit& unit, const std::vector<std::string>& columns);
 
 }  // namespace pneumaid
