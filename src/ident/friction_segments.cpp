@@ -228,7 +228,7 @@ struct StrokeLog {
   double band_m;         // the stuck band (StuckBand)
   double half_stroke_m;  // the stroke ends at +-half_stroke_m
   double contact_m;      // within this of an end the rod may touch the stop
-  double sigma_x_m;      // position noise (PositionNoise)
+  double sigma_x_m;      // position noise (PositionNoise, times the lag inverse's gain)
   double drift_m;        // the force noise's drift per sample^2 (SetWeights)
 };
 

@@ -93,9 +93,9 @@ struct StrokeData {
   std::string skipped;  // logs that could not be used, why
 };
 
-// The position noise the friction fit reads the logs with: NoiseOf x
-// (declared, or estimated from the logs), at least 0.1 um (a noise-free log
-// still has its numbers' rounding).
+// The position noise of the logged x: NoiseOf x (declared, or estimated from
+// the logs), at least 0.1 um (a noise-free log still has its numbers'
+// rounding). PrepareStrokes grows it by the inverse of a declared x lag.
 double PositionNoise(const Unit& unit);
 
 // The stuck band of FrictionFitOptions widened by the position noise.

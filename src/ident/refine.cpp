@@ -143,7 +143,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   // A windowed stage's costs are windows': report whole runs, as validated
   // (and at the caller's start when friction was replayed first or the kept
   // fit started elsewhere).
-  if (fit.first_fit_windowed || stages.front().friction_replay || fit.from_screened_start) {
+  if (fit.first_fit_windowed || stages.front().friction_replay || fit.from_moved_start) {
     before = WholeRunCosts(start, unit, spec, options);
     cost_before = 0;
     for (const ExperimentCost& e : before) cost_before += e.before;

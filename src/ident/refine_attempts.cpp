@@ -109,7 +109,7 @@ Attempts::Attempts(const Parameters& start, const Unit& unit, const FitSpec& spe
       best_(FitStages(start, unit, spec, stages, options)),
       given_has_values_(best_.result.has_values()),
       given_before_last_(best_.before_last),
-      screened_start_(start) {}
+      moved_start_(start) {}
 
 bool Attempts::Offer(StagedFit&& candidate, std::string* report) {
   const int iterations = best_.result.iterations + candidate.result.iterations;
@@ -142,10 +142,10 @@ void Attempts::ScreenFriction() {
   screen_report_ = screen.report;
   screened_candidates_ = screen.candidates;
   if (!screen.moved) return;
-  screened_start_ = std::move(screen.start);
-  screened_ = true;
-  StagedFit from_screened = FitStages(screened_start_, unit_, spec_, stages_, options_);
-  from_screened.from_screened_start = true;
+  moved_start_ = std::move(screen.start);
+  moved_ = true;
+  StagedFit from_screened = FitStages(moved_start_, unit_, spec_, stages_, options_);
+  from_screened.from_moved_start = true;
   if (!Offer(std::move(from_screened), &screen_report_)) {
     screen_report_ += "; not kept: the fit from the given start ends lower";
   }
@@ -155,10 +155,10 @@ void Attempts::ScreenFriction() {
     if (Explained()) break;
     ++tried;
     StagedFit from_alternative = FitStages(alternative, unit_, spec_, stages_, options_);
-    from_alternative.from_screened_start = true;
+    from_alternative.from_moved_start = true;
     if (Offer(std::move(from_alternative), &screen_report_)) {
       kept = tried;
-      screened_start_ = std::move(alternative);
+      moved_start_ = std::move(alternative);
     }
   }
   if (tried > 0) {
@@ -169,20 +169,24 @@ void Attempts::ScreenFriction() {
 }
 
 void Attempts::CoordinateStart() {
-  if (Explained() || options_.coordinate_rounds <= 0) return;
+  // A spec whose first stage replays the friction fit would refit the moved
+  // coefficients before any simulation fit: nothing to search for.
+  if (Explained() || options_.coordinate_rounds <= 0 || stages_.front().friction_replay) return;
   // Neither start explains the runs: the given one with one friction
   // coefficient at a time moved (the others the component fits').
-  refine_internal::CoordinateStart moved =
-      SearchFrictionCoordinates(start_, unit_, spec_, options_);
-  if (!moved.moved) return;
+  CoordinateSearch moved = SearchFrictionCoordinates(start_, unit_, spec_, options_);
+  if (!moved.moved) {
+    coordinate_report_ = moved.report;
+    return;
+  }
   const double before = best_.result.reduced_chi_square;
   StagedFit candidate = FitStages(moved.start, unit_, spec_, stages_, options_);
-  candidate.from_screened_start = true;
+  candidate.from_moved_start = true;
   const double after = candidate.result.reduced_chi_square;
   const bool kept = Offer(std::move(candidate), &coordinate_report_);
   if (kept) {
-    screened_start_ = std::move(moved.start);
-    screened_ = true;
+    moved_start_ = std::move(moved.start);
+    moved_ = true;
   }
   char line[160];
   std::snprintf(line, sizeof(line), "; the fit from it: %.3g against %.3g, %s", after, before,
@@ -193,8 +197,8 @@ void Attempts::CoordinateStart() {
 void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,
                      std::string* report) {
   const double before = best_.result.reduced_chi_square;
-  StagedFit candidate = FitStages(screened_start_, unit_, spec_, stages, options_, robust_runs);
-  candidate.from_screened_start = screened_;
+  StagedFit candidate = FitStages(moved_start_, unit_, spec_, stages, options_, robust_runs);
+  candidate.from_moved_start = moved_;
   const double after = candidate.result.reduced_chi_square;
   const bool kept = Offer(std::move(candidate), report);
   char line[200];

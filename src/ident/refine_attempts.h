@@ -30,8 +30,10 @@ struct StagedFit {
   Parameters before_last;              // what the last stage started from
   std::vector<ExperimentCost> before;  // the first fitted stage's costs at its start
   double cost_before = 0;
-  bool first_fit_windowed = false;   // `before` and `cost_before` are windows'
-  bool from_screened_start = false;  // else from the caller's start
+  bool first_fit_windowed = false;  // `before` and `cost_before` are windows'
+  // From a start a later attempt moved (the screen's, the coordinate
+  // start's), else from the caller's.
+  bool from_moved_start = false;
 };
 
 // The verdict on a fit's last stage: a windowed stage's runs are judged
@@ -75,8 +77,8 @@ class Attempts {
   // Keeps `candidate` when it is Better, `report` then naming the attempt
   // that found it; the iterations add up either way. True when kept.
   bool Offer(StagedFit&& candidate, std::string* report);
-  // A fit from the screened start (the given one when the screen moved
-  // nothing) through `stages`, offered; its one-line report.
+  // A fit from the moved start (moved_start_) through `stages`, offered; its
+  // one-line report.
   void Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,
              std::string* report);
 
@@ -90,8 +92,8 @@ class Attempts {
   // started (the rescue starts from there).
   bool given_has_values_ = false;
   Parameters given_before_last_;
-  Parameters screened_start_;
-  bool screened_ = false;  // screened_start_ differs from start_
+  Parameters moved_start_;
+  bool moved_ = false;  // moved_start_ differs from start_
   std::string screen_report_, coordinate_report_, robust_report_, windowed_report_;
   int screened_candidates_ = 0;
   std::string* kept_report_ = nullptr;  // the report of the later attempt kept, if any

@@ -52,14 +52,13 @@ double Floor(const Coordinate& c, const Parameters& p) {
 
 }  // namespace
 
-CoordinateStart SearchFrictionCoordinates(const Parameters& start, const Unit& unit,
-                                          const FitSpec& spec, const RefineOptions& options) {
-  CoordinateStart out;
+CoordinateSearch SearchFrictionCoordinates(const Parameters& start, const Unit& unit,
+                                           const FitSpec& spec, const RefineOptions& options) {
+  CoordinateSearch out;
   out.start = start;
   const auto score = [&](const Parameters& p) {
     ++out.candidates;
-    const double chi = MedianRunChiSquare(WholeRunMisfits(p, unit, spec, options));
-    return std::isnan(chi) ? HUGE_VAL : chi;
+    return VerdictMeasure(p, unit, spec, options);
   };
   out.chi_square_before = out.chi_square_after = score(start);
   const std::vector<Coordinate> coordinates = FreeFrictionCoordinates(spec);
@@ -77,12 +76,14 @@ CoordinateStart SearchFrictionCoordinates(const Parameters& start, const Unit& u
       double fd = 0;
       GetParameter(out.start, c.direction + "Fd", &fd);
       const double centre = std::max(value, Floor(c, out.start));
+      double previous = value;
       for (int i = -kStepsPerSide; i <= kStepsPerSide; ++i) {
         if (i == 0) continue;
         const double candidate = std::clamp(
             centre * std::pow(options.coordinate_span, static_cast<double>(i) / kStepsPerSide),
             free->lower, free->upper);
-        if (candidate == value) continue;
+        if (candidate == value || candidate == previous) continue;
+        previous = candidate;
         if ((c.name == "Fd" && candidate > fs) || (c.name == "Fs" && fd > candidate)) continue;
         Parameters p = out.start;
         SetParameter(&p, c.path, candidate);
@@ -105,9 +106,16 @@ CoordinateStart SearchFrictionCoordinates(const Parameters& start, const Unit& u
     moves += move;
   }
   out.moved = out.chi_square_after < out.chi_square_before;
-  if (!out.moved) return out;
-  ForgetMoved(start, spec, &out.start);
   char line[200];
+  if (!out.moved) {
+    std::snprintf(line, sizeof(line),
+                  "friction start one coefficient at a time: no move lowers the median reduced "
+                  "chi-square %.3g (%d candidates simulated)",
+                  out.chi_square_before, out.candidates);
+    out.report = line;
+    return out;
+  }
+  ForgetMoved(start, spec, &out.start);
   std::snprintf(line, sizeof(line),
                 "friction start one coefficient at a time: median reduced chi-square %.3g -> "
                 "%.3g (%d candidates simulated; ",

@@ -40,8 +40,7 @@ class Screen {
   // The verdict's measure of `p` (HUGE_VAL when a run cannot be simulated).
   double Score(const Parameters& p) {
     ++out_->candidates;
-    const double chi = MedianRunChiSquare(WholeRunMisfits(p, unit_, spec_, options_));
-    return std::isnan(chi) ? HUGE_VAL : chi;
+    return VerdictMeasure(p, unit_, spec_, options_);
   }
 
   // The force balance of the fitted runs' smooth slides, read once.

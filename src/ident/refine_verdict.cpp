@@ -53,6 +53,12 @@ std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit&
   return MisfitsOf(WholeRunResiduals(params, unit, spec, options), options.misfit_window_s);
 }
 
+double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
+                      const RefineOptions& options) {
+  const double chi = MedianRunChiSquare(WholeRunMisfits(params, unit, spec, options));
+  return std::isnan(chi) ? HUGE_VAL : chi;
+}
+
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {
   std::map<std::string, std::pair<double, int>> runs;  // sum of channel chi-squares, channels
   for (const ChannelMisfit& m : misfits) {

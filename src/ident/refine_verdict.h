@@ -29,6 +29,12 @@ std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit&
 // The median over runs of each run's reduced chi-square over its channels.
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits);
 
+// The verdict's measure of `params` with no fit: MedianRunChiSquare of the
+// WholeRunMisfits, HUGE_VAL where a run cannot be simulated. What the starts'
+// searches (the friction screen, the coordinate start) rank candidates by.
+double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
+                      const RefineOptions& options);
+
 // The verdict on `r` (its misfits): status, threshold, and when it fails a
 // message naming the worst runs, channels and windows.
 void Judge(const RefineOptions& options, RefineResult* r);

@@ -72,7 +72,7 @@ TEST(FrictionSegmentsTest, ASlideThatTurnsBackBeforeItStopsIsReplayedForwardOnly
   const Unit unit = TurningStrokes(2000, 0.44);
   const FrictionFitOptions options;
   const StrokeData data = PrepareStrokes(unit, options);
-  const double band = StuckBand(options, unit.manifest.DeclaredSigma("x", 1e-5));
+  const double band = StuckBand(options, friction_internal::PositionNoise(unit));
   int turning = 0, two_sided = 0;
   for (const Segment& s : data.segments) {
     if (s.direction == 0) continue;

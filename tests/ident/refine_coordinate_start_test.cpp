@@ -53,14 +53,18 @@ TEST(RefineCoordinateStartTest, TheOneCoefficientOffIsMovedFirst) {
   const testing::RefineCase& c = OneCoefficientOff();
   const FitSpec spec = LoadFitSpec(testing::kDefaultFitSpec);
   const RefineOptions options = OnlyTheCoordinateStart(1);
-  const refine_internal::CoordinateStart moved =
+  const refine_internal::CoordinateSearch moved =
       refine_internal::SearchFrictionCoordinates(c.start, c.unit, spec, options);
   std::cout << moved.report << "\n";
   ASSERT_TRUE(moved.moved);
   EXPECT_EQ(moved.candidates, 1 + 8 * 16);
   EXPECT_LT(moved.chi_square_after, 0.2 * moved.chi_square_before);
   EXPECT_NE(moved.report.find("friction.positive.vs"), std::string::npos) << moved.report;
-  // The one move: every other coefficient as it was.
+  // The one move, to within a grid step (5 %) of the truth; every other
+  // coefficient as it was.
+  EXPECT_NEAR(moved.start.friction.positive.stribeck_velocity_m_per_s,
+              c.truth.friction.positive.stribeck_velocity_m_per_s,
+              0.05 * c.truth.friction.positive.stribeck_velocity_m_per_s);
   EXPECT_EQ(moved.start.friction.negative.stribeck_velocity_m_per_s,
             c.start.friction.negative.stribeck_velocity_m_per_s);
   EXPECT_EQ(moved.start.friction.positive.static_force_N, c.start.friction.positive.static_force_N);
@@ -72,16 +76,12 @@ TEST(RefineCoordinateStartTest, TheFitFromItExplainsTheRunsWhereTheGivenStartSta
   const RefineResult stalled = Refine(c.start, c.unit, spec, OnlyTheCoordinateStart(0));
   std::cout << stalled.BriefReport();
   EXPECT_FALSE(stalled.explained());
-  EXPECT_TRUE(stalled.coordinate_report.empty());
+  EXPECT_GT(stalled.reduced_chi_square, 100.0);  // a stall, not a near miss
   const RefineResult result = Refine(c.start, c.unit, spec, OnlyTheCoordinateStart(2));
   std::cout << result.BriefReport();
   ASSERT_TRUE(result.explained()) << result.reason;
   EXPECT_NE(result.coordinate_report.find(", kept"), std::string::npos) << result.coordinate_report;
   testing::ExpectFrictionWithinTolerance(result.params, c.truth);
-  // Reported against the caller's start, not the moved one.
-  const FittedCoefficient* vs = result.Find("friction.positive.vs");
-  ASSERT_NE(vs, nullptr);
-  EXPECT_DOUBLE_EQ(vs->start, c.start.friction.positive.stribeck_velocity_m_per_s);
 }
 
 TEST(RefineCoordinateStartTest, OptionsNameTheBadField) {

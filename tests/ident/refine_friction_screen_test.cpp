@@ -108,6 +108,7 @@ TEST(RefineFrictionScreenTest, WithoutTheScreenTheSameStartEndsInAnotherBasin) {
   const RefineResult screened = Refine(c.start, c.unit, spec, RefineOptions{});
   RefineOptions options;
   options.screen_friction_starts = false;
+  options.coordinate_rounds = 0;
   options.windowed_refit = false;
   const RefineResult result = Refine(c.start, c.unit, spec, options);
   std::cout << result.BriefReport();

@@ -110,7 +110,8 @@ struct RefineOptions {
   // taking the one best move; the fit is run again from there and kept when
   // Better. Where the component fits are right but for one coefficient (a
   // Stribeck velocity 17 % low), the screen above moves the right ones too
-  // (docs/refinement.md). 0: off.
+  // (docs/refinement.md). Not with a first stage that replays the friction
+  // fit (it would refit the moved coefficients). 0: off.
   int coordinate_rounds = 2;
   double coordinate_span = 1.5;
   // Standard errors robust over runs: each parameter's error is widened to
