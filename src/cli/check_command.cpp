@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/io/rig_writer.h"
@@ -41,6 +42,11 @@ void PrintUnit(const Unit& unit) {
     for (const auto& path : m.defaults_used) std::cout << " " << path;
     std::cout << "\n";
   }
+  // What the fits will weigh each logged channel by, where the manifest does
+  // not say it or the logs contradict it.
+  const std::string noise =
+      ChannelNoiseNote(unit, {"x", "p1", "p2", "p_up", "p_down", "q", "q_in", "q_out", "q1", "q2"});
+  if (!noise.empty()) std::cout << "  " << noise << "\n";
   for (const Experiment& e : unit.experiments) {
     const auto& t = e.column("t");
     const double duration = t.back() - t.front();

@@ -1,6 +1,10 @@
 // `pneumaid check` end to end on the bundled datasets.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <string>
+
 #include "cli_test_util.h"
 
 namespace pneumaid {
@@ -17,6 +21,27 @@ TEST_F(CheckCliTest, SummarisesEveryExperimentInDisplayUnits) {
   EXPECT_NE(out.find("x [mm]"), std::string::npos) << out;
   EXPECT_NE(out.find("p1 [bar_g]"), std::string::npos) << out;
   EXPECT_NE(out.find("at 1000 Hz"), std::string::npos) << out;
+}
+
+// A sensor whose declared noise its logs contradict (p1 declared at 100 Pa
+// for the 300 it carries) is named before any fit weighs by it; a unit whose
+// declarations hold says nothing of its noise.
+TEST_F(CheckCliTest, NamesADeclaredNoiseTheLogsContradict) {
+  ASSERT_EQ(Run("check " + testing::Source("datasets/paper-rig")), 0) << Stderr();
+  EXPECT_EQ(Stdout().find("noise"), std::string::npos) << Stdout();
+  const std::filesystem::path unit = dir_ / "paper-rig";
+  std::filesystem::copy(testing::Source("datasets/paper-rig"), unit);
+  std::string manifest = Read(unit / "unit.yaml");
+  const std::size_t at = manifest.find("p1: {sigma: 300}");
+  ASSERT_NE(at, std::string::npos);
+  manifest.replace(at, 16, "p1: {sigma: 100}");
+  std::ofstream(unit / "unit.yaml", std::ios::binary) << manifest;
+  ASSERT_EQ(Run("check " + unit.string()), 0) << Stderr();
+  EXPECT_NE(Stdout().find("declared noise below what the logs show: p1 100 Pa declared, "
+                          "the logs' quietest stretches 2"),
+            std::string::npos)
+      << Stdout();
+  EXPECT_EQ(Stdout().find("p2 300 Pa declared"), std::string::npos) << Stdout();
 }
 
 TEST_F(CheckCliTest, CorruptUnitExitsTwoNamingFileAndLineAndTheOthersAreStillChecked) {

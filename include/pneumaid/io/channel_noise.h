@@ -49,10 +49,12 @@ constexpr double kDeclaredNoiseContradicted = 2.0;
 
 // One line for a report on the noise of `columns` that the unit logs: the
 // undeclared ones with their estimates ("noise not declared, estimated from
-// the logs: x 5.2e-06 m, p1 310 Pa"), then the declared ones whose logs show
-// more than kDeclaredNoiseContradicted times as much ("declared noise below
-// what the logs show: p1 100 Pa declared, the logs 305 ..."); empty when
-// neither.
+// the logs: x 5.2e-06 m, p1 310 Pa"), then the declared ones whose logs'
+// quietest stretches show more than kDeclaredNoiseContradicted times as much
+// ("declared noise below what the logs show: p1 100 Pa declared, the logs'
+// quietest stretches 227 ..."; a floor, not EstimateNoise: at 250 Hz a light
+// rod's slips are not smooth at the sampling rate and would pass for noise);
+// empty when neither.
 std::string ChannelNoiseNote(const Unit& unit, const std::vector<std::string>& columns);
 
 }  // namespace pneumaid
