@@ -39,6 +39,37 @@ double Quantum(const std::vector<const std::vector<double>*>& columns, std::size
   return 100 * off_grid <= steps && unit_steps >= 10 ? smallest : 0.0;
 }
 
+// The noise of the quietest stretches of `columns`: the spread of the fourth
+// differences (white noise: variance 70 sigma^2; median absolute value 0.6745
+// sigma_d) in blocks of kFloorBlock samples, the 10th percentile over the
+// blocks. Where the signal is not smooth at the sampling rate (a light rod
+// slipping within a sample at 250 Hz) EstimateNoise reads its moves as noise;
+// a resting rod, a settled chamber or a held flow shows the noise alone. For
+// white noise the 10th percentile is kFloorOfWhiteNoise of its sigma; lower
+// where a quiet block lies on one ADC level.
+constexpr std::size_t kFloorBlock = 64;
+constexpr double kFloorOfWhiteNoise = 0.785;  // measured on 10^5 Gaussian samples, +-1 %
+// A floor over fewer blocks than this is no percentile.
+constexpr std::size_t kMinFloorBlocks = 20;
+double QuietNoiseFloor(const std::vector<const std::vector<double>*>& columns) {
+  std::vector<double> blocks, d;
+  for (const std::vector<double>* v : columns) {
+    for (std::size_t begin = 0; begin + kFloorBlock <= v->size(); begin += kFloorBlock) {
+      d.clear();
+      for (std::size_t i = begin + 4; i < begin + kFloorBlock; ++i) {
+        const double* x = v->data() + i;
+        d.push_back(std::fabs(x[0] - 4 * x[-1] + 6 * x[-2] - 4 * x[-3] + x[-4]));
+      }
+      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+      blocks.push_back(d[d.size() / 2] / 0.6745 / std::sqrt(70.0));
+    }
+  }
+  if (blocks.size() < kMinFloorBlocks) return 0;
+  const std::size_t at = blocks.size() / 10;
+  std::nth_element(blocks.begin(), blocks.begin() + at, blocks.end());
+  return blocks[at];
+}
+
 const char* SiUnit(const std::string& column) {
   if (column == "x") return "m";
   if (column == "u") return "V";
@@ -102,6 +133,15 @@ ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& column
   // less noise than the step repeats its reading). Where the noise is at least
   // about half the step the differences see noise and rounding both.
   noise.sigma = std::sqrt(std::max(spread, noise.quantum * noise.quantum / 12));
+  // Where the quietest stretches show less than half of that, the spread is
+  // the signal's: not smooth at the sampling rate (a light rod that slips
+  // within a sample at 250 Hz: 983 Pa on pressures of 300 Pa noise). Not on
+  // readings whose noise is below half their ADC step: a quiet stretch there
+  // repeats its reading and shows the rounding, not the noise.
+  const double quiet = QuietNoiseFloor(columns) / kFloorOfWhiteNoise;
+  if (quiet > 0 && quiet >= 0.5 * noise.quantum && 2 * quiet < noise.sigma) {
+    noise.sigma = std::max(quiet, noise.quantum / std::sqrt(12.0));
+  }
   // A log written with about six significant digits is known no better.
   double largest = 0;
   for (const std::vector<double>* v : columns)
@@ -121,34 +161,6 @@ ChannelNoise NoiseOf(const Manifest& manifest, const std::string& column,
 }
 
 namespace {
-
-// The noise of the quietest stretches of `columns`: the spread of the fourth
-// differences (white noise: variance 70 sigma^2; median absolute value 0.6745
-// sigma_d) in blocks of kFloorBlock samples, the 10th percentile over the
-// blocks. Where the signal is not smooth at the sampling rate (a light rod
-// slipping within a sample at 250 Hz) EstimateNoise reads its moves as noise;
-// a resting rod, a settled chamber or a held flow shows the noise alone. Lower
-// than the noise where a quiet block lies on one ADC level: a floor, for
-// telling a declaration too low, never for weighing.
-constexpr std::size_t kFloorBlock = 64;
-double QuietNoiseFloor(const std::vector<const std::vector<double>*>& columns) {
-  std::vector<double> blocks, d;
-  for (const std::vector<double>* v : columns) {
-    for (std::size_t begin = 0; begin + kFloorBlock <= v->size(); begin += kFloorBlock) {
-      d.clear();
-      for (std::size_t i = begin + 4; i < begin + kFloorBlock; ++i) {
-        const double* x = v->data() + i;
-        d.push_back(std::fabs(x[0] - 4 * x[-1] + 6 * x[-2] - 4 * x[-3] + x[-4]));
-      }
-      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-      blocks.push_back(d[d.size() / 2] / 0.6745 / std::sqrt(70.0));
-    }
-  }
-  if (blocks.empty()) return 0;
-  const std::size_t at = blocks.size() / 10;
-  std::nth_element(blocks.begin(), blocks.begin() + at, blocks.end());
-  return blocks[at];
-}
 
 // The column's samples in every log of the unit that has it.
 std::vector<const std::vector<double>*> LoggedColumns(const Unit& unit, const std::string& column) {

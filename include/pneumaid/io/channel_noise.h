@@ -27,8 +27,12 @@ struct ChannelNoise {
 // least), and at least 1e-6 of the largest reading (about six significant
 // digits written). Within 15 % of sqrt(sigma^2 + q^2 / 12) but where the noise
 // is a small fraction of the step (the rounding of a resting signal is then a
-// fixed offset that the logs cannot show). 0 for fewer than 5 samples or a
-// column that never changes.
+// fixed offset that the logs cannot show). Where the signal is not smooth at
+// the sampling rate (a light rod's slips at 250 Hz) the spread is the
+// signal's: where the log's quietest stretches (blocks of 64 samples, the
+// 10th percentile) show less than half of it, their noise is taken instead,
+// within 25 % when a third of the log is quiet. 0 for fewer than 5 samples or
+// a column that never changes.
 ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& columns);
 
 // The noise `manifest` declares for `column`, or the estimate from `logs` (the
