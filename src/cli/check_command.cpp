@@ -9,6 +9,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/io/rig_writer.h"
+#include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid::cli {
 namespace {
@@ -47,6 +48,8 @@ void PrintUnit(const Unit& unit) {
   const std::string noise =
       ChannelNoiseNote(unit, {"x", "p1", "p2", "p_up", "p_down", "q", "q_in", "q_out", "q1", "q2"});
   if (!noise.empty()) std::cout << "  " << noise << "\n";
+  const PositionZero zero = ReadPositionZero(unit);
+  if (zero.offset_m != 0) std::cout << "  " << zero.note << "\n";
   for (const Experiment& e : unit.experiments) {
     const auto& t = e.column("t");
     const double duration = t.back() - t.front();

@@ -12,6 +12,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/provenance.h"
 #include "pneumaid/model/parameter_table.h"
+#include "pneumaid/validate/logged_run.h"
 #include "refine_attempts.h"
 #include "refine_covariance.h"
 #include "refine_residual.h"
@@ -170,6 +171,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   r.held_out_before = HeldOut(conditioned, unit, held_out, options);
   r.held_out_after = HeldOut(r.has_values() ? r.params : conditioned, unit, held_out, options);
   r.noise_note = NoiseNote(spec, unit);
+  if (const PositionZero zero = ReadPositionZero(unit); zero.offset_m != 0)
+    r.position_note = zero.note;
   r.stages = static_cast<int>(stages.size());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;
@@ -207,6 +210,7 @@ std::string RefineResult::BriefReport() const {
     out << line;
   }
   if (!noise_note.empty()) out << "  " << noise_note << "\n";
+  if (!position_note.empty()) out << "  " << position_note << "\n";
   if (!screen_report.empty()) out << "  " << screen_report << "\n";
   if (!coordinate_report.empty()) out << "  " << coordinate_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";

@@ -5,6 +5,7 @@
 
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/validate/logged_run.h"
 #include "pneumaid/validate/validate.h"
 
 namespace pneumaid::refine_internal {
@@ -82,7 +83,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
                       const std::array<double, kStartOffsets>& sample_sigma_Pa) {
   FitExperiment out;
   out.id = e.entry.id;
-  out.measured = e.AsTrajectory();
+  out.measured = LoggedTrajectory(e, unit);
   out.command = SampledCommand(out.measured.t_s, out.measured.u_V);
   int averaged = 1;
   out.initial = LoggedInitialState(out.measured, half_stroke_m, &averaged);

@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <numeric>
 #include <string>
+#include <vector>
 
 #include "pneumaid/eval/metrics.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/model/load.h"
 
 namespace pneumaid {
 namespace {
@@ -43,6 +45,84 @@ void ApplyRigConditions(const RigConstants& rig, Parameters* params) {
 }
 
 }  // namespace
+
+PositionZero ReadPositionZero(const Unit& unit) {
+  const RigConstants& rig = unit.manifest.rig;
+  const double half = 0.5 * rig.stroke_m;
+  const double weight_N =
+      rig.orientation == Orientation::kVertical ? rig.load_mass_kg * kStandardGravity_m_per_s2 : 0;
+  const double pressing_N =
+      0.5 * (rig.supply_pressure_Pa - rig.atmospheric_pressure_Pa) * rig.area_2_m2();
+  std::vector<double> rests[2];  // median positions minus the stop's
+  for (const Experiment& e : unit.experiments) {
+    const auto &x = e.column("x"), &p1 = e.column("p1"), &p2 = e.column("p2");
+    if (x.empty() || p1.empty() || p2.empty()) continue;
+    // Which stop sample i is pressed against: 0 retracted, 1 extended, -1 none.
+    const auto stop = [&](std::size_t i) {
+      const double force = PneumaticAndGravityForce(p1[i], p2[i], rig.atmospheric_pressure_Pa,
+                                                    rig.area_1_m2(), rig.area_2_m2(), weight_N);
+      if (x[i] < -half + 1e-3 && force < -pressing_N) return 0;
+      if (x[i] > half - 1e-3 && force > pressing_N) return 1;
+      return -1;
+    };
+    for (std::size_t i = 0; i < x.size();) {
+      const int end = stop(i);
+      std::size_t j = i + 1;
+      double low = x[i], high = x[i];
+      while (end >= 0 && j < x.size() && stop(j) == end) {
+        low = std::min(low, x[j]);
+        high = std::max(high, x[j]);
+        if (high - low > kStopRestBand_m) break;
+        ++j;
+      }
+      if (end >= 0 && j - i >= kMinStopRestSamples) {
+        std::vector<double> at(x.begin() + static_cast<long>(i), x.begin() + static_cast<long>(j));
+        std::nth_element(at.begin(), at.begin() + static_cast<long>(at.size() / 2), at.end());
+        rests[end].push_back(at[at.size() / 2] - (end == 0 ? -half : half));
+      }
+      i = j;
+    }
+  }
+  PositionZero out;
+  double sum = 0;
+  int ends = 0;
+  for (int end = 0; end < 2; ++end) {
+    out.rests[end] = static_cast<int>(rests[end].size());
+    if (rests[end].empty()) continue;
+    std::vector<double>& r = rests[end];
+    std::nth_element(r.begin(), r.begin() + static_cast<long>(r.size() / 2), r.end());
+    out.from_stop_m[end] = r[r.size() / 2];
+    sum += out.from_stop_m[end];
+    ++ends;
+  }
+  if (ends == 0) return out;
+  const double offset = sum / ends;
+  if (std::fabs(offset) >= kMinPositionZero_m) out.offset_m = offset;
+  char line[160];
+  out.note = "position zero: the rod rests";
+  for (int end = 0; end < 2; ++end) {
+    if (out.rests[end] == 0) continue;
+    std::snprintf(line, sizeof(line), "%s %+.3f mm from the %s stop (%d rests)",
+                  end == 1 && out.rests[0] > 0 ? " and" : "", out.from_stop_m[end] * 1e3,
+                  end == 0 ? "retracted" : "extended", out.rests[end]);
+    out.note += line;
+  }
+  if (out.offset_m == 0) {
+    out.note += ": x read as logged";
+  } else {
+    std::snprintf(line, sizeof(line), ": x read %.3f mm %s (a transducer's zero)",
+                  std::fabs(out.offset_m) * 1e3, out.offset_m > 0 ? "lower" : "higher");
+    out.note += line;
+  }
+  return out;
+}
+
+Trajectory LoggedTrajectory(const Experiment& e, const Unit& unit) {
+  Trajectory out = e.AsTrajectory();
+  const double offset = ReadPositionZero(unit).offset_m;
+  for (double& x : out.x_m) x -= offset;
+  return out;
+}
 
 // The state a run starts from: the mean of its leading samples while the
 // command has not yet changed (at most 50), so that one noisy first sample

@@ -9,6 +9,7 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
+#include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid {
 namespace {
@@ -54,7 +55,7 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
                                         const ValidationOptions& options) {
   ExperimentValidation out;
   out.id = experiment.entry.id;
-  out.measured = experiment.AsTrajectory();
+  out.measured = LoggedTrajectory(experiment, unit);
   const Trajectory& m = out.measured;
   const InitialState initial = LoggedInitialState(m, 0.5 * params.cylinder.stroke_m);
   out.simulation = Simulate(params, SampledCommand(m.t_s, m.u_V), initial, m.t_s,

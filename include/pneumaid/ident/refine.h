@@ -222,6 +222,9 @@ struct RefineResult : FitResult {
   // the declared ones whose logs show far more (ChannelNoiseNote); empty when
   // neither.
   std::string noise_note;
+  // The logged position's zero read off the rests at the end stops, when it
+  // moved x (ReadPositionZero's note); empty when x is compared as logged.
+  std::string position_note;
   // What a friction_replay stage found (empty without one).
   std::string replay_report;
   // What the friction screen (RefineOptions::screen_friction_starts) found
