@@ -23,7 +23,7 @@ struct CoordinateSearch {
   double chi_square_after = 0;   // and at the moved start
   int candidates = 0;            // simulated
   bool moved = false;            // some move lowered the measure
-  std::string report;            // one line, empty when nothing moved
+  std::string report;            // one line: the moves taken, or that none lowered the measure
 };
 
 // Up to RefineOptions::coordinate_rounds moves of the free friction

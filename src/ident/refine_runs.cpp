@@ -5,7 +5,6 @@
 
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
-#include "pneumaid/validate/logged_run.h"
 #include "pneumaid/validate/validate.h"
 
 namespace pneumaid::refine_internal {
@@ -80,10 +79,11 @@ std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Un
 
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
                       double half_stroke_m, const std::map<std::string, double>& sigmas,
-                      const std::array<double, kStartOffsets>& sample_sigma_Pa) {
+                      const std::array<double, kStartOffsets>& sample_sigma_Pa,
+                      const PositionZero& zero) {
   FitExperiment out;
   out.id = e.entry.id;
-  out.measured = LoggedTrajectory(e, unit);
+  out.measured = LoggedTrajectory(e, zero);
   out.command = SampledCommand(out.measured.t_s, out.measured.u_V);
   int averaged = 1;
   out.initial = LoggedInitialState(out.measured, half_stroke_m, &averaged);
@@ -187,10 +187,11 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
   const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
   const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);
+  const PositionZero zero = ReadPositionZero(unit);
   const double band = windows ? 4.0 * NoiseSigma(unit, "x") + 10e-6 : 0.0;
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
-    FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma);
+    FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma, zero);
     if (!windows) {
       runs.push_back(std::move(run));
       continue;

@@ -14,6 +14,7 @@
 #include "pneumaid/sim/command.h"
 #include "pneumaid/sim/sensitivities.h"
 #include "pneumaid/sim/simulate.h"
+#include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid::refine_internal {
 
@@ -80,10 +81,12 @@ std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Un
                                                    const std::map<std::string, double>& sigmas);
 
 // One logged run as the fit sees it. `sigmas`: ChannelSigmas(spec, unit);
-// `sample_sigma_Pa`: StartSampleSigma(spec, unit, sigmas).
+// `sample_sigma_Pa`: StartSampleSigma(spec, unit, sigmas); `zero`:
+// ReadPositionZero(unit).
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
                       double half_stroke_m, const std::map<std::string, double>& sigmas,
-                      const std::array<double, kStartOffsets>& sample_sigma_Pa);
+                      const std::array<double, kStartOffsets>& sample_sigma_Pa,
+                      const PositionZero& zero);
 
 // Multiple shooting (FitStage::windows): the run cut where the rod is stuck,
 // each window simulated from its logged state, v = 0, with the command-driven

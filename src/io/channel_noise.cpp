@@ -39,10 +39,14 @@ double Quantum(const std::vector<const std::vector<double>*>& columns, std::size
   return 100 * off_grid <= steps && unit_steps >= 10 ? smallest : 0.0;
 }
 
+// The fourth difference centred on *y (y[-2] .. y[2]): white noise of sigma
+// has variance kFourthDifferenceVariance sigma^2 in it.
+constexpr double kFourthDifferenceVariance = 70.0;
+double FourthDifference(const double* y) { return y[2] - 4 * y[1] + 6 * y[0] - 4 * y[-1] + y[-2]; }
+
 // The noise of the quietest stretches of `columns`: the spread of the fourth
-// differences (white noise: variance 70 sigma^2; median absolute value 0.6745
-// sigma_d) in blocks of kFloorBlock samples, the 10th percentile over the
-// blocks. Where the signal is not smooth at the sampling rate (a light rod
+// differences (median absolute value 0.6745 of their sigma) in blocks of kFloorBlock samples, the
+// 10th percentile over the blocks. Where the signal is not smooth at the sampling rate (a light rod
 // slipping within a sample at 250 Hz) EstimateNoise reads its moves as noise;
 // a resting rod, a settled chamber or a held flow shows the noise alone. For
 // white noise the 10th percentile is kFloorOfWhiteNoise of its sigma; lower
@@ -56,12 +60,10 @@ double QuietNoiseFloor(const std::vector<const std::vector<double>*>& columns) {
   for (const std::vector<double>* v : columns) {
     for (std::size_t begin = 0; begin + kFloorBlock <= v->size(); begin += kFloorBlock) {
       d.clear();
-      for (std::size_t i = begin + 4; i < begin + kFloorBlock; ++i) {
-        const double* x = v->data() + i;
-        d.push_back(std::fabs(x[0] - 4 * x[-1] + 6 * x[-2] - 4 * x[-3] + x[-4]));
-      }
+      for (std::size_t i = begin + 2; i + 2 < begin + kFloorBlock; ++i)
+        d.push_back(std::fabs(FourthDifference(v->data() + i)));
       std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-      blocks.push_back(d[d.size() / 2] / 0.6745 / std::sqrt(70.0));
+      blocks.push_back(d[d.size() / 2] / 0.6745 / std::sqrt(kFourthDifferenceVariance));
     }
   }
   if (blocks.size() < kMinFloorBlocks) return 0;
@@ -95,7 +97,7 @@ ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& column
   for (const std::vector<double>* v : columns) {
     const std::vector<double>& y = *v;
     for (std::size_t i = 2; i + 2 < y.size(); i += stride) {
-      d4.push_back(y[i + 2] - 4 * y[i + 1] + 6 * y[i] - 4 * y[i - 1] + y[i - 2]);
+      d4.push_back(FourthDifference(y.data() + i));
     }
   }
   noise.samples = d4.size();
@@ -127,7 +129,8 @@ ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& column
       ++kept;
     }
   }
-  const double spread = kept > 0 ? squares / (70.0 * static_cast<double>(kept)) : 0.0;
+  const double spread =
+      kept > 0 ? squares / (kFourthDifferenceVariance * static_cast<double>(kept)) : 0.0;
   // Readings on an ADC step: a model is off by the rounding, q^2 / 12 in
   // variance, also where the differences do not see it (a resting signal with
   // less noise than the step repeats its reading). Where the noise is at least

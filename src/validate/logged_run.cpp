@@ -117,10 +117,9 @@ PositionZero ReadPositionZero(const Unit& unit) {
   return out;
 }
 
-Trajectory LoggedTrajectory(const Experiment& e, const Unit& unit) {
+Trajectory LoggedTrajectory(const Experiment& e, const PositionZero& zero) {
   Trajectory out = e.AsTrajectory();
-  const double offset = ReadPositionZero(unit).offset_m;
-  for (double& x : out.x_m) x -= offset;
+  for (double& x : out.x_m) x -= zero.offset_m;
   return out;
 }
 

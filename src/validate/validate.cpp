@@ -51,11 +51,11 @@ std::vector<std::string> MissedThresholds(const std::map<std::string, ChannelMet
 }
 
 ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& unit,
-                                        const Experiment& experiment,
+                                        const Experiment& experiment, const PositionZero& zero,
                                         const ValidationOptions& options) {
   ExperimentValidation out;
   out.id = experiment.entry.id;
-  out.measured = LoggedTrajectory(experiment, unit);
+  out.measured = LoggedTrajectory(experiment, zero);
   const Trajectory& m = out.measured;
   const InitialState initial = LoggedInitialState(m, 0.5 * params.cylinder.stroke_m);
   out.simulation = Simulate(params, SampledCommand(m.t_s, m.u_V), initial, m.t_s,
@@ -140,6 +140,7 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
   const Parameters conditioned = WithRigConditions(params, unit);
   ValidationReport report;
   report.unit = unit.manifest.unit;
+  const PositionZero zero = ReadPositionZero(unit);  // once for every run
   for (const auto& id : options.experiment_ids) {
     bool found = false;
     for (const auto& e : unit.experiments) found = found || e.entry.id == id;
@@ -156,7 +157,7 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
                        "experiment '" + e.entry.id + "' is a " + ToString(e.entry.kind) +
                            " log; only stroke and validation runs can be simulated");
     }
-    report.experiments.push_back(ValidateExperiment(conditioned, unit, e, options));
+    report.experiments.push_back(ValidateExperiment(conditioned, unit, e, zero, options));
   }
   if (report.experiments.empty()) {
     throw InputError(unit.manifest_path(), 0, 0, "no validation experiments to validate");

@@ -51,7 +51,7 @@ TEST(PositionZeroTest, TheRestsAtTheStopsShowATransducersZero) {
   EXPECT_NE(zero.note.find(" lower (a transducer's zero)"), std::string::npos) << zero.note;
   // The trajectories compared with simulations are the rod where it was.
   for (std::size_t k = 0; k < unit.experiments.size(); ++k) {
-    const Trajectory as_zeroed = LoggedTrajectory(shifted.experiments[k], shifted);
+    const Trajectory as_zeroed = LoggedTrajectory(shifted.experiments[k], zero);
     const std::vector<double>& x = unit.experiments[k].column("x");
     for (std::size_t i = 0; i < x.size(); ++i)
       ASSERT_NEAR(as_zeroed.x_m[i], x[i] + 2e-4 - zero.offset_m, 1e-12);

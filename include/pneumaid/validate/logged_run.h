@@ -59,9 +59,10 @@ struct PositionZero {
 };
 PositionZero ReadPositionZero(const Unit& unit);
 
-// e.AsTrajectory() with its x read through the unit's PositionZero: what
-// the refinement and validation compare simulations with.
-Trajectory LoggedTrajectory(const Experiment& e, const Unit& unit);
+// e.AsTrajectory() with its x read through `zero` (ReadPositionZero of its
+// unit, read once for all of the unit's runs): what the refinement and
+// validation compare simulations with.
+Trajectory LoggedTrajectory(const Experiment& e, const PositionZero& zero);
 
 // A simulated run as the rig's instruments would have logged it: each
 // channel (x, p1, p2, q1, q2) through the lag the manifest declares for it.
