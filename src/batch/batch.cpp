@@ -94,6 +94,7 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
     outcome.verdict = "up to date";
     return outcome;
   }
+  if (options.refine) CheckRunsToFit(options.spec, unit);
   std::ostringstream report;
   std::ostringstream json;
   IdentifyReport identified;

@@ -1,10 +1,12 @@
 #include <ctime>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 
 #include "commands.h"
 #include "pneumaid/ident/identify.h"
+#include "pneumaid/ident/refine.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
@@ -54,6 +56,12 @@ int RunIdentify(const IdentifyArgs& args) {
   options.valve.fit_u_sat = !args.fix_u_sat;
   options.tool_version = PNEUMAID_VERSION;
   options.date = UtcNow();
+  // A unit the refinement would refuse is refused before the component fits.
+  std::optional<FitSpec> spec;
+  if (args.refine) {
+    spec = LoadFitSpec(args.spec_path);
+    CheckRunsToFit(*spec, unit);
+  }
   IdentifyReport report;
   Parameters identified;
   try {
@@ -69,8 +77,8 @@ int RunIdentify(const IdentifyArgs& args) {
   if (args.refine) {
     RefineOptions refine;
     refine.threads = args.threads;
-    return ReportAndSave(Refine(identified, unit, LoadFitSpec(args.spec_path), refine), unit,
-                         args.out_path, args.html_path, report.BriefReport());
+    return ReportAndSave(Refine(identified, unit, *spec, refine), unit, args.out_path,
+                         args.html_path, report.BriefReport());
   }
   ReportOptions page;
   page.text_report = report.BriefReport();

@@ -178,6 +178,8 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   return r;
 }
 
+void CheckRunsToFit(const FitSpec& spec, const Unit& unit) { RunsToFit(spec, unit); }
+
 RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,
                          const RefineOptions& options) {
   CheckInputs(spec, options);

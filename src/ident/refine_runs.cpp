@@ -46,11 +46,15 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
     }
     const bool is_kind = name == "stroke" || name == "validation";
     if (!matched && (must_match || !is_kind)) {
-      throw InputError(spec.source, 0, 0,
-                       is_kind ? "fit: " + unit.manifest_path() + " has no " + name +
-                                     " experiment: the refinement has no run to fit"
-                               : "fit: no experiment '" + name + "' (an id or a kind) in " +
-                                     unit.manifest_path());
+      if (is_kind) {  // the unit lacks what a spec may rightly ask of any unit
+        throw InputError(unit.manifest_path(), 0, 0,
+                         "the unit has no " + name + " experiment, and the fit spec " +
+                             spec.source + " fits '" + name +
+                             "': the refinement has no run to fit");
+      }
+      throw InputError(
+          spec.source, 0, 0,
+          "fit: no experiment '" + name + "' (an id or a kind) in " + unit.manifest_path());
     }
   }
   return chosen;
@@ -173,9 +177,7 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, doub
   return windows;
 }
 
-// The fitted runs of a spec, whole or cut into windows.
-std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
-                                      const FitSpec& spec, bool windows) {
+std::vector<const Experiment*> RunsToFit(const FitSpec& spec, const Unit& unit) {
   const auto fitted = Select(unit, spec.fit, spec, true);
   for (const Experiment* e : Select(unit, spec.hold_out, spec, false)) {
     if (std::count(fitted.begin(), fitted.end(), e)) {
@@ -184,6 +186,13 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
     }
   }
   if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
+  return fitted;
+}
+
+// The fitted runs of a spec, whole or cut into windows.
+std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
+                                      const FitSpec& spec, bool windows) {
+  const auto fitted = RunsToFit(spec, unit);
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
   const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
   const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);

@@ -95,6 +95,9 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
 std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m,
                                    const std::array<double, kStartOffsets>& sample_sigma_Pa);
 
+// The experiments `spec` fits on `unit` (CheckRunsToFit's rules).
+std::vector<const Experiment*> RunsToFit(const FitSpec& spec, const Unit& unit);
+
 // The fitted runs of a spec, whole or cut into windows; InputError when none,
 // or when a run is both fitted and held out.
 std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,

@@ -51,5 +51,30 @@ TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(out));
 }
 
+// A valve bench unit asked for --refine, which needs stroke runs: refused
+// before the component fits (it was refused after them, their time spent), with
+// the unit's manifest and the spec named, exit 2 and nothing written.
+TEST_F(IdentifyCliTest, AUnitWithNothingToRefineIsRefusedBeforeTheComponentFits) {
+  const std::filesystem::path unit = dir_ / "unit";
+  std::filesystem::copy(testing::Source("datasets/paper-rig"), unit);
+  std::string manifest = Read(unit / "unit.yaml");
+  const std::size_t experiments = manifest.find("experiments:");
+  ASSERT_NE(experiments, std::string::npos);
+  manifest.replace(experiments, std::string::npos,
+                   "experiments:\n  - {id: valve-staircase, kind: valve, file: "
+                   "valve-staircase.csv}\n");
+  std::ofstream(unit / "unit.yaml", std::ios::binary) << manifest;
+  const std::string out = (dir_ / "refined.yaml").string();
+  EXPECT_EQ(Run("identify " + unit.string() + " --refine --out " + out), 2);
+  EXPECT_NE(Stderr().find((unit / "unit.yaml").string() + ": the unit has no stroke experiment"),
+            std::string::npos)
+      << Stderr();
+  EXPECT_NE(Stderr().find("fit-default.yaml"), std::string::npos) << Stderr();
+  EXPECT_EQ(Stdout().find("Valve K_vp fit"), std::string::npos) << Stdout();
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // Without --refine the same unit is identified.
+  EXPECT_EQ(Run("identify " + unit.string() + " --out " + out), 0) << Stderr();
+}
+
 }  // namespace
 }  // namespace pneumaid

@@ -441,7 +441,8 @@ TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
     Refine(Parameters{}, no_strokes, spec, RefineOptions{});
     ADD_FAILURE() << "a unit without stroke logs was refined on its strokes";
   } catch (const InputError& error) {
-    EXPECT_NE(std::string(error.what()).find("has no stroke experiment"), std::string::npos)
+    EXPECT_NE(std::string(error.what()).find("the unit has no stroke experiment"),
+              std::string::npos)
         << error.what();
   }
   spec = TwoParameters();

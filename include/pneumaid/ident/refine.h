@@ -251,6 +251,13 @@ struct RefineResult : FitResult {
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options);
 
+// Throws InputError, as Refine would, when `spec` has nothing to fit on
+// `unit`: it names a run or a kind of run the unit does not log, a log that
+// cannot be simulated, or a run both fitted and held out. For callers that
+// fit the components first (identify --refine, batch): the unit is refused
+// before that work, not after it.
+void CheckRunsToFit(const FitSpec& spec, const Unit& unit);
+
 // How well `params` explain the fitted runs of `spec` on `unit`, with no fit:
 // each run simulated from its logged start, its channels' reduced
 // chi-squares and worst windows, the median over runs and the verdict
