@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # The discrepancy workflow's studies (docs/diagnose.md), on synthetic units
-# with the rig's model mismatch, validation runs only (configs/protocol-validation.yaml):
+# with the rig's model mismatch, validation runs only (configs/protocol-validation.yaml with
+# stick events: its smooth stick, a rod that creeps, is the catalog's stick_creep, studied as
+# an effect of its own):
 #   scripts/diagnose-study.sh false-positives [SEEDS]   # clean units, both orientations
 #   scripts/diagnose-study.sh detection [SEED [EFFECT]] # each effect (or one) at four sizes
 # Prints one line per unit: what was hidden, what diagnose named.
@@ -10,12 +12,14 @@ cd "$(dirname "$0")/.."
 pneumaid=build/pneumaid
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+sed 's/friction: regularized/friction: events/' configs/protocol-validation.yaml \
+  > "$work/protocol.yaml"
 
 run() {  # label, truth config, effects body, seed, base config
   local label=$1 truth=$2 effects=$3 seed=$4 base=$5
   sed "s/^effects: {}/effects: {$effects}/" "$truth" > "$work/truth.yaml"
   rm -rf "$work/unit" "$work/out"
-  $pneumaid synth --truth "$work/truth.yaml" --protocol configs/protocol-validation.yaml \
+  $pneumaid synth --truth "$work/truth.yaml" --protocol "$work/protocol.yaml" \
     --seed "$seed" --out "$work/unit" >/dev/null
   local named
   named=$($pneumaid diagnose --params "$base" "$work/unit" --out "$work/out" --max-effects 1 \
@@ -57,6 +61,7 @@ heat_transfer h 0.0125 0.025 0.05 0.1
 supply_droop r 6e7 1.2e8 2.5e8 5e8
 friction_pressure kp 2.5e-7 5e-7 1e-6 2e-6
 valve_deadzone u0 0.01 0.02 0.04 0.08
+stick_creep v 2.5e-5 5e-5 1e-4 2e-4
 EOT
     ;;
   *) echo "usage: $0 false-positives [SEEDS] | detection [SEED [EFFECT]]" >&2; exit 2 ;;

@@ -44,6 +44,11 @@ std::vector<EffectInfo> MakeCatalog() {
        {{"u0", "V", "dead zone of the valve opening", ValueRange{0, true, 1, false}, 0.0, 0.3,
          0.03}},
        true},
+      {"stick_creep",
+       "a stuck rod creeps: friction saturates within |v| < v, not at v = 0",
+       {{"v", "m/s", "creep speed at which a held rod's friction reaches its Stribeck value",
+         kPositive, 1e-6, 1e-3, 1e-4}},
+       true},
   };
 }
 

@@ -20,6 +20,7 @@ Parameters WithAllSimulatedEffects() {
   p.effects["valve_deadzone"] = {{"u0", 0.05}};
   p.effects["heat_transfer"] = {{"h", 0.3}};
   p.effects["supply_droop"] = {{"r", 3e7}};
+  p.effects["stick_creep"] = {{"v", 2e-4}};
   return p;
 }
 
@@ -34,8 +35,24 @@ TEST(ActuatorTest, LayoutCountsTheStatesOfEachOption) {
   p.effects["pipeline_lag"] = {{"delta", 8.0}};
   EXPECT_EQ(ActuatorLayout::For(p).size, 6);
   // valve_lag 2, the tube 2, flow_sensor_lag 2, heat_transfer 2 (two gas
-  // temperatures); supply_droop has no state.
+  // temperatures); supply_droop and stick_creep have no state.
   EXPECT_EQ(ActuatorLayout::For(WithAllSimulatedEffects()).size, 12);
+}
+
+// stick_creep sets the friction saturation's width (the regularisation's
+// otherwise): at half of it a rod's friction is 1.5 / 2 - 0.5 / 8 of Fs.
+TEST(ActuatorTest, StickCreepSetsTheWidthOfTheFrictionSaturation) {
+  Parameters p;
+  const ModelRegularization reg;
+  EXPECT_EQ(MakeActuatorCoefficients<double>(p, reg).stick_velocity_m_per_s,
+            reg.stick_velocity_m_per_s);
+  p.effects["stick_creep"] = {{"v", 2e-4}};
+  const auto c = MakeActuatorCoefficients<double>(p, reg);
+  EXPECT_EQ(c.stick_velocity_m_per_s, 2e-4);
+  const double fs = p.friction.positive.static_force_N;
+  EXPECT_NEAR(
+      FrictionForce(1e-4, c.friction_positive, c.friction_negative, c.stick_velocity_m_per_s),
+      fs * (0.75 - 0.0625), 1e-3 * fs);
 }
 
 // The Jacobian CVODE uses (forward-mode autodiff) against central differences

@@ -50,7 +50,7 @@ TEST(ParametersTest, EffectsAreCheckedAgainstTheCatalog) {
 TEST(ParametersTest, CatalogHoldsTheSpecNames) {
   for (const char* name :
        {"valve_lag", "flow_sensor_lag", "pipeline_lag", "cross_leakage", "heat_transfer",
-        "supply_droop", "friction_pressure", "valve_deadzone"}) {
+        "supply_droop", "friction_pressure", "valve_deadzone", "stick_creep"}) {
     EXPECT_NE(FindEffect(name), nullptr) << name;
   }
 }

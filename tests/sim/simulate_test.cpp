@@ -122,6 +122,42 @@ TEST(SimulateTest, RodHeldBelowStaticFrictionCreepsLessThanATenthMillimetrePerSe
   }
 }
 
+// stick_creep: a rod held below Fs creeps at the speed where the saturated
+// friction Fs (1.5 s - 0.5 s^3), s = v / v_creep, balances the net force
+// (closed form; the sealed chambers barely change over the few um it moves),
+// with stick events or without; the base model's rod stays put.
+TEST(SimulateTest, WithStickCreepAHeldRodCreepsAtTheSpeedItsFrictionBalances) {
+  Parameters p = HorizontalWithoutTube();
+  const double fs = p.friction.positive.static_force_N, p2 = 2e5, hold_s = 0.2;
+  for (double fraction : {0.3, 0.8, -0.5}) {
+    const double p1 = (fraction * fs - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
+    const InitialState start{0.0, 0.0, p1, p2};
+    const auto times = UniformTimes(0, hold_s, 1000);
+    const Trajectory still = MustSimulate(p, CommandSignal{}, start, times);
+    EXPECT_EQ(still.x_m.back(), 0.0) << fraction;
+    Parameters creeping = p;
+    creeping.effects["stick_creep"] = {{"v", 1e-4}};
+    const double scale = fraction > 0 ? 1.0 : p.friction.negative.static_force_N / fs;
+    // s from 1.5 s - 0.5 s^3 = |F| / Fs by bisection on [0, 1].
+    const double target = std::fabs(fraction) / scale;
+    double low = 0, high = 1;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (low + high);
+      (mid * (1.5 - 0.5 * mid * mid) < target ? low : high) = mid;
+    }
+    const double expected_m_per_s = std::copysign(1e-4 * low, fraction);
+    for (StickSlipTreatment treatment :
+         {StickSlipTreatment::kEvents, StickSlipTreatment::kRegularized}) {
+      SimulationOptions options;
+      options.stick_slip = treatment;
+      const Trajectory run = MustSimulate(creeping, CommandSignal{}, start, times, options);
+      const std::size_t half = run.size() / 2;  // past the start's transient
+      const double speed = (run.x_m.back() - run.x_m[half]) / (run.t_s.back() - run.t_s[half]);
+      EXPECT_NEAR(speed, expected_m_per_s, 0.02 * std::fabs(expected_m_per_s)) << fraction;
+    }
+  }
+}
+
 TEST(SimulateTest, RodBreaksAwayAboveStaticFriction) {
   Parameters p = HorizontalWithoutTube();
   const double p2 = 2e5;

@@ -29,7 +29,9 @@ namespace pneumaid {
 // one; docs/model.md explains the choices.
 struct ModelRegularization {
   // Half-width of the friction saturation around v = 0. A rod whose net
-  // force is below Fs creeps at less than this speed.
+  // force is below Fs creeps at less than this speed. A parameter set with
+  // the stick_creep effect sets its own (and is simulated without stick
+  // events).
   double stick_velocity_m_per_s = 1.0e-5;
   // Contact spring of the end stops. 1e7 N/m lets the full supply force on the
   // cap side (100 N) push the rod 10 um past the stop.
@@ -170,7 +172,10 @@ ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
                                                   : 0.0);
   c.friction_positive = MakeStribeckCoefficients<T>(p.friction.positive);
   c.friction_negative = MakeStribeckCoefficients<T>(p.friction.negative);
-  c.stick_velocity_m_per_s = T(reg.stick_velocity_m_per_s);
+  // stick_creep: the saturation's width is the rig's, not the regularisation's.
+  c.stick_velocity_m_per_s =
+      T(p.effects.count("stick_creep") ? internal::EffectValue(p, "stick_creep", "v")
+                                       : reg.stick_velocity_m_per_s);
   const double stiffness = reg.end_stop_stiffness_N_per_m;
   c.end_stop = {T(half_stroke), T(stiffness),
                 T(2.0 * reg.end_stop_damping_ratio * std::sqrt(stiffness * cyl.load_mass_kg)),
