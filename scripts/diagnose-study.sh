@@ -14,6 +14,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 sed 's/friction: regularized/friction: events/' configs/protocol-validation.yaml \
   > "$work/protocol.yaml"
+grep -q 'friction: events' "$work/protocol.yaml" || { echo "protocol: no stick events" >&2; exit 1; }
 
 run() {  # label, truth config, effects body, seed, base config
   local label=$1 truth=$2 effects=$3 seed=$4 base=$5

@@ -11,6 +11,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/effects.h"
 #include "pneumaid/report/report.h"
 
 namespace pneumaid::cli {
@@ -117,7 +118,7 @@ CommandRunner AddDiagnoseCommand(CLI::App* app) {
       ->required();
   app->add_option("--json", args->json_path, "also write the report (pneumaid-report/1) here");
   app->add_option("--max-effects", args->max_effects, "add at most this many effects")
-      ->check(CLI::Range(0, 8))
+      ->check(CLI::Range(0, static_cast<int>(EffectCatalog().size())))
       ->capture_default_str();
   app->add_option("--effects", args->effects,
                   "candidate effects, comma-separated (default: every one the set lacks)");

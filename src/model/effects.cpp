@@ -47,7 +47,7 @@ std::vector<EffectInfo> MakeCatalog() {
       {"stick_creep",
        "a stuck rod creeps: friction saturates within |v| < v, not at v = 0",
        {{"v", "m/s", "creep speed at which a held rod's friction reaches its Stribeck value",
-         kPositive, 1e-6, 1e-3, 1e-4}},
+         kPositive, 1e-5, 1e-3, 1e-4}},
        true},
   };
 }

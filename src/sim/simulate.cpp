@@ -439,9 +439,8 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   InitialLagStates(data.layout, data.coefficients, command, fresh, data.command, initial, t0, y0);
   data.breakaway_margin_N = options.breakaway_margin_N;
   data.reversal_velocity_m_per_s = options.velocity_tolerance_m_per_s;
-  // A rig whose rod creeps (stick_creep) has no stuck mode to switch to.
-  const bool events =
-      options.stick_slip == StickSlipTreatment::kEvents && params.effects.count("stick_creep") == 0;
+  // A rod that creeps (stick_creep) has no stuck mode to switch to.
+  const bool events = options.stick_slip == StickSlipTreatment::kEvents && !Creeps(params);
   data.motion = events ? InitialMode(data, y0) : MotionMode::kRegularized;
   if (data.motion == MotionMode::kStuck) y0[kVelocity] = 0.0;
 

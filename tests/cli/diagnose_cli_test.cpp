@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "cli_test_util.h"
+#include "pneumaid/model/effects.h"
 
 namespace pneumaid {
 namespace {
@@ -53,10 +54,10 @@ TEST_F(DiagnoseCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_EQ(Run("diagnose --params " + testing::Source("configs/paper.yaml") + " " +
                 testing::Source("datasets/fleet/PVQ13-0014") + " --out " + out),
             2);
-  EXPECT_EQ(
-      Run("diagnose --params " + testing::Source("configs/paper.yaml") + " " +
-          testing::Source("datasets/hidden/valve-lag") + " --out " + out + " --max-effects 9"),
-      2);
+  EXPECT_EQ(Run("diagnose --params " + testing::Source("configs/paper.yaml") + " " +
+                testing::Source("datasets/hidden/valve-lag") + " --out " + out + " --max-effects " +
+                std::to_string(EffectCatalog().size() + 1)),
+            2);
   EXPECT_EQ(Listing(dir_), before);
   // An --out that holds other files is never replaced.
   const std::string notes = Write("notes.txt", "mine");

@@ -199,6 +199,38 @@ TEST(SensitivitiesTest, MatchCentralDifferencesWithHeatTransferAndSupplyDroop) {
   EXPECT_GT(sens.p1.col(1).cwiseAbs().maxCoeff() * 3e8, 10.0);   // Pa per 100 % of r
 }
 
+// stick_creep's v: a horizontal rod held at half its breakaway force with the
+// valves shut creeps at a speed proportional to v (docs/effects.md), so its
+// position's column is v's whole effect; with Fs, which the creep speed also
+// sets, against central differences on the creeping hold.
+TEST(SensitivitiesTest, MatchCentralDifferencesForAStickCreepHold) {
+  Case c;
+  c.params.cylinder.orientation = Orientation::kHorizontal;
+  c.params.effects["stick_creep"] = {{"v", 1e-4}};
+  const auto& cyl = c.params.cylinder;
+  const double p2 = 2e5, atmosphere = c.params.supply.atmospheric_pressure_Pa;
+  const double p1 = (0.5 * c.params.friction.positive.static_force_N + p2 * cyl.area_2_m2 +
+                     atmosphere * (cyl.area_1_m2 - cyl.area_2_m2)) /
+                    cyl.area_1_m2;
+  c.initial = {0.0, 0.0, p1, p2};
+  c.times = UniformTimes(0, 0.05, 1000);
+  TightenTolerances(&c);
+  c.sensitivity = FreeParameters(c.params, {"effects.stick_creep.v", "friction.positive.Fs"});
+  c.sensitivity.error_control = true;
+  Trajectory run;
+  TrajectorySensitivities sens;
+  const SimulationSummary summary = SimulateCase(c, &run, &sens);
+  ASSERT_TRUE(summary.ok()) << summary.message;
+  EXPECT_EQ(summary.events, 0);
+  EXPECT_GT(run.x_m.back(), 1e-6);  // it creeps
+  long mismatch = 0;
+  const double worst = WorstError(c, run, sens, 1e-4, 1e-4, &mismatch);
+  std::cout << "worst |J - J_fd| / (|J_fd| + 1): " << worst << "\n";
+  EXPECT_LE(worst, 1e-4);
+  // x grows with v: at the end of the hold dx/dv is about x / v.
+  EXPECT_NEAR(sens.x.col(0)(sens.x.rows() - 1) * 1e-4, run.x_m.back(), 0.05 * run.x_m.back());
+}
+
 // Stick/slip and the end stop: the jump conditions make the sensitivities the
 // derivatives of the event-driven outputs. Checked against central differences
 // whose perturbed runs keep the same number of events. The bound is looser than

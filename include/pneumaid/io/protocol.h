@@ -64,7 +64,9 @@ struct Protocol {
   // How the rig's physics differs from the model the fits use (none by
   // default): a real rig is not the fitting model.
   struct Mismatch {
-    // Stick as a smooth law (creep below stick_velocity) instead of events.
+    // Stick as a smooth law (creep below stick_velocity) instead of events:
+    // the catalog's stick_creep effect at that width (a truth holding the
+    // effect creeps at its own v).
     bool regularized_friction = false;
     double stick_velocity_m_per_s = 1e-4;
     // The rig's integration tolerance (the fits use 1e-5 to 1e-6).

@@ -128,6 +128,11 @@ struct ActuatorOutputs {
   T q1_kg_per_s, q2_kg_per_s;  // mass flows into the chambers at the valve side
 };
 
+// stick_creep: the rod creeps below its breakaway force (friction saturates
+// within |v| < the effect's v), so it has no stuck mode; its width replaces
+// ModelRegularization::stick_velocity_m_per_s.
+inline bool Creeps(const Parameters& p) { return p.effects.count("stick_creep") > 0; }
+
 namespace internal {
 inline double EffectValue(const Parameters& p, const char* name, const char* key) {
   const auto effect = p.effects.find(name);
@@ -172,10 +177,8 @@ ActuatorCoefficients<T> MakeActuatorCoefficients(const Parameters& p,
                                                   : 0.0);
   c.friction_positive = MakeStribeckCoefficients<T>(p.friction.positive);
   c.friction_negative = MakeStribeckCoefficients<T>(p.friction.negative);
-  // stick_creep: the saturation's width is the rig's, not the regularisation's.
   c.stick_velocity_m_per_s =
-      T(p.effects.count("stick_creep") ? internal::EffectValue(p, "stick_creep", "v")
-                                       : reg.stick_velocity_m_per_s);
+      T(Creeps(p) ? internal::EffectValue(p, "stick_creep", "v") : reg.stick_velocity_m_per_s);
   const double stiffness = reg.end_stop_stiffness_N_per_m;
   c.end_stop = {T(half_stroke), T(stiffness),
                 T(2.0 * reg.end_stop_damping_ratio * std::sqrt(stiffness * cyl.load_mass_kg)),

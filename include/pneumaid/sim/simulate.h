@@ -19,10 +19,12 @@ enum class StickSlipTreatment {
   // Exact Eq. 12 switching: the rod is held (x, v frozen) until the driving
   // force exceeds Fs, slides with the Stribeck law of its direction, and sticks
   // again when v returns to zero with the force below Fs. CVODE root finding
-  // locates each switch; the integrator restarts there.
+  // locates each switch; the integrator restarts there. A parameter set with
+  // the stick_creep effect is simulated as kRegularized (its rod creeps).
   kEvents,
-  // One smooth law (ModelRegularization::stick_velocity_m_per_s): no events,
-  // creep below the stick velocity while held. For smooth sensitivities.
+  // One smooth law (ModelRegularization::stick_velocity_m_per_s, or the
+  // stick_creep effect's v): no events, creep below the stick velocity while
+  // held. For smooth sensitivities.
   kRegularized,
 };
 
