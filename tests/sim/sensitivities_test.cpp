@@ -174,6 +174,20 @@ TEST(SensitivitiesTest, MatchCentralDifferencesOnASmoothSlide) {
   EXPECT_LE(worst, 1e-4);
 }
 
+// `c` simulated with its sensitivities (error-controlled) into `run` and
+// `sens`: no stick event, and every column within 1e-4 of central
+// differences (relative to |J_fd| + 1).
+void ExpectMatchOnAnEventFreeRun(Case c, Trajectory* run, TrajectorySensitivities* sens) {
+  c.sensitivity.error_control = true;
+  const SimulationSummary summary = SimulateCase(c, run, sens);
+  ASSERT_TRUE(summary.ok()) << summary.message;
+  EXPECT_EQ(summary.events, 0);
+  long mismatch = 0;
+  const double worst = WorstError(c, *run, *sens, 1e-4, 1e-4, &mismatch);
+  std::cout << "worst |J - J_fd| / (|J_fd| + 1): " << worst << "\n";
+  EXPECT_LE(worst, 1e-4);
+}
+
 // The effects whose parameters reach the model through a gas-temperature
 // state (heat_transfer) and through the implicit supply pressure
 // (supply_droop, derivatives -f_theta / f'), with the base parameters they
@@ -184,16 +198,9 @@ TEST(SensitivitiesTest, MatchCentralDifferencesWithHeatTransferAndSupplyDroop) {
   c.params.effects["supply_droop"] = {{"r", 3e8}};
   c.sensitivity = FreeParameters(c.params, {"effects.heat_transfer.h", "effects.supply_droop.r",
                                             "pipeline.delta", "friction.positive.b"});
-  c.sensitivity.error_control = true;
   Trajectory run;
   TrajectorySensitivities sens;
-  const SimulationSummary summary = SimulateCase(c, &run, &sens);
-  ASSERT_TRUE(summary.ok()) << summary.message;
-  EXPECT_EQ(summary.events, 0);
-  long mismatch = 0;
-  const double worst = WorstError(c, run, sens, 1e-4, 1e-4, &mismatch);
-  std::cout << "worst |J - J_fd| / (|J_fd| + 1): " << worst << "\n";
-  EXPECT_LE(worst, 1e-4);
+  ExpectMatchOnAnEventFreeRun(c, &run, &sens);
   // Both effects move the outputs (their columns are not zero).
   EXPECT_GT(sens.p1.col(0).cwiseAbs().maxCoeff() * 0.05, 10.0);  // Pa per 100 % of h
   EXPECT_GT(sens.p1.col(1).cwiseAbs().maxCoeff() * 3e8, 10.0);   // Pa per 100 % of r
@@ -216,17 +223,10 @@ TEST(SensitivitiesTest, MatchCentralDifferencesForAStickCreepHold) {
   c.times = UniformTimes(0, 0.05, 1000);
   TightenTolerances(&c);
   c.sensitivity = FreeParameters(c.params, {"effects.stick_creep.v", "friction.positive.Fs"});
-  c.sensitivity.error_control = true;
   Trajectory run;
   TrajectorySensitivities sens;
-  const SimulationSummary summary = SimulateCase(c, &run, &sens);
-  ASSERT_TRUE(summary.ok()) << summary.message;
-  EXPECT_EQ(summary.events, 0);
+  ExpectMatchOnAnEventFreeRun(c, &run, &sens);
   EXPECT_GT(run.x_m.back(), 1e-6);  // it creeps
-  long mismatch = 0;
-  const double worst = WorstError(c, run, sens, 1e-4, 1e-4, &mismatch);
-  std::cout << "worst |J - J_fd| / (|J_fd| + 1): " << worst << "\n";
-  EXPECT_LE(worst, 1e-4);
   // x grows with v: at the end of the hold dx/dv is about x / v.
   EXPECT_NEAR(sens.x.col(0)(sens.x.rows() - 1) * 1e-4, run.x_m.back(), 0.05 * run.x_m.back());
 }
