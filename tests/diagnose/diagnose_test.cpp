@@ -14,11 +14,11 @@
 #include <iostream>
 #include <string>
 
+#include "../../src/diagnose/candidates.h"
 #include "../synth/synth_test_util.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/protocol.h"
-#include "pneumaid/model/effects.h"
 #include "pneumaid/synth/synthetic_rig.h"
 #include "pneumaid/validate/validate.h"
 
@@ -92,12 +92,8 @@ TEST_P(DiagnoseHiddenEffectTest, NamesTheEffectAndClosesMostOfItsGap) {
   options.max_effects = 1;
   // The rig's creep is the mismatch these units carry, not the question:
   // the candidates are the others (the creep's own case has them all).
-  for (const EffectInfo& effect : EffectCatalog()) {
-    const std::string name = effect.name;
-    const bool creep = name == "stick_creep", tube = name == "pipeline_lag";
-    if ((creep && hidden.effect != name) || (tube && base.pipeline.model != PipelineModel::kNone))
-      continue;
-    options.effects.push_back(name);
+  for (const std::string& name : diagnose_internal::AbsentEffects(base)) {
+    if (name != "stick_creep" || hidden.effect == name) options.effects.push_back(name);
   }
   const DiagnoseResult result = Diagnose(base, unit, options);
   std::cout << result.BriefReport();
