@@ -11,6 +11,7 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/provenance.h"
+#include "pneumaid/model/actuator.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/logged_run.h"
 #include "refine_attempts.h"
@@ -76,12 +77,22 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   return WithProvenanceEntry(provenance, "refine", entry);
 }
 
-// InputError for options or a spec (however it was made) that are not valid.
-void CheckInputs(const FitSpec& spec, const RefineOptions& options) {
+// InputError for options or a spec (however it was made) that are not valid,
+// and for a friction replay of a set whose rod creeps: the replay sticks the
+// rod exactly (FitFriction), so it would fit a model the set does not use.
+void CheckInputs(const Parameters& start, const FitSpec& spec, const RefineOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
-  if (!spec.IsValid(&error)) {
-    throw InputError(spec.source.empty() ? "fit spec" : spec.source, 0, 0, error);
+  const std::string source = spec.source.empty() ? "fit spec" : spec.source;
+  if (!spec.IsValid(&error)) throw InputError(source, 0, 0, error);
+  for (size_t k = 0; k < spec.stages.size(); ++k) {
+    if (spec.stages[k].friction_replay && Creeps(start)) {
+      throw InputError(source, 0, 0,
+                       "stages: stage " + std::to_string(k + 1) +
+                           " replays friction with a rod that sticks exactly, and the start "
+                           "parameter set holds the stick_creep effect (a rod that creeps): "
+                           "expected no friction_replay stage for a set with stick_creep");
+    }
   }
 }
 
@@ -128,7 +139,7 @@ bool RefineOptions::IsValid(std::string* error) const {
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options) {
   const auto clock = std::chrono::steady_clock::now();
-  CheckInputs(spec, options);
+  CheckInputs(start, spec, options);
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   Attempts attempts(start, unit, spec, stages, options);
@@ -182,7 +193,7 @@ void CheckRunsToFit(const FitSpec& spec, const Unit& unit) { RunsToFit(spec, uni
 
 RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,
                          const RefineOptions& options) {
-  CheckInputs(spec, options);
+  CheckInputs(params, spec, options);
   RefineResult r;
   r.params = params;
   r.misfits = WholeRunMisfits(params, unit, spec, options);

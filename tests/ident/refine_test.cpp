@@ -425,6 +425,18 @@ initial_pressures: fit
   EXPECT_EQ(result.estimated_starts, 1);
 }
 
+// The InputError of Refine(start, unit, spec), which must name each of `names`.
+void ExpectRefusedNaming(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                         const std::vector<std::string>& names) {
+  try {
+    Refine(start, unit, spec, RefineOptions{});
+    ADD_FAILURE() << "refined; expected a refusal naming " << names.front();
+  } catch (const InputError& error) {
+    for (const std::string& name : names)
+      EXPECT_NE(std::string(error.what()).find(name), std::string::npos) << error.what();
+  }
+}
+
 TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   FitSpec spec = TwoParameters();
   spec.fit = {"stroke-999"};
@@ -437,27 +449,20 @@ TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   no_strokes.experiments.clear();
   spec = TwoParameters();
   spec.fit = {"stroke"};
-  try {
-    Refine(Parameters{}, no_strokes, spec, RefineOptions{});
-    ADD_FAILURE() << "a unit without stroke logs was refined on its strokes";
-  } catch (const InputError& error) {
-    EXPECT_NE(std::string(error.what()).find("the unit has no stroke experiment"),
-              std::string::npos)
-        << error.what();
-  }
+  ExpectRefusedNaming(Parameters{}, no_strokes, spec, {"the unit has no stroke experiment"});
   spec = TwoParameters();
   spec.hold_out = {"stroke-100"};  // both fitted and held out
   EXPECT_THROW(Refine(Parameters{}, *unit_, spec, RefineOptions{}), InputError);
   spec = TwoParameters();
   Parameters outside;
   outside.friction.negative.dynamic_force_N = 30;  // above its max of 20
-  try {
-    Refine(outside, *unit_, spec, RefineOptions{});
-    ADD_FAILURE() << "a start outside the bounds was accepted";
-  } catch (const InputError& error) {
-    EXPECT_NE(std::string(error.what()).find("friction.negative.Fd"), std::string::npos)
-        << error.what();
-  }
+  ExpectRefusedNaming(outside, *unit_, spec, {"friction.negative.Fd"});
+  // A friction replay sticks the rod exactly: not a model for a set that creeps.
+  spec.stages = {FitStage{}, FitStage{}};
+  spec.stages[0].friction_replay = true;
+  Parameters creeping;
+  creeping.effects["stick_creep"]["v"] = 1e-4;
+  ExpectRefusedNaming(creeping, *unit_, spec, {"stage 1 replays friction", "stick_creep"});
 }
 
 // On data with model mismatch (smooth stick, the rig integrated tighter) the
