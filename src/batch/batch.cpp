@@ -94,7 +94,10 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
     outcome.verdict = "up to date";
     return outcome;
   }
-  if (options.refine) CheckRunsToFit(options.spec, unit);
+  RefineOptions refine;
+  refine.simulation.stop = stop;
+  refine.validation.stop = stop;
+  if (options.refine) CheckRefinable(options.prior, unit, options.spec, refine);
   std::ostringstream report;
   std::ostringstream json;
   IdentifyReport identified;
@@ -104,9 +107,6 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
        << ", \"directory\": " << JsonString(unit_dir.string());
   std::string verdict = "identified";
   if (options.refine) {
-    RefineOptions refine;
-    refine.simulation.stop = stop;
-    refine.validation.stop = stop;
     const RefineResult r = Refine(params, unit, options.spec, refine);
     report << r.BriefReport();
     if (!r.has_values()) throw FitError("refinement of unit " + name, r.reason);

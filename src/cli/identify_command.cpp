@@ -58,9 +58,11 @@ int RunIdentify(const IdentifyArgs& args) {
   options.date = UtcNow();
   // A unit the refinement would refuse is refused before the component fits.
   std::optional<FitSpec> spec;
+  RefineOptions refine;
+  refine.threads = args.threads;
   if (args.refine) {
     spec = LoadFitSpec(args.spec_path);
-    CheckRunsToFit(*spec, unit);
+    CheckRefinable(prior, unit, *spec, refine);
   }
   IdentifyReport report;
   Parameters identified;
@@ -75,8 +77,6 @@ int RunIdentify(const IdentifyArgs& args) {
   }
   std::cout << report.BriefReport();
   if (args.refine) {
-    RefineOptions refine;
-    refine.threads = args.threads;
     return ReportAndSave(Refine(identified, unit, *spec, refine), unit, args.out_path,
                          args.html_path, report.BriefReport());
   }
@@ -103,11 +103,15 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
                             "fit each valve branch's saturation opening u_sat (the default)");
   app->add_flag("--fix-u-sat", args->fix_u_sat, "keep the prior's u_sat instead of fitting it")
       ->excludes(fit);
-  app->add_flag("--refine", args->refine,
-                "after the component fits, refine through the simulator (see --spec)");
-  app->add_option("--spec", args->spec_path, "fit spec for --refine")->capture_default_str();
+  auto* refine =
+      app->add_flag("--refine", args->refine,
+                    "after the component fits, refine through the simulator (see --spec)");
+  app->add_option("--spec", args->spec_path, "fit spec for --refine")
+      ->capture_default_str()
+      ->needs(refine);
   app->add_option("--threads", args->threads, "--refine: experiments simulated in parallel")
-      ->check(CLI::Range(1, 256));
+      ->check(CLI::Range(1, 256))
+      ->needs(refine);
   AddHtmlOption(app, &args->html_path);
   return [args]() { return RunIdentify(*args); };
 }

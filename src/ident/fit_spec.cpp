@@ -5,6 +5,7 @@
 
 #include "../io/yaml_reader.h"
 #include "pneumaid/io/files.h"
+#include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/sim/sensitivities.h"
 
@@ -12,6 +13,14 @@ namespace pneumaid {
 namespace {
 
 const char* const kChannels[] = {"x", "p1", "p2", "q1", "q2"};
+
+// What the model accepts at a freeable path: a scalar's range or an effect
+// parameter's (the catalog's); nullptr for a path that names neither.
+const ValueRange* RangeOf(const std::string& path) {
+  if (const ScalarParameterInfo* info = FindScalarParameter(path)) return &info->range;
+  if (const EffectParameterInfo* info = FindEffectParameter(path)) return &info->range;
+  return nullptr;
+}
 
 class FitSpecReader : internal::YamlReader {
  public:
@@ -78,9 +87,8 @@ class FitSpecReader : internal::YamlReader {
     for (const auto& entry : node) {
       FreeParameter p;
       p.path = Key(entry.first);
-      const ScalarParameterInfo* info = FindScalarParameter(p.path);
-      const bool effect = p.path.rfind("effects.", 0) == 0;
-      if (info == nullptr && !effect) Fail(entry.first, "unknown parameter '" + p.path + "'");
+      const ValueRange* range = RangeOf(p.path);
+      if (range == nullptr) Fail(entry.first, "unknown parameter '" + p.path + "'");
       const YAML::Node bounds = entry.second;
       const std::string where = "parameters." + p.path;
       Keys(bounds, where + ".", {"min", "max", "scale"});
@@ -88,8 +96,8 @@ class FitSpecReader : internal::YamlReader {
       p.lower = Number(bounds["min"], where + ".min");
       p.upper = Number(bounds["max"], where + ".max");
       if (!(p.lower < p.upper)) Fail(bounds, where + ": expected min < max");
-      if (info != nullptr && (!info->range.Contains(p.lower) || !info->range.Contains(p.upper))) {
-        Fail(bounds, where + ": bounds must lie " + info->range.Describe());
+      if (!range->Contains(p.lower) || !range->Contains(p.upper)) {
+        Fail(bounds, where + ": bounds must lie " + range->Describe());
       }
       if (const YAML::Node scale = bounds["scale"]) {
         const std::string name = Text(scale);
@@ -202,16 +210,14 @@ bool FitSpec::IsValid(std::string* error) const {
   for (std::size_t k = 0; k < parameters.size(); ++k) {
     const FreeParameter& p = parameters[k];
     const std::string where = "parameters." + p.path;
-    const ScalarParameterInfo* info = FindScalarParameter(p.path);
-    if (info == nullptr && p.path.rfind("effects.", 0) != 0) {
-      return fail("parameters: unknown parameter '" + p.path + "'");
-    }
+    const ValueRange* range = RangeOf(p.path);
+    if (range == nullptr) return fail("parameters: unknown parameter '" + p.path + "'");
     for (std::size_t j = 0; j < k; ++j) {
       if (parameters[j].path == p.path) return fail(where + ": freed twice");
     }
     if (!(p.lower < p.upper)) return fail(where + ": expected min < max");
-    if (info != nullptr && (!info->range.Contains(p.lower) || !info->range.Contains(p.upper))) {
-      return fail(where + ": bounds must lie " + info->range.Describe());
+    if (!range->Contains(p.lower) || !range->Contains(p.upper)) {
+      return fail(where + ": bounds must lie " + range->Describe());
     }
     if (p.scale == ParameterScale::kLog && !(p.lower > 0)) {
       return fail(where + ": a log scale needs min > 0");

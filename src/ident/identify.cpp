@@ -29,6 +29,14 @@ void Record(const FitResult& fit, Parameters* params, IdentifyReport* report) {
   }
 }
 
+// Whether `paths` holds one under `prefix`.
+bool Lists(const std::vector<std::string>& paths, const std::string& prefix) {
+  for (const std::string& path : paths) {
+    if (path.compare(0, prefix.size(), prefix) == 0) return true;
+  }
+  return false;
+}
+
 bool HasKind(const Unit& unit, ExperimentKind kind) {
   for (const auto& e : unit.experiments) {
     if (e.entry.kind == kind) return true;
@@ -41,6 +49,22 @@ void AddPriorsUnder(const std::string& prefix, const std::string& why, IdentifyR
     const std::string path = info.path;
     if (path.compare(0, prefix.size(), prefix) == 0)
       report->priors.push_back(path + " (" + why + ")");
+  }
+}
+
+// The prior's effects, which the set keeps and no component fit models, each
+// parameter listed as from the prior. A rod that creeps (stick_creep) is
+// named with what that means for friction fitted here: the friction fit
+// replays a rod that sticks exactly.
+void ListPriorEffects(const Parameters& params, IdentifyReport* report) {
+  const bool friction_fitted = Lists(report->fitted, "friction.");
+  for (const auto& [effect, values] : params.effects) {
+    for (const auto& [name, value] : values) {
+      std::string why = "an effect of the prior; the component fits do not model it";
+      if (effect == "stick_creep" && friction_fitted)
+        why += ": friction.* were fitted to a rod that sticks exactly";
+      report->priors.push_back("effects." + effect + "." + name + " (" + why + ")");
+    }
   }
 }
 
@@ -184,6 +208,7 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
   }
   IdentifyPipeline(unit, prior, options, &params, report);
   IdentifyFriction(unit, prior, options, &params, report);
+  ListPriorEffects(params, report);
   params.provenance_yaml = Provenance(unit, options, *report);
   const auto problems = Validate(params);
   if (!problems.empty()) {

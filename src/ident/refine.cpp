@@ -77,17 +77,20 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   return WithProvenanceEntry(provenance, "refine", entry);
 }
 
-// InputError for options or a spec (however it was made) that are not valid,
-// and for a friction replay of a set whose rod creeps: the replay sticks the
-// rod exactly (FitFriction), so it would fit a model the set does not use.
-void CheckInputs(const Parameters& start, const FitSpec& spec, const RefineOptions& options) {
+// InputError for options or a spec (however it was made) that are not valid.
+void CheckInputs(const FitSpec& spec, const RefineOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("refine options", 0, 0, error);
-  const std::string source = spec.source.empty() ? "fit spec" : spec.source;
-  if (!spec.IsValid(&error)) throw InputError(source, 0, 0, error);
+  if (!spec.IsValid(&error)) throw InputError(spec.Name(), 0, 0, error);
+}
+
+// InputError for a friction replay of a set whose rod creeps: the replay
+// sticks the rod exactly (FitFriction), so it would fit a model the set does
+// not use.
+void CheckReplayModel(const Parameters& start, const FitSpec& spec) {
   for (size_t k = 0; k < spec.stages.size(); ++k) {
     if (spec.stages[k].friction_replay && Creeps(start)) {
-      throw InputError(source, 0, 0,
+      throw InputError(spec.Name(), 0, 0,
                        "stages: stage " + std::to_string(k + 1) +
                            " replays friction with a rod that sticks exactly, and the start "
                            "parameter set holds the stick_creep effect (a rod that creeps): "
@@ -139,7 +142,8 @@ bool RefineOptions::IsValid(std::string* error) const {
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options) {
   const auto clock = std::chrono::steady_clock::now();
-  CheckInputs(start, spec, options);
+  CheckInputs(spec, options);
+  CheckReplayModel(start, spec);
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   Attempts attempts(start, unit, spec, stages, options);
@@ -189,11 +193,16 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   return r;
 }
 
-void CheckRunsToFit(const FitSpec& spec, const Unit& unit) { RunsToFit(spec, unit); }
+void CheckRefinable(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options) {
+  CheckInputs(spec, options);
+  CheckReplayModel(start, spec);
+  RunsToFit(spec, unit);
+}
 
 RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,
                          const RefineOptions& options) {
-  CheckInputs(params, spec, options);
+  CheckInputs(spec, options);
   RefineResult r;
   r.params = params;
   r.misfits = WholeRunMisfits(params, unit, spec, options);

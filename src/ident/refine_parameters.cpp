@@ -17,11 +17,11 @@ ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec) {
   for (const FreeParameter& p : spec.parameters) {
     double value = 0;
     if (!GetParameter(start, p.path, &value)) {
-      throw InputError(spec.source, 0, 0,
+      throw InputError(spec.Name(), 0, 0,
                        "parameter " + p.path + " is not in the starting parameter set");
     }
     if (!(value >= p.lower && value <= p.upper)) {
-      throw InputError(spec.source, 0, 0,
+      throw InputError(spec.Name(), 0, 0,
                        "the start value of " + p.path + " (" + std::to_string(value) +
                            ") lies outside its bounds");
     }

@@ -38,7 +38,7 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
       matched = true;
       if (!IsSimulable(e.entry.kind)) {
         if (by_kind) continue;
-        throw InputError(spec.source, 0, 0,
+        throw InputError(spec.Name(), 0, 0,
                          "experiment '" + name + "' is a " + ToString(e.entry.kind) +
                              " log; only stroke and validation runs can be refined on");
       }
@@ -49,11 +49,11 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
       if (is_kind) {  // the unit lacks what a spec may rightly ask of any unit
         throw InputError(unit.manifest_path(), 0, 0,
                          "the unit has no " + name + " experiment, and the fit spec " +
-                             spec.source + " fits '" + name +
+                             spec.Name() + " fits '" + name +
                              "': the refinement has no run to fit");
       }
       throw InputError(
-          spec.source, 0, 0,
+          spec.Name(), 0, 0,
           "fit: no experiment '" + name + "' (an id or a kind) in " + unit.manifest_path());
     }
   }
@@ -98,7 +98,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
     if (wanted == spec.channels.end() || (out.measured.*row.values).empty()) continue;
     const double sigma = sigmas.at(row.name);
     if (!(sigma > 0)) {
-      throw InputError(spec.source, 0, 0,
+      throw InputError(spec.Name(), 0, 0,
                        "channel " + row.name + ": no sigma given, none declared under sensors in " +
                            unit.manifest_path() + ", and its logs never change");
     }
@@ -108,7 +108,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
     out.channels.push_back(c);
   }
   if (out.channels.empty()) {
-    throw InputError(spec.source, 0, 0, "experiment '" + out.id + "' logs none of the channels");
+    throw InputError(spec.Name(), 0, 0, "experiment '" + out.id + "' logs none of the channels");
   }
   return out;
 }
@@ -181,11 +181,11 @@ std::vector<const Experiment*> RunsToFit(const FitSpec& spec, const Unit& unit) 
   const auto fitted = Select(unit, spec.fit, spec, true);
   for (const Experiment* e : Select(unit, spec.hold_out, spec, false)) {
     if (std::count(fitted.begin(), fitted.end(), e)) {
-      throw InputError(spec.source, 0, 0,
+      throw InputError(spec.Name(), 0, 0,
                        "experiment '" + e->entry.id + "' is both fitted and held out");
     }
   }
-  if (fitted.empty()) throw InputError(spec.source, 0, 0, "no experiment to fit");
+  if (fitted.empty()) throw InputError(spec.Name(), 0, 0, "no experiment to fit");
   return fitted;
 }
 

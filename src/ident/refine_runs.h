@@ -95,7 +95,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
 std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m,
                                    const std::array<double, kStartOffsets>& sample_sigma_Pa);
 
-// The experiments `spec` fits on `unit` (CheckRunsToFit's rules).
+// The experiments `spec` fits on `unit` (CheckRefinable's rules).
 std::vector<const Experiment*> RunsToFit(const FitSpec& spec, const Unit& unit);
 
 // The fitted runs of a spec, whole or cut into windows; InputError when none,

@@ -66,4 +66,17 @@ const EffectInfo* FindEffect(const std::string& name) {
   return nullptr;
 }
 
+const EffectParameterInfo* FindEffectParameter(const std::string& path) {
+  const std::string prefix = "effects.";
+  if (path.compare(0, prefix.size(), prefix) != 0) return nullptr;
+  const auto dot = path.find('.', prefix.size());
+  if (dot == std::string::npos) return nullptr;
+  const EffectInfo* effect = FindEffect(path.substr(prefix.size(), dot - prefix.size()));
+  if (effect == nullptr) return nullptr;
+  for (const EffectParameterInfo& parameter : effect->parameters) {
+    if (path.compare(dot + 1, std::string::npos, parameter.name) == 0) return &parameter;
+  }
+  return nullptr;
+}
+
 }  // namespace pneumaid

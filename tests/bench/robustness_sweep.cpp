@@ -19,8 +19,9 @@
 // true parameters instead of identify's (how far starts are the gap).
 // --start rig: refine the rig's own model from the truth: where the rig
 // creeps (its smooth stick), the truth with that creep as `stick_creep` and
-// its v freed too, so model and rig agree; what the logs determine (the
-// held-out rule then measures against that model's runs).
+// its v freed over the catalog's plausible range, so model and rig agree;
+// what the logs determine (the held-out rule then measures against that
+// model's runs).
 // --held-out-probe K: per unit, K friction sets drawn within half the
 // issue's tolerances around the truth (all else true) are validated on the
 // held-out runs: how many pass the held-out rule (is that rule consistent
@@ -53,6 +54,7 @@
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_writer.h"
+#include "pneumaid/model/effects.h"
 #include "pneumaid/model/kvp.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/synth/synthetic_rig.h"
@@ -351,7 +353,9 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     FitSpec refine_spec = spec;
     if (start == Start::kRig && d.protocol.mismatch.regularized_friction) {
       from.effects["stick_creep"]["v"] = d.protocol.mismatch.stick_velocity_m_per_s;
-      refine_spec.parameters.push_back({"effects.stick_creep.v", 1e-5, 1e-3, ParameterScale::kLog});
+      const EffectParameterInfo& v = *FindEffectParameter("effects.stick_creep.v");
+      refine_spec.parameters.push_back(
+          {"effects.stick_creep.v", v.plausible_min, v.plausible_max, ParameterScale::kLog});
     }
     const RefineResult refined = Refine(from, unit, refine_spec, refine_options);
     out.refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();

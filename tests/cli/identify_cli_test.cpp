@@ -48,6 +48,31 @@ TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_EQ(Run("identify " + testing::Source("datasets/fleet/PVQ13-0014") + " --out " + out), 2);
   EXPECT_EQ(
       Run("identify " + testing::Source("datasets/paper-rig") + " --only valves --out " + out), 2);
+  // --spec and --threads belong to --refine: alone they are refused, not ignored.
+  EXPECT_EQ(Run("identify " + testing::Source("datasets/paper-rig") + " --spec " +
+                testing::Source("configs/fit-default.yaml") + " --out " + out),
+            2);
+  EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+// A prior whose rod creeps (stick_creep), asked to refine with a spec that
+// replays friction with a rod that sticks exactly: refused before the
+// component fits, the spec and the effect named.
+TEST_F(IdentifyCliTest, ACreepingPriorIsRefusedAFrictionReplayBeforeTheComponentFits) {
+  std::string prior = Read(testing::Source("configs/paper.yaml"));
+  const std::size_t effects = prior.find("effects: {}");
+  ASSERT_NE(effects, std::string::npos);
+  prior.replace(effects, 11, "effects: {stick_creep: {v: 1.0e-4}}");
+  const std::filesystem::path prior_path = dir_ / "creeping.yaml";
+  std::ofstream(prior_path, std::ios::binary) << prior;
+  const std::string out = (dir_ / "refined.yaml").string();
+  EXPECT_EQ(
+      Run("identify " + testing::Source("datasets/paper-rig") + " --prior " + prior_path.string() +
+          " --refine --spec " + testing::Source("configs/fit-from-scratch.yaml") + " --out " + out),
+      2);
+  EXPECT_NE(Stderr().find("fit-from-scratch.yaml"), std::string::npos) << Stderr();
+  EXPECT_NE(Stderr().find("stick_creep"), std::string::npos) << Stderr();
+  EXPECT_EQ(Stdout().find("Valve K_vp fit"), std::string::npos) << Stdout();
   EXPECT_FALSE(std::filesystem::exists(out));
 }
 

@@ -99,6 +99,14 @@ INSTANTIATE_TEST_SUITE_P(
                 "format: pneumaid-fit/1\nparameters:\n"
                 "  friction.positive.Fd: {min: 0, max: 9, scale: log}\n",
                 3, "min > 0"},
+        BadSpec{"an effect's bound outside what the model accepts",  // v = 0: no creep width
+                "format: pneumaid-fit/1\nparameters:\n"
+                "  effects.stick_creep.v: {min: 0, max: 1.0e-3}\n",
+                3, "parameters.effects.stick_creep.v: bounds must lie"},
+        BadSpec{"an effect the catalog does not have",
+                "format: pneumaid-fit/1\nparameters:\n"
+                "  effects.stick_creap.v: {min: 1.0e-5, max: 1.0e-3}\n",
+                3, "unknown parameter 'effects.stick_creap.v'"},
         BadSpec{"scale name",
                 "format: pneumaid-fit/1\nparameters:\n"
                 "  friction.positive.Fd: {min: 0, max: 9, scale: cubic}\n",
@@ -162,6 +170,14 @@ TEST(FitSpecTest, IsValidNamesTheBadFieldOfASpecBuiltInCode) {
        "parameters.friction.positive.Fs: a log scale needs min > 0"},
       {"outside the physical range", [](FitSpec* s) { s->parameters[2].lower = -1; },
        "parameters.friction.positive.Fs: bounds must lie"},
+      {"an effect's parameter the catalog does not have",
+       [](FitSpec* s) { s->parameters[0].path = "effects.valve_lag.delay"; },
+       "unknown parameter 'effects.valve_lag.delay'"},
+      {"an effect's bound outside what the model accepts",
+       [](FitSpec* s) {
+         s->parameters[0] = {"effects.valve_lag.tau", 0, 0.1};
+       },
+       "parameters.effects.valve_lag.tau: bounds must lie"},
       {"too many",
        [](FitSpec* s) {
          for (const char* p : {"friction.positive.Fs", "valve.decreasing.q_max",

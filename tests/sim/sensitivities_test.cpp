@@ -200,7 +200,7 @@ TEST(SensitivitiesTest, MatchCentralDifferencesWithHeatTransferAndSupplyDroop) {
                                             "pipeline.delta", "friction.positive.b"});
   Trajectory run;
   TrajectorySensitivities sens;
-  ExpectMatchOnAnEventFreeRun(c, &run, &sens);
+  ASSERT_NO_FATAL_FAILURE(ExpectMatchOnAnEventFreeRun(c, &run, &sens));
   // Both effects move the outputs (their columns are not zero).
   EXPECT_GT(sens.p1.col(0).cwiseAbs().maxCoeff() * 0.05, 10.0);  // Pa per 100 % of h
   EXPECT_GT(sens.p1.col(1).cwiseAbs().maxCoeff() * 3e8, 10.0);   // Pa per 100 % of r
@@ -225,7 +225,7 @@ TEST(SensitivitiesTest, MatchCentralDifferencesForAStickCreepHold) {
   c.sensitivity = FreeParameters(c.params, {"effects.stick_creep.v", "friction.positive.Fs"});
   Trajectory run;
   TrajectorySensitivities sens;
-  ExpectMatchOnAnEventFreeRun(c, &run, &sens);
+  ASSERT_NO_FATAL_FAILURE(ExpectMatchOnAnEventFreeRun(c, &run, &sens));
   EXPECT_GT(run.x_m.back(), 1e-6);  // it creeps
   // x grows with v: at the end of the hold dx/dv is about x / v.
   EXPECT_NEAR(sens.x.col(0)(sens.x.rows() - 1) * 1e-4, run.x_m.back(), 0.05 * run.x_m.back());

@@ -83,6 +83,9 @@ struct FitSpec {
   // `error` names the field. Refine() calls it.
   bool IsValid(std::string* error) const;
 
+  // What messages call the spec: its file, or "fit spec" for one built in code.
+  std::string Name() const { return source.empty() ? "fit spec" : source; }
+
   // The free parameter at `path`, or nullptr when the spec holds it fixed.
   const FreeParameter* FindParameter(const std::string& path) const;
 };

@@ -251,12 +251,15 @@ struct RefineResult : FitResult {
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options);
 
-// Throws InputError, as Refine would, when `spec` has nothing to fit on
-// `unit`: it names a run or a kind of run the unit does not log, a log that
-// cannot be simulated, or a run both fitted and held out. For callers that
-// fit the components first (identify --refine, batch): the unit is refused
-// before that work, not after it.
-void CheckRunsToFit(const FitSpec& spec, const Unit& unit);
+// Throws InputError, as Refine(start, unit, spec, options) would, before any
+// fit: options or a spec that are not valid, a friction replay of a start
+// whose rod creeps, or nothing to fit on `unit` (a run or a kind of run the
+// unit does not log, a log that cannot be simulated, a run both fitted and
+// held out). For callers that fit the components first (identify --refine,
+// batch; `start` the prior, whose effects the identified set keeps): the unit
+// is refused before that work, not after it.
+void CheckRefinable(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options);
 
 // How well `params` explain the fitted runs of `spec` on `unit`, with no fit:
 // each run simulated from its logged start, its channels' reduced

@@ -36,4 +36,8 @@ const std::vector<EffectInfo>& EffectCatalog();
 // nullptr when `name` is not in the catalog.
 const EffectInfo* FindEffect(const std::string& name);
 
+// The catalog's entry of an effect parameter's path ("effects.valve_lag.tau");
+// nullptr when the path names no effect parameter of the catalog.
+const EffectParameterInfo* FindEffectParameter(const std::string& path);
+
 }  // namespace pneumaid
