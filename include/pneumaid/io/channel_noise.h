@@ -29,10 +29,11 @@ struct ChannelNoise {
 // is a small fraction of the step (the rounding of a resting signal is then a
 // fixed offset that the logs cannot show). Where the signal is not smooth at
 // the sampling rate (a light rod's slips at 250 Hz) the spread is the
-// signal's: where the log's quietest stretches (blocks of 64 samples, the
-// 10th percentile) show less than half of it, their noise is taken instead,
-// within 25 % when a third of the log is quiet. 0 for fewer than 5 samples or
-// a column that never changes.
+// signal's: where the log's quiet stretches (blocks of 64 samples whose
+// spread is within twice the 10th percentile's, their differences pooled)
+// show less than half of it, their noise is taken instead, within 5 % when a
+// third of the log is quiet. 0 for fewer than 5 samples or a column that
+// never changes.
 ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& columns);
 
 // The noise `manifest` declares for `column`, or the estimate from `logs` (the
