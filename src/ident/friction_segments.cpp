@@ -10,6 +10,7 @@
 #include "meter_lag.h"
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/model/load.h"
+#include "pneumaid/validate/logged_run.h"
 #include "uniform_clock.h"
 
 namespace pneumaid::friction_internal {
@@ -364,6 +365,10 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     return internal::PlanLagInverse(period_s, unit.manifest.DeclaredTau(column, 0.0)).noise_gain;
   };
   const double reading_sigma_x_m = PositionNoise(unit);
+  // A transducer's zero that the rests at the stops show: x is read less it,
+  // as the refinement and validation read it, so that the stops, the end
+  // zones and the replays from a stop are where the rod was.
+  const double zero_m = ReadPositionZero(unit).offset_m;
   const double p1_sigma_N = NoiseSigma(unit, "p1") * rig.area_1_m2();
   const double p2_sigma_N = NoiseSigma(unit, "p2") * rig.area_2_m2();
   const double reading_sigma_N = std::hypot(p1_sigma_N, p2_sigma_N);
@@ -410,7 +415,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
       force[i] = PneumaticAndGravityForce(p1[i], p2[i], rig.atmospheric_pressure_Pa,
                                           rig.area_1_m2(), rig.area_2_m2(), weight_N);
     }
-    const auto& x = e.column("x");
+    std::vector<double> x = e.column("x");
+    for (double& value : x) value -= zero_m;
     const int min_samples = std::max(options.min_stuck_samples,
                                      static_cast<int>(std::ceil(options.min_stuck_s / period)));
     const Runs runs =

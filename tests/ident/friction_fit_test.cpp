@@ -16,6 +16,7 @@
 #include "friction_test_util.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/protocol.h"
+#include "pneumaid/io/rig_data.h"
 #include "pneumaid/synth/synthetic_rig.h"
 
 namespace pneumaid {
@@ -379,6 +380,39 @@ TEST(FrictionFitTest, StrokesFromStopToStopGetFsFromTheBreakawaysAtTheStops) {
   }
   ExpectWithinToleranceOrHeld(fit, "positive", truth.friction.positive, {"Fs", "Fd", "b", "vs"});
   ExpectWithinToleranceOrHeld(fit, "negative", truth.friction.negative, {"Fs", "Fd", "b", "vs"});
+}
+
+// A position transducer zeroed off (x logged 0.3 mm low, or 1 mm high; the
+// rests at the stops show it, ReadPositionZero) is read less its zero, as
+// refinement and validation read it: the stops, the end zones and the
+// replays from a stop are where the rod was. Read as logged, the bundled
+// unit's positive Fs came out 18.6 N for 10 at -0.3 mm, and the negative Fs
+// 14.0 N at +1 mm, both "converged".
+TEST(FrictionFitTest, ATransducersZeroIsTakenOffBeforeTheStops) {
+  const std::string dir = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig";
+  const Unit unit = ReadUnit(dir);
+  const Parameters truth = LoadParams(dir + "/truth.yaml");
+  const FrictionFitResult as_zeroed = FitFriction(unit, Parameters{}.friction, {});
+  for (const double offset_m : {-3e-4, 1e-3}) {
+    Unit shifted = unit;
+    for (Experiment& e : shifted.experiments) {
+      const auto x = e.columns.find("x");
+      if (x != e.columns.end())
+        for (double& value : x->second) value += offset_m;
+    }
+    const FrictionFitResult fit = FitFriction(shifted, Parameters{}.friction, {});
+    ASSERT_EQ(fit.status, FitStatus::kConverged) << offset_m << ": " << fit.reason;
+    ExpectWithinTolerance(fit.positive.params, truth.friction.positive, "positive");
+    ExpectWithinTolerance(fit.negative.params, truth.friction.negative, "negative");
+    const auto values = Values(fit.positive.params), zeroed = Values(as_zeroed.positive.params);
+    const auto negative = Values(fit.negative.params);
+    const auto negative_zeroed = Values(as_zeroed.negative.params);
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_NEAR(values[i], zeroed[i], 0.01 * std::fabs(zeroed[i])) << offset_m << kNames[i];
+      EXPECT_NEAR(negative[i], negative_zeroed[i], 0.01 * std::fabs(negative_zeroed[i]))
+          << offset_m << kNames[i];
+    }
+  }
 }
 
 // A light horizontal rod at low commands, strokes into the stops: the few
