@@ -1,12 +1,15 @@
 // ReadPositionZero and LoggedTrajectory (pneumaid/validate/logged_run.h): a
 // position transducer zeroed 0.2 mm off shows in the rests at the end stops,
-// and the runs are compared with the rod where it was. The bundled unit
+// and the runs are compared (validation, the refinement's fitted runs) with
+// the rod where it was. The bundled unit
 // (pneumaid synth, datasets/paper-rig) with its x shifted in memory.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 
+#include "pneumaid/ident/fit_spec.h"
+#include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/validate/logged_run.h"
@@ -60,6 +63,13 @@ TEST(PositionZeroTest, TheRestsAtTheStopsShowATransducersZero) {
   // against a stop 0.2 mm off the model's would cost 0.2 mm there).
   const Parameters truth = LoadParams(kUnit + "/truth.yaml");
   EXPECT_NEAR(ValidationXRmse(truth, shifted), ValidationXRmse(truth, unit), 2e-5);
+  // The refinement's fitted runs too: the truth's verdict measure as on the
+  // unit as zeroed (read as logged, the rod pressed 0.2 mm off the model's
+  // stop would cost hundreds per residual).
+  const FitSpec spec = LoadFitSpec(std::string(PNEUMAID_SOURCE_DIR) + "/configs/fit-default.yaml");
+  const double as_zeroed = EvaluateFit(truth, unit, spec, RefineOptions{}).reduced_chi_square;
+  EXPECT_NEAR(EvaluateFit(truth, shifted, spec, RefineOptions{}).reduced_chi_square, as_zeroed,
+              0.1 * as_zeroed);
   // The other way, and below what the rests resolve: as logged.
   EXPECT_NEAR(ReadPositionZero(Shifted(unit, -3e-4)).offset_m, -3e-4, 2e-5);
   EXPECT_EQ(ReadPositionZero(Shifted(unit, 3e-5)).offset_m, 0.0);
