@@ -66,15 +66,23 @@ const EffectInfo* FindEffect(const std::string& name) {
   return nullptr;
 }
 
-const EffectParameterInfo* FindEffectParameter(const std::string& path) {
+bool SplitEffectPath(const std::string& path, std::string* name, std::string* parameter) {
   const std::string prefix = "effects.";
-  if (path.compare(0, prefix.size(), prefix) != 0) return nullptr;
+  if (path.compare(0, prefix.size(), prefix) != 0) return false;
   const auto dot = path.find('.', prefix.size());
-  if (dot == std::string::npos) return nullptr;
-  const EffectInfo* effect = FindEffect(path.substr(prefix.size(), dot - prefix.size()));
+  if (dot == std::string::npos) return false;
+  *name = path.substr(prefix.size(), dot - prefix.size());
+  *parameter = path.substr(dot + 1);
+  return true;
+}
+
+const EffectParameterInfo* FindEffectParameter(const std::string& path) {
+  std::string name, parameter;
+  if (!SplitEffectPath(path, &name, &parameter)) return nullptr;
+  const EffectInfo* effect = FindEffect(name);
   if (effect == nullptr) return nullptr;
-  for (const EffectParameterInfo& parameter : effect->parameters) {
-    if (path.compare(dot + 1, std::string::npos, parameter.name) == 0) return &parameter;
+  for (const EffectParameterInfo& info : effect->parameters) {
+    if (parameter == info.name) return &info;
   }
   return nullptr;
 }

@@ -95,17 +95,6 @@ std::vector<ScalarParameterInfo> MakeTable() {
 
 #undef PNEUMAID_REF
 
-// "effects.<name>.<parameter>" -> (name, parameter); false for other paths.
-bool SplitEffectPath(const std::string& path, std::string* name, std::string* parameter) {
-  const std::string prefix = "effects.";
-  if (path.compare(0, prefix.size(), prefix) != 0) return false;
-  const auto dot = path.find('.', prefix.size());
-  if (dot == std::string::npos) return false;
-  *name = path.substr(prefix.size(), dot - prefix.size());
-  *parameter = path.substr(dot + 1);
-  return true;
-}
-
 }  // namespace
 
 bool ValueRange::Contains(double value) const {

@@ -36,6 +36,9 @@ const std::vector<EffectInfo>& EffectCatalog();
 // nullptr when `name` is not in the catalog.
 const EffectInfo* FindEffect(const std::string& name);
 
+// "effects.<name>.<parameter>" -> (name, parameter); false for other paths.
+bool SplitEffectPath(const std::string& path, std::string* name, std::string* parameter);
+
 // The catalog's entry of an effect parameter's path ("effects.valve_lag.tau");
 // nullptr when the path names no effect parameter of the catalog.
 const EffectParameterInfo* FindEffectParameter(const std::string& path);
