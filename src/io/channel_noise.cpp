@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace pneumaid {
 namespace {
@@ -44,11 +45,18 @@ double Quantum(const std::vector<const std::vector<double>*>& columns, std::size
 constexpr double kFourthDifferenceVariance = 70.0;
 double FourthDifference(const double* y) { return y[2] - 4 * y[1] + 6 * y[0] - 4 * y[-1] + y[-2]; }
 
+// The sigma of white noise whose fourth differences have these magnitudes:
+// their median is 0.6745 of the differences' sigma.
+double SigmaOfDifferences(std::vector<double> magnitudes) {
+  std::nth_element(magnitudes.begin(), magnitudes.begin() + magnitudes.size() / 2,
+                   magnitudes.end());
+  return magnitudes[magnitudes.size() / 2] / 0.6745 / std::sqrt(kFourthDifferenceVariance);
+}
+
 // The quietest stretches of `columns`: the fourth differences in blocks of
-// kFloorBlock samples, each block's spread (median absolute value 0.6745 of
-// their sigma). Where the signal is not smooth at the sampling rate (a light
-// rod slipping within a sample at 250 Hz) EstimateNoise reads its moves as
-// noise; a resting rod, a settled chamber or a held flow shows the noise alone.
+// kFloorBlock samples, each block's spread (SigmaOfDifferences). Where the signal is not smooth at
+// the sampling rate (a light rod slipping within a sample at 250 Hz) EstimateNoise reads its moves
+// as noise; a resting rod, a settled chamber or a held flow shows the noise alone.
 constexpr std::size_t kFloorBlock = 64;
 // A floor over fewer blocks than this is no percentile.
 constexpr std::size_t kMinFloorBlocks = 20;
@@ -58,14 +66,12 @@ struct Blocks {
 };
 Blocks BlocksOf(const std::vector<const std::vector<double>*>& columns) {
   Blocks out;
-  std::vector<double> d;
   for (const std::vector<double>* v : columns) {
     for (std::size_t begin = 0; begin + kFloorBlock <= v->size(); begin += kFloorBlock) {
       for (std::size_t i = begin + 2; i + 2 < begin + kFloorBlock; ++i)
         out.differences.push_back(std::fabs(FourthDifference(v->data() + i)));
-      d.assign(out.differences.end() - (kFloorBlock - 4), out.differences.end());
-      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-      out.spreads.push_back(d[d.size() / 2] / 0.6745 / std::sqrt(kFourthDifferenceVariance));
+      out.spreads.push_back(
+          SigmaOfDifferences({out.differences.end() - (kFloorBlock - 4), out.differences.end()}));
     }
   }
   return out;
@@ -107,9 +113,7 @@ double QuietNoise(const std::vector<const std::vector<double>*>& columns) {
     const auto first = blocks.differences.begin() + static_cast<std::ptrdiff_t>(k * per_block);
     pooled.insert(pooled.end(), first, first + static_cast<std::ptrdiff_t>(per_block));
   }
-  std::nth_element(pooled.begin(), pooled.begin() + pooled.size() / 2, pooled.end());
-  return pooled[pooled.size() / 2] / 0.6745 / std::sqrt(kFourthDifferenceVariance) /
-         kQuietOfWhiteNoise;
+  return SigmaOfDifferences(std::move(pooled)) / kQuietOfWhiteNoise;
 }
 
 const char* SiUnit(const std::string& column) {
