@@ -394,13 +394,8 @@ TEST(FrictionFitTest, ATransducersZeroIsTakenOffBeforeTheStops) {
   const Parameters truth = LoadParams(dir + "/truth.yaml");
   const FrictionFitResult as_zeroed = FitFriction(unit, Parameters{}.friction, {});
   for (const double offset_m : {-3e-4, 1e-3}) {
-    Unit shifted = unit;
-    for (Experiment& e : shifted.experiments) {
-      const auto x = e.columns.find("x");
-      if (x != e.columns.end())
-        for (double& value : x->second) value += offset_m;
-    }
-    const FrictionFitResult fit = FitFriction(shifted, Parameters{}.friction, {});
+    const FrictionFitResult fit =
+        FitFriction(testing::WithPositionOffset(unit, offset_m), Parameters{}.friction, {});
     ASSERT_EQ(fit.status, FitStatus::kConverged) << offset_m << ": " << fit.reason;
     ExpectWithinTolerance(fit.positive.params, truth.friction.positive, "positive");
     ExpectWithinTolerance(fit.negative.params, truth.friction.negative, "negative");

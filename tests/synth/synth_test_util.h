@@ -31,4 +31,15 @@ inline Unit WriteAndReadUnit(const SyntheticUnit& unit, const std::string& name)
   }
 }
 
+// `unit` as a rig whose position transducer is zeroed `offset_m` off writes
+// it: every logged x moved by the offset.
+inline Unit WithPositionOffset(Unit unit, double offset_m) {
+  for (Experiment& e : unit.experiments) {
+    const auto x = e.columns.find("x");
+    if (x == e.columns.end()) continue;
+    for (double& value : x->second) value += offset_m;
+  }
+  return unit;
+}
+
 }  // namespace pneumaid::testing

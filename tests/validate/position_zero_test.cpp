@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 
+#include "../synth/synth_test_util.h"
 #include "pneumaid/ident/fit_spec.h"
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
@@ -19,15 +20,6 @@ namespace pneumaid {
 namespace {
 
 const std::string kUnit = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig";
-
-Unit Shifted(Unit unit, double offset_m) {
-  for (Experiment& e : unit.experiments) {
-    const auto x = e.columns.find("x");
-    if (x == e.columns.end()) continue;
-    for (double& value : x->second) value += offset_m;
-  }
-  return unit;
-}
 
 double ValidationXRmse(const Parameters& params, const Unit& unit) {
   double worst = 0;
@@ -47,7 +39,7 @@ TEST(PositionZeroTest, ALogAsZeroedIsReadAsLogged) {
 
 TEST(PositionZeroTest, TheRestsAtTheStopsShowATransducersZero) {
   const Unit unit = ReadUnit(kUnit);
-  const Unit shifted = Shifted(unit, 2e-4);
+  const Unit shifted = testing::WithPositionOffset(unit, 2e-4);
   const PositionZero zero = ReadPositionZero(shifted);
   EXPECT_NEAR(zero.offset_m, 2e-4, 2e-5);
   EXPECT_NE(zero.note.find(": x read 0.2"), std::string::npos) << zero.note;
@@ -71,8 +63,8 @@ TEST(PositionZeroTest, TheRestsAtTheStopsShowATransducersZero) {
   EXPECT_NEAR(EvaluateFit(truth, shifted, spec, RefineOptions{}).reduced_chi_square, as_zeroed,
               0.1 * as_zeroed);
   // The other way, and below what the rests resolve: as logged.
-  EXPECT_NEAR(ReadPositionZero(Shifted(unit, -3e-4)).offset_m, -3e-4, 2e-5);
-  EXPECT_EQ(ReadPositionZero(Shifted(unit, 3e-5)).offset_m, 0.0);
+  EXPECT_NEAR(ReadPositionZero(testing::WithPositionOffset(unit, -3e-4)).offset_m, -3e-4, 2e-5);
+  EXPECT_EQ(ReadPositionZero(testing::WithPositionOffset(unit, 3e-5)).offset_m, 0.0);
 }
 
 }  // namespace
