@@ -4,6 +4,7 @@
 //   1. the friction screen (refine_friction_screen.h): a start whose
 //      friction is read off the logs, and its next-best candidates (also
 //      when the given fit is explained but leaves friction at a bound);
+//      when still not explained, the same ranked by the windows;
 //   2. a start one friction coefficient away from the given one
 //      (refine_coordinate_start.h);
 //   3. a robust refit (each run through a Cauchy loss);
@@ -21,6 +22,7 @@
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/parameters.h"
+#include "refine_friction_screen.h"
 
 namespace pneumaid::refine_internal {
 
@@ -74,6 +76,9 @@ class Attempts {
 
  private:
   bool Explained() const { return best_.result.explained(); }
+  // One friction screen ranked by `measure`, the fits from its start and
+  // next-best candidates offered; its report appended to screen_report_.
+  void ScreenWith(ScreenMeasure measure, bool even_if_explained);
   // Keeps `candidate` when it is Better, `report` then naming the attempt
   // that found it; the iterations add up either way. True when kept.
   bool Offer(StagedFit&& candidate, std::string* report);

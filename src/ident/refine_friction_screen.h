@@ -7,8 +7,10 @@
 // off the logs: per direction, a grid in
 // Fs and vs, each point's Fd and b solved from the force balance of the
 // smooth slides (friction_segments.h), then a pattern search in Fs and vs;
-// every candidate is simulated once and judged by the verdict's measure. No
-// Jacobian, no fit: 90 to 120 whole-run simulations.
+// every candidate is simulated once and judged by the verdict's measure, or
+// by the windows' (WindowedMeasure: each slide from its logged state, so an
+// error of one direction does not carry into the other's slides). No
+// Jacobian, no fit: 90 to 120 simulations of the fitted runs.
 #pragma once
 
 #include <string>
@@ -18,13 +20,20 @@
 
 namespace pneumaid::refine_internal {
 
+// What a screen ranks its candidates by.
+enum class ScreenMeasure {
+  kWholeRuns,  // VerdictMeasure, the verdict's own
+  kWindows,    // WindowedMeasure
+};
+
 struct FrictionScreen {
   Parameters start;  // the best candidate (`start` itself when none is better)
   double chi_square_before = 0, chi_square_after = 0;  // the verdict's measure
+  double ranked_before = 0, ranked_after = 0;          // the measure it ranks by
   int candidates = 0;                                  // simulated
-  bool moved = false;  // a candidate's median is lower than the start's
-  std::string report;  // one line, empty when nothing moved
-  // Up to `alternatives` next-best candidates (lowest median first), each
+  bool moved = false;                                  // a candidate ranks before the start
+  std::string report;                                  // one line, empty when nothing moved
+  // Up to `alternatives` next-best candidates (lowest ranked first), each
   // differing from `start` and from one another in some direction's Fs by a
   // factor kDistinctStatic or its vs by kDistinctStribeck.
   std::vector<Parameters> alternatives;
@@ -40,7 +49,8 @@ inline constexpr double kDistinctStatic = 1.15, kDistinctStribeck = 1.3;
 // is (one simulation) unless `even_if_explained`.
 FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
                                     const RefineOptions& options, bool even_if_explained = false,
-                                    int alternatives = 0);
+                                    int alternatives = 0,
+                                    ScreenMeasure measure = ScreenMeasure::kWholeRuns);
 
 // A free coefficient of `spec` that `p` moved from `start` loses its
 // standard error in `p->uncertainty` (the component fit's no longer applies:

@@ -4,13 +4,14 @@
 
 namespace pneumaid::refine_internal {
 
-std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit& unit,
-                                            const FitSpec& spec, const RefineOptions& options) {
+std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Unit& unit,
+                                             const FitSpec& spec, const RefineOptions& options,
+                                             bool windows) {
   const Parameters conditioned = WithRigConditions(params, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
   const std::vector<double> theta = map.ThetaOf(conditioned);
   std::vector<RunResiduals> out;
-  for (FitExperiment& run : FittedRuns(conditioned, unit, spec, false)) {
+  for (FitExperiment& run : FittedRuns(conditioned, unit, spec, windows)) {
     const ExperimentResidual residual(&conditioned, &map, &run, &options.simulation,
                                       options.jacobian);
     Eigen::VectorXd r(residual.num_residuals());

@@ -241,14 +241,21 @@ class ExperimentResidual final : public ceres::CostFunction {
   mutable double first_cost_ = NAN;
 };
 
-// Each whole fitted run at `params`, simulated from its logged start, with
-// its weighted residuals (NaN where it cannot be simulated).
+// Each fitted run at `params` with its weighted residuals (NaN where it
+// cannot be simulated): whole, simulated from its logged start, or cut into
+// the windows of multiple shooting (Windows), each from its logged state.
 struct RunResiduals {
   FitExperiment run;
   Eigen::VectorXd residuals;
 };
-std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit& unit,
-                                            const FitSpec& spec, const RefineOptions& options);
+std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Unit& unit,
+                                             const FitSpec& spec, const RefineOptions& options,
+                                             bool windows);
+inline std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit& unit,
+                                                   const FitSpec& spec,
+                                                   const RefineOptions& options) {
+  return FittedRunResiduals(params, unit, spec, options, false);
+}
 
 // 0.5 |r|^2 of each run (NaN where it could not be simulated), as both the
 // start's and the fit's cost.

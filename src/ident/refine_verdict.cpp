@@ -59,6 +59,19 @@ double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec&
   return std::isnan(chi) ? HUGE_VAL : chi;
 }
 
+double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
+                       const RefineOptions& options) {
+  double squares = 0;
+  long rows = 0;
+  for (const RunResiduals& w : FittedRunResiduals(params, unit, spec, options, true)) {
+    const auto data = w.residuals.head(w.run.data_rows());
+    if (!data.allFinite()) return HUGE_VAL;
+    squares += data.squaredNorm();
+    rows += w.run.data_rows();
+  }
+  return rows > 0 ? squares / static_cast<double>(rows) : HUGE_VAL;
+}
+
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {
   std::map<std::string, std::pair<double, int>> runs;  // sum of channel chi-squares, channels
   for (const ChannelMisfit& m : misfits) {

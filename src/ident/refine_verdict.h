@@ -35,6 +35,15 @@ double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits);
 double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
                       const RefineOptions& options);
 
+// The windows' measure of `params` with no fit: the mean square of the
+// weighted data residuals over the fitted runs cut into the windows of
+// multiple shooting (each from its logged state, v = 0), HUGE_VAL where a
+// window cannot be simulated. A window holds one slide, so an error of one
+// direction's friction does not carry into the slides after it: what the
+// windowed friction screen ranks candidates by.
+double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
+                       const RefineOptions& options);
+
 // The verdict on `r` (its misfits): status, threshold, and when it fails a
 // message naming the worst runs, channels and windows.
 void Judge(const RefineOptions& options, RefineResult* r);

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "../synth/synth_test_util.h"
 #include "pneumaid/io/params_yaml.h"
@@ -30,6 +32,16 @@ inline Parameters HeavyHorizontalTruth() {
   return truth;
 }
 
+// configs/paper-horizontal.yaml with `load_kg` and the friction given.
+inline Parameters HorizontalTruth(double load_kg, const StribeckParams& positive,
+                                  const StribeckParams& negative) {
+  Parameters truth = HeavyHorizontalTruth();
+  truth.cylinder.load_mass_kg = load_kg;
+  truth.friction.positive = positive;
+  truth.friction.negative = negative;
+  return truth;
+}
+
 // One stroke cycle at 0.5, 0.7 and 0.9 V, written with model mismatch:
 // smooth stick (creep below 0.1 mm/s), the rig integrated at rtol 1e-8;
 // synthetic, from `truth` and `seed`, through the test's temporary `dir`.
@@ -40,6 +52,18 @@ inline Unit MismatchedStrokes(const Parameters& truth, std::uint64_t seed, const
   protocol.mismatch.stick_velocity_m_per_s = 1e-4;
   protocol.mismatch.relative_tolerance = 1e-8;
   return WriteAndReadUnit(Synthesize(truth, protocol, seed, id), dir);
+}
+
+// Strokes at `levels`, `cycles` of them, that stop 5 mm short of the ends,
+// logged at 500 Hz, the rig integrated at rtol 1e-8: a light rod sticks and
+// slips all along, and reverses where no stop resets a slide's error.
+inline Protocol ShortStrokesAt500Hz(std::vector<double> levels, int cycles) {
+  Protocol protocol = RefinementProtocol(std::move(levels), false);
+  protocol.stroke_cycles = cycles;
+  protocol.stroke_margin_m = 0.005;
+  protocol.sample_rate_Hz = 500;
+  protocol.mismatch.relative_tolerance = 1e-8;
+  return protocol;
 }
 
 // A refinement test's truth, start and unit.

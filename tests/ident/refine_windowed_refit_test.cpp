@@ -1,7 +1,8 @@
 // Refinement's windowed refit (RefineOptions::windowed_refit): a light rod
 // logged at a low rate stick-slips chaotically, so whole runs are a rugged
 // cost even next to the optimum; when the plain, screened and robust fits
-// stall, the last stage run first by multiple shooting finds the basin.
+// stall, the last stage run first by multiple shooting finds the basin; so
+// does the friction screen ranked by windows, which runs before it.
 // Logs written with model mismatch: the rig integrated at rtol 1e-8, the
 // position quantised; synthetic (pneumaid's synthetic rig, seed 15).
 #include <gtest/gtest.h>
@@ -24,18 +25,11 @@ namespace {
 const testing::RefineCase& LightRodAt500Hz() {
   static const testing::RefineCase c = [] {
     testing::RefineCase w;
-    w.truth = testing::HeavyHorizontalTruth();
-    w.truth.cylinder.load_mass_kg = 0.06;
-    w.truth.friction.positive = {9.6, 2.67, 13.1, 0.0186};
-    w.truth.friction.negative = {8.4, 0.51, 11.1, 0.0226};
-    Protocol protocol = testing::RefinementProtocol({0.5, 0.7, 0.9}, false);
-    protocol.stroke_cycles = 2;
-    protocol.stroke_margin_m = 0.005;
+    w.truth = testing::HorizontalTruth(0.06, {9.6, 2.67, 13.1, 0.0186}, {8.4, 0.51, 11.1, 0.0226});
+    Protocol protocol = testing::ShortStrokesAt500Hz({0.5, 0.7, 0.9}, 2);
     protocol.stroke_dwell_s = 0;
-    protocol.sample_rate_Hz = 500;
     protocol.sensors["x"].quantization = 1e-5;
     protocol.mismatch.regularized_friction = false;
-    protocol.mismatch.relative_tolerance = 1e-8;
     w.unit =
         testing::WriteAndReadUnit(Synthesize(w.truth, protocol, 15, "W"), "refine_windowed_light");
     w.start = w.truth;
@@ -52,8 +46,10 @@ TEST(RefineWindowedRefitTest, ALightRodLoggedAt500HzIsFoundByMultipleShooting) {
   const auto refine = [&](bool windowed_refit) {
     RefineOptions options;
     options.windowed_refit = windowed_refit;
-    // The coordinate start, tried before, finds this basin too (its two
-    // moves take the two coefficients back): off, to test the windowed refit.
+    // The screen ranked by windows and the coordinate start, tried before,
+    // find this basin too (the coordinate start's two moves take the two
+    // coefficients back): off, to test the windowed refit.
+    options.screen_friction_windows = false;
     options.coordinate_rounds = 0;
     RefineResult result = Refine(c.start, c.unit, spec, options);
     std::cout << result.BriefReport();
@@ -66,6 +62,31 @@ TEST(RefineWindowedRefitTest, ALightRodLoggedAt500HzIsFoundByMultipleShooting) {
   // Without it: the plain, screened, robust and rescue fits all stall.
   const RefineResult without = refine(false);
   EXPECT_EQ(without.status, FitStatus::kNotExplained);
+}
+
+// The friction screen ranked by windows (RefineOptions::screen_friction_
+// windows), with neither the windowed refit nor the coordinate start: where
+// the whole runs' screen and its fits stall (above), a start it ranks by
+// windows, or one of its next-best candidates, is fitted to the basin.
+TEST(RefineWindowedRefitTest, TheScreenRankedByWindowsFindsTheSameBasin) {
+  const testing::RefineCase& c = LightRodAt500Hz();
+  RefineOptions options;
+  options.windowed_refit = false;
+  options.coordinate_rounds = 0;
+  const RefineResult result =
+      Refine(c.start, c.unit, LoadFitSpec(testing::kDefaultFitSpec), options);
+  std::cout << result.BriefReport();
+  ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;
+  // The fit kept is the windows' screen's: from its best candidate (no "not
+  // kept") or from a next-best one ("the fit from candidate N kept").
+  const std::size_t windows = result.screen_report.find("ranked by windows");
+  ASSERT_NE(windows, std::string::npos) << result.screen_report;
+  const std::string report = result.screen_report.substr(windows);
+  EXPECT_TRUE(report.find("not kept") == std::string::npos ||
+              report.find("the fit from candidate") != std::string::npos)
+      << report;
+  EXPECT_TRUE(result.windowed_report.empty()) << result.windowed_report;
+  testing::ExpectFrictionWithinTolerance(result.params, c.truth);
 }
 
 }  // namespace

@@ -103,6 +103,13 @@ struct RefineOptions {
   // under stick-slip the best simulated candidate is not always in the basin
   // that explains the runs, the second or third can be.
   int screened_alternatives = 2;
+  // When the fits from the screened starts are not explained either: the
+  // screen again with its candidates ranked by the windows of multiple
+  // shooting (each run restarted from its logged state at every stuck
+  // phase, so an error of one direction's friction does not carry into the
+  // other's slides), and fits from its best and next-best candidates. Where
+  // both directions start off, the whole runs can hide the basin of each.
+  bool screen_friction_windows = true;
   // When the fits from the given and the screened starts are not explained:
   // a start one friction coefficient away from the given one. Up to this many
   // rounds, each scanning every free friction coefficient on its own within
