@@ -47,10 +47,11 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
     const bool is_kind = name == "stroke" || name == "validation";
     if (!matched && (must_match || !is_kind)) {
       if (is_kind) {  // the unit lacks what a spec may rightly ask of any unit
-        throw InputError(unit.manifest_path(), 0, 0,
-                         "the unit has no " + name + " experiment, and the fit spec " +
-                             spec.Name() + " fits '" + name +
-                             "': the refinement has no run to fit");
+        throw InputError(
+            unit.manifest_path(), 0, 0,
+            "the unit has no " + name + " experiment, and " +
+                (spec.source.empty() ? "the fit spec" : "the fit spec " + spec.source) + " fits '" +
+                name + "': the refinement has no run to fit");
       }
       throw InputError(
           spec.Name(), 0, 0,

@@ -449,7 +449,11 @@ TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   no_strokes.experiments.clear();
   spec = TwoParameters();
   spec.fit = {"stroke"};
-  ExpectRefusedNaming(Parameters{}, no_strokes, spec, {"the unit has no stroke experiment"});
+  ExpectRefusedNaming(Parameters{}, no_strokes, spec,
+                      {"the unit has no stroke experiment, and the fit spec two.yaml fits"});
+  spec.source.clear();  // built in code: no file to name
+  ExpectRefusedNaming(Parameters{}, no_strokes, spec,
+                      {"the unit has no stroke experiment, and the fit spec fits 'stroke'"});
   spec = TwoParameters();
   spec.hold_out = {"stroke-100"};  // both fitted and held out
   EXPECT_THROW(Refine(Parameters{}, *unit_, spec, RefineOptions{}), InputError);
