@@ -8,6 +8,7 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
+#include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/logged_run.h"
 
@@ -53,16 +54,17 @@ void AddPriorsUnder(const std::string& prefix, const std::string& why, IdentifyR
 }
 
 // The prior's effects, which the set keeps and no component fit models, each
-// parameter listed as from the prior. A rod that creeps (stick_creep) is
-// named with what that means for friction fitted here: the friction fit
-// replays a rod that sticks exactly.
+// parameter listed as from the prior. One that acts on friction (the
+// catalog's acts_on_friction) is named with what that means for friction
+// fitted here: the friction fit replays the paper's law with exact stick.
 void ListPriorEffects(const Parameters& params, IdentifyReport* report) {
   const bool friction_fitted = Lists(report->fitted, "friction.");
   for (const auto& [effect, values] : params.effects) {
+    const EffectInfo* info = FindEffect(effect);
     for (const auto& [name, value] : values) {
       std::string why = "an effect of the prior; the component fits do not model it";
-      if (effect == "stick_creep" && friction_fitted)
-        why += ": friction.* were fitted to a rod that sticks exactly";
+      if (info != nullptr && info->acts_on_friction && friction_fitted)
+        why += ": friction.* were fitted without it, to the paper's law with exact stick";
       report->priors.push_back("effects." + effect + "." + name + " (" + why + ")");
     }
   }

@@ -11,7 +11,7 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/provenance.h"
-#include "pneumaid/model/actuator.h"
+#include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/logged_run.h"
 #include "refine_attempts.h"
@@ -89,12 +89,16 @@ void CheckInputs(const FitSpec& spec, const RefineOptions& options) {
 // not use.
 void CheckReplayModel(const Parameters& start, const FitSpec& spec) {
   for (size_t k = 0; k < spec.stages.size(); ++k) {
-    if (spec.stages[k].friction_replay && Creeps(start)) {
+    if (!spec.stages[k].friction_replay) continue;
+    for (const auto& [name, values] : start.effects) {
+      const EffectInfo* effect = FindEffect(name);
+      if (effect == nullptr || !effect->acts_on_friction) continue;
       throw InputError(spec.Name(), 0, 0,
                        "stages: stage " + std::to_string(k + 1) +
-                           " replays friction with a rod that sticks exactly, and the start "
-                           "parameter set holds the stick_creep effect (a rod that creeps): "
-                           "expected no friction_replay stage for a set with stick_creep");
+                           " replays friction under the paper's Stribeck law with exact stick, "
+                           "and the start parameter set holds the " +
+                           name + " effect (" + effect->doc +
+                           "): expected no friction_replay stage for a set with " + name);
     }
   }
 }

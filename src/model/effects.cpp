@@ -38,7 +38,8 @@ std::vector<EffectInfo> MakeCatalog() {
       {"friction_pressure",
        "friction scales by 1 + kp ((p1 + p2)/2 - p_atm)",
        {{"kp", "1/Pa", "pressure sensitivity of the seal friction", kNonNegative, 0.0, 1e-5, 5e-7}},
-       true},
+       true,
+       /*acts_on_friction=*/true},
       {"valve_deadzone",
        "no flow below |u| < u0; opening rescaled above it",
        {{"u0", "V", "dead zone of the valve opening", ValueRange{0, true, 1, false}, 0.0, 0.3,
@@ -48,7 +49,8 @@ std::vector<EffectInfo> MakeCatalog() {
        "a stuck rod creeps: friction saturates within |v| < v, not at v = 0",
        {{"v", "m/s", "creep speed at which a held rod's friction reaches its Stribeck value",
          kPositive, 1e-5, 1e-3, 1e-4}},
-       true},
+       true,
+       /*acts_on_friction=*/true},
   };
 }
 

@@ -42,21 +42,26 @@ TEST(IdentifyTest, FitsTheValveAndSaysWhatCameFromThePrior) {
   EXPECT_EQ(back.valve.decreasing.a, p.valve.decreasing.a);
 }
 
-// An effect of the prior is kept and listed as the prior's; a rod that creeps
-// is named with what it means for the friction fitted without it.
+// An effect of the prior is kept and listed as the prior's; one that acts on
+// friction (a rod that creeps, friction that scales with the pressures) is
+// named with what it means for the friction fitted without it.
 TEST(IdentifyTest, ThePriorsEffectsAreListedAsFromThePrior) {
   const Unit unit = ReadUnit(kUnit);
   Parameters prior;
   prior.effects["stick_creep"]["v"] = 1e-4;
   prior.effects["valve_lag"]["tau"] = 0.004;
+  prior.effects["friction_pressure"]["kp"] = 1e-7;
   IdentifyReport report;
   const Parameters p = Identify(unit, prior, IdentifyOptions{}, &report);
   EXPECT_EQ(p.effects, prior.effects);
-  EXPECT_TRUE(Lists(report.priors,
-                    "effects.stick_creep.v (an effect of the prior; the component "
-                    "fits do not model it: friction.* were fitted to a rod that "
-                    "sticks exactly)"))
-      << report.BriefReport();
+  for (const char* effect : {"stick_creep.v", "friction_pressure.kp"}) {
+    EXPECT_TRUE(Lists(report.priors, std::string("effects.") + effect +
+                                         " (an effect of the prior; the component fits do not "
+                                         "model it: friction.* were fitted without it, to the "
+                                         "paper's law with exact stick)"))
+        << effect << "\n"
+        << report.BriefReport();
+  }
   EXPECT_TRUE(Lists(report.priors,
                     "effects.valve_lag.tau (an effect of the prior; the component "
                     "fits do not model it)"))

@@ -461,12 +461,21 @@ TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   Parameters outside;
   outside.friction.negative.dynamic_force_N = 30;  // above its max of 20
   ExpectRefusedNaming(outside, *unit_, spec, {"friction.negative.Fd"});
-  // A friction replay sticks the rod exactly: not a model for a set that creeps.
+  // A friction replay fits the paper's law with exact stick: not a model for
+  // a set with an effect that acts on friction (a rod that creeps, friction
+  // that scales with the pressures); an effect that does not is no reason.
   spec.stages = {FitStage{}, FitStage{}};
   spec.stages[0].friction_replay = true;
   Parameters creeping;
   creeping.effects["stick_creep"]["v"] = 1e-4;
   ExpectRefusedNaming(creeping, *unit_, spec, {"stage 1 replays friction", "stick_creep"});
+  Parameters pressure_scaled;
+  pressure_scaled.effects["friction_pressure"]["kp"] = 1e-7;
+  ExpectRefusedNaming(pressure_scaled, *unit_, spec,
+                      {"stage 1 replays friction", "friction_pressure"});
+  Parameters lagging;
+  lagging.effects["valve_lag"]["tau"] = 0.004;
+  EXPECT_NO_THROW(CheckRefinable(lagging, *unit_, spec, RefineOptions{}));
 }
 
 // On data with model mismatch (smooth stick, the rig integrated tighter) the

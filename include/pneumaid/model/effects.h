@@ -29,6 +29,11 @@ struct EffectInfo {
   // False for effects the catalog names but the simulator cannot honour yet;
   // simulating a parameter set that holds one is refused, never ignored.
   bool simulated;
+  // True for effects that change the friction the rod feels from the paper's
+  // Stribeck law with exact stick (rod_replay.h): the friction fit and the
+  // friction_replay stage model that law alone, so friction they fit is not
+  // the friction of a set with such an effect.
+  bool acts_on_friction = false;
 };
 
 const std::vector<EffectInfo>& EffectCatalog();
