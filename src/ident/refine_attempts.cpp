@@ -137,26 +137,33 @@ void Attempts::ScreenFriction() {
   // The fit from the given start stalled (not explained, out of iterations
   // or nothing usable) or left friction at a bound: a start whose friction
   // is read off the logs may lie in the basin that explains the runs.
-  ScreenWith(ScreenMeasure::kWholeRuns, friction_at_bound);
+  ScreenWith(ScreenMeasure::kWholeRuns, friction_at_bound, &screen_report_);
   // Still not explained: the candidates ranked by the windows, where an error
   // of one direction's friction does not carry into the other's slides (with
   // both directions off, the whole runs hide the basin of each).
-  if (!Explained() && options_.screen_friction_windows) ScreenWith(ScreenMeasure::kWindows, false);
+  if (!Explained() && options_.screen_friction_windows) {
+    ScreenWith(ScreenMeasure::kWindows, false, &windows_screen_report_);
+  }
 }
 
-void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained) {
+std::string Attempts::screen_report() const {
+  if (screen_report_.empty() || windows_screen_report_.empty())
+    return screen_report_ + windows_screen_report_;
+  return screen_report_ + "\n  " + windows_screen_report_;
+}
+
+void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::string* report) {
   FrictionScreen screen = ScreenFrictionStarts(start_, unit_, spec_, options_, even_if_explained,
                                                options_.screened_alternatives, measure);
   screened_candidates_ += screen.candidates;
+  *report = screen.report;
   if (!screen.moved) return;
-  if (!screen_report_.empty()) screen_report_ += "\n  ";
-  screen_report_ += screen.report;
-  const Parameters kept_start = moved_start_;
+  const Parameters previous_start = moved_start_;
   moved_start_ = std::move(screen.start);
   StagedFit from_screened = FitStages(moved_start_, unit_, spec_, stages_, options_);
   from_screened.from_moved_start = true;
-  bool kept = Offer(std::move(from_screened), &screen_report_);
-  if (!kept) screen_report_ += "; not kept: the fit kept before ends lower";
+  bool kept = Offer(std::move(from_screened), report);
+  if (!kept) *report += "; not kept: the fit kept before ends lower";
   // Not explained from the best candidate either: the next-best ones.
   int tried = 0, kept_alternative = 0;
   for (Parameters& alternative : screen.alternatives) {
@@ -164,24 +171,25 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained) {
     ++tried;
     StagedFit from_alternative = FitStages(alternative, unit_, spec_, stages_, options_);
     from_alternative.from_moved_start = true;
-    if (Offer(std::move(from_alternative), &screen_report_)) {
+    if (Offer(std::move(from_alternative), report)) {
       kept_alternative = tried;
       kept = true;
       moved_start_ = std::move(alternative);
     }
   }
   if (tried > 0) {
-    screen_report_ += "; " + std::to_string(tried) + " next-best candidate(s) fitted" +
-                      (kept_alternative > 0 ? ", the fit from candidate " +
-                                                  std::to_string(kept_alternative + 1) + " kept"
-                                            : ", none ended lower");
+    *report += "; " + std::to_string(tried) + " next-best candidate(s) fitted" +
+               (kept_alternative > 0
+                    ? ", the fit from candidate " + std::to_string(kept_alternative + 1) + " kept"
+                    : ", none ended lower");
   }
-  // The later attempts start from the screened start: the first screen's
-  // even when its fit was not kept, a later one's only when its fit was.
-  if (kept || !moved_) {
+  // The later attempts start from the screened start: the whole runs'
+  // screen's even when its fit was not kept (its best candidate by the
+  // verdict's own measure), the windows' only when its fit was.
+  if (kept || measure == ScreenMeasure::kWholeRuns) {
     moved_ = true;
   } else {
-    moved_start_ = kept_start;
+    moved_start_ = previous_start;
   }
 }
 

@@ -68,7 +68,8 @@ class Attempts {
   StagedFit& best() { return best_; }
   // One line per later attempt (empty: not tried), and how many friction
   // starts the screen simulated.
-  const std::string& screen_report() const { return screen_report_; }
+  // The whole runs' screen's line, then the windows' screen's (if it ran).
+  std::string screen_report() const;
   const std::string& coordinate_report() const { return coordinate_report_; }
   const std::string& robust_report() const { return robust_report_; }
   const std::string& windowed_report() const { return windowed_report_; }
@@ -77,8 +78,8 @@ class Attempts {
  private:
   bool Explained() const { return best_.result.explained(); }
   // One friction screen ranked by `measure`, the fits from its start and
-  // next-best candidates offered; its report appended to screen_report_.
-  void ScreenWith(ScreenMeasure measure, bool even_if_explained);
+  // next-best candidates offered; its one-line report into `report`.
+  void ScreenWith(ScreenMeasure measure, bool even_if_explained, std::string* report);
   // Keeps `candidate` when it is Better, `report` then naming the attempt
   // that found it; the iterations add up either way. True when kept.
   bool Offer(StagedFit&& candidate, std::string* report);
@@ -99,7 +100,8 @@ class Attempts {
   Parameters given_before_last_;
   Parameters moved_start_;
   bool moved_ = false;  // moved_start_ differs from start_
-  std::string screen_report_, coordinate_report_, robust_report_, windowed_report_;
+  std::string screen_report_, windows_screen_report_, coordinate_report_, robust_report_,
+      windowed_report_;
   int screened_candidates_ = 0;
   std::string* kept_report_ = nullptr;  // the report of the later attempt kept, if any
 };

@@ -18,8 +18,9 @@ using friction_internal::FitSliding;
 namespace {
 
 // One screen: the best candidate so far (in out->start), every candidate
-// simulated with its median (for the alternatives), and the force balance
-// of the fitted runs' smooth slides that gives each candidate its Fd and b.
+// simulated with its measure (for the alternatives), and, ranked by whole
+// runs, the force balance of the fitted runs' smooth slides that gives each
+// candidate its Fd and b.
 class Screen {
  public:
   struct Direction {
@@ -90,7 +91,7 @@ class Screen {
   }
 
   // Full, per direction: every Fs of the coarse grid (1 to 32 N) with every
-  // vs from 1 to 32 mm/s (factors of sqrt 2), Fd and b kept. Ranked by
+  // vs from 1 to 32 mm/s (factors of sqrt 2), b kept and Fd at most Fs. Ranked by
   // windows a direction's best no longer depends on where the other's
   // is, so the grid need not be walked one coordinate at a time.
   void FullGrid() {
@@ -124,7 +125,7 @@ class Screen {
           SetParameter(&p, d.prefix + "Fd",
                        Bounded(d.prefix + "Fd", std::min(fd * std::ldexp(1.0, i), fs)));
           SetParameter(&p, d.prefix + "b", Bounded(d.prefix + "b", b * std::ldexp(1.0, j)));
-          Keep(std::move(p));
+          Consider(std::move(p));
         }
       }
     }
@@ -133,7 +134,7 @@ class Screen {
   // Fine: a pattern search over every direction's Fs and vs with shrinking
   // factors (the basins are narrow: a factor 1.2 in Fs can be the
   // difference), each factor repeated while it gains; vs moves by the
-  // factor squared, Fd and b follow from the slides.
+  // factor squared, Fd and b follow from the slides (ranked by whole runs).
   void PatternSearch() {
     for (const double factor : {1.41, 1.19, 1.09, 1.04}) {
       for (int repeat = 0; repeat < 2; ++repeat) {
@@ -205,14 +206,14 @@ class Screen {
 
   // Simulates (fs, vs) for a direction; keeps it when it is the best yet.
   void Try(const Direction& d, double fs, double vs, const Parameters* base = nullptr) {
-    Keep(Candidate(d, fs, vs, base));
+    Consider(Candidate(d, fs, vs, base));
   }
 
-  // Simulates `p`; keeps it when it is the best yet.
-  void Keep(Parameters p) {
-    const double chi = Score(p);
-    if (keep_simulated_ && std::isfinite(chi)) simulated_.emplace_back(chi, p);
-    if (chi < out_->ranked_after) out_->ranked_after = chi, out_->start = std::move(p);
+  // Simulates `p`; takes it as the best when it ranks first yet.
+  void Consider(Parameters p) {
+    const double measure = Score(p);
+    if (keep_simulated_ && std::isfinite(measure)) simulated_.emplace_back(measure, p);
+    if (measure < out_->ranked_after) out_->ranked_after = measure, out_->start = std::move(p);
   }
 
   // Whether two sets differ in some direction's Fs by kDistinctStatic or its

@@ -4,13 +4,15 @@
 // noise), and the component fit misses Fs and vs where the slides are short
 // or the load heavy. When the fit from the given start is not explained (or
 // leaves friction at a bound), that start is screened against friction read
-// off the logs: per direction, a grid in
-// Fs and vs, each point's Fd and b solved from the force balance of the
-// smooth slides (friction_segments.h), then a pattern search in Fs and vs;
-// every candidate is simulated once and judged by the verdict's measure, or
-// by the windows' (WindowedMeasure: each slide from its logged state, so an
-// error of one direction does not carry into the other's slides). No
-// Jacobian, no fit: 90 to 120 simulations of the fitted runs.
+// off the logs: per direction, a grid in Fs and vs, each point's Fd and b
+// solved from the force balance of the smooth slides (friction_segments.h),
+// then a pattern search in Fs and vs; every candidate is simulated once and
+// judged by the verdict's measure, 90 to 120 simulations. Ranked by the
+// windows instead (WindowedMeasure: each slide from its logged state, so an
+// error of one direction does not carry into the other's slides), the grid
+// is full in Fs and vs with the start's Fd and b (at most Fs), then a grid
+// in Fd and b, then the pattern search: about 560 simulations of the
+// windows. No Jacobian, no fit.
 #pragma once
 
 #include <string>
@@ -29,7 +31,7 @@ enum class ScreenMeasure {
 struct FrictionScreen {
   Parameters start;  // the best candidate (`start` itself when none is better)
   double chi_square_before = 0, chi_square_after = 0;  // the verdict's measure
-  double ranked_before = 0, ranked_after = 0;          // the measure it ranks by
+  double ranked_before = 0, ranked_after = 0;          // the measure it ranks by (0: not screened)
   int candidates = 0;                                  // simulated
   bool moved = false;                                  // a candidate ranks before the start
   std::string report;                                  // one line, empty when nothing moved

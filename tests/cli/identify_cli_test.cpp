@@ -55,9 +55,10 @@ TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(out));
 }
 
-// A prior whose rod creeps (stick_creep), asked to refine with a spec that
-// replays friction with a rod that sticks exactly: refused before the
-// component fits, the spec and the effect named.
+// A prior whose rod creeps (stick_creep, an effect that acts on friction),
+// asked to refine with a spec that replays friction under the paper's law
+// with exact stick: refused before the component fits, the spec and the
+// effect named.
 TEST_F(IdentifyCliTest, ACreepingPriorIsRefusedAFrictionReplayBeforeTheComponentFits) {
   std::string prior = Read(testing::Source("configs/paper.yaml"));
   const std::size_t effects = prior.find("effects: {}");

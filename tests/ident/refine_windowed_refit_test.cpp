@@ -85,7 +85,10 @@ TEST(RefineWindowedRefitTest, TheScreenRankedByWindowsFindsTheSameBasin) {
   EXPECT_TRUE(report.find("not kept") == std::string::npos ||
               report.find("the fit from candidate") != std::string::npos)
       << report;
+  // Explained there: no later attempt ran.
+  EXPECT_TRUE(result.robust_report.empty()) << result.robust_report;
   EXPECT_TRUE(result.windowed_report.empty()) << result.windowed_report;
+  EXPECT_EQ(result.rescue_starts_tried, 0);
   testing::ExpectFrictionWithinTolerance(result.params, c.truth);
 }
 

@@ -103,7 +103,8 @@ struct RefineOptions {
   // under stick-slip the best simulated candidate is not always in the basin
   // that explains the runs, the second or third can be.
   int screened_alternatives = 2;
-  // When the fits from the screened starts are not explained either: the
+  // When the fits from the screened starts are not explained either (and
+  // screen_friction_starts is on): the
   // screen again with its candidates ranked by the windows of multiple
   // shooting (each run restarted from its logged state at every stuck
   // phase, so an error of one direction's friction does not carry into the
@@ -234,9 +235,10 @@ struct RefineResult : FitResult {
   std::string position_note;
   // What a friction_replay stage found (empty without one).
   std::string replay_report;
-  // What the friction screen (RefineOptions::screen_friction_starts) found
-  // (empty when it kept the start), and how many candidates it simulated (0:
-  // not screened).
+  // What the friction screens (RefineOptions::screen_friction_starts and
+  // screen_friction_windows) found, one line each (empty when they kept the
+  // start), and how many candidates they simulated together (the start
+  // counted by each; 0: not screened).
   std::string screen_report;
   int screened_candidates = 0;
   // What the coordinate start (RefineOptions::coordinate_rounds) moved, what
