@@ -255,9 +255,9 @@ TEST(RefineFrictionScreenTest, TheWindowsMisfitsOfTheTwoDirectionsAddUp) {
 // truth's too, b back onto the truth's (the grid in Fd and b after the one
 // in Fs and vs). The windows tell vs least: on this heavy unit it ends
 // within a factor 3 (2.8 measured). The next-best candidates are ranked by
-// the windows too. Limits, measured: with Fd 2 and b 0.5 of the truth's and
-// Fs and vs right, the Fs-vs grid runs first under the wrong sliding
-// friction and the screen ends at 284; with all four off, at 39.5.
+// the windows too. Limits, measured: with Fd 2 and b 0.5 of the truth's, the
+// Fs-vs grid runs first under the wrong sliding friction and the screen ends
+// at 284, whether Fs and vs start right or off as above.
 TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin) {
   const ScreenCase& c = HeavyUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
