@@ -282,20 +282,17 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   for (Parameters& alternative : out.alternatives) ForgetMoved(start, spec, &alternative);
   out.moved = out.ranked_after < out.ranked_before;
   if (!out.moved) return out;
+  char line[240];
   if (windows) {
     out.chi_square_after = VerdictMeasure(out.start, unit, spec, options);
     ++out.candidates;
-  } else {
-    out.chi_square_after = out.ranked_after;
-  }
-  char line[240];
-  if (windows) {
     std::snprintf(line, sizeof(line),
                   "friction start read off the logs, ranked by windows: mean square %.3g -> %.3g, "
                   "median reduced chi-square %.3g -> %.3g (%d candidates simulated)",
                   out.ranked_before, out.ranked_after, out.chi_square_before, out.chi_square_after,
                   out.candidates);
   } else {
+    out.chi_square_after = out.ranked_after;
     std::snprintf(line, sizeof(line),
                   "friction start read off the logs: median reduced chi-square %.3g -> %.3g "
                   "(%d candidates simulated)",
