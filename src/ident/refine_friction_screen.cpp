@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -131,10 +132,39 @@ class Screen {
     }
   }
 
+  // Joint, per direction where Fd and b are free: Fs from 1 to 32 N
+  // (factors of sqrt 2) by vs from 1 to 32 mm/s (factors of 2) by Fd at 2,
+  // 10, 30 and 60 % of Fs by b at 1, 2.5, 6 and 15 N s/m, each point from the
+  // best before the direction. The grids above move a pair of coefficients
+  // at a time: with Fd and b off, the best Fs and vs are off too, and from
+  // there the best Fd and b stay off (sweep-21's negative direction: Fd 0.9
+  // and b 4.2 held it at Fs 4.8, vs 2.2 mm/s for 4.1 and 9.0).
+  void JointGrid() {
+    for (const Direction& d : directions_) {
+      if (!IsFree(spec_, d.prefix + "Fd") || !IsFree(spec_, d.prefix + "b")) continue;
+      const Parameters base = out_->start;
+      for (int g = 0; g <= 10; ++g) {
+        const double fs = std::pow(2.0, 0.5 * g);
+        for (int h = 0; h <= 5; ++h) {
+          const Parameters point = Candidate(d, fs, 1e-3 * std::ldexp(1.0, h), &base);
+          for (const double share : {0.02, 0.1, 0.3, 0.6}) {
+            for (const double b : {1.0, 2.5, 6.0, 15.0}) {
+              Parameters p = point;
+              SetParameter(&p, d.prefix + "Fd", Bounded(d.prefix + "Fd", share * fs));
+              SetParameter(&p, d.prefix + "b", Bounded(d.prefix + "b", b));
+              Consider(std::move(p));
+            }
+          }
+        }
+      }
+    }
+  }
+
   // Fine: a pattern search over every direction's Fs and vs with shrinking
   // factors (the basins are narrow: a factor 1.2 in Fs can be the
   // difference), each factor repeated while it gains; vs moves by the
-  // factor squared, Fd and b follow from the slides (ranked by whole runs).
+  // factor squared. Ranked by whole runs, Fd and b follow from the slides;
+  // ranked by windows, they move too (by the factor squared, Fd at most Fs).
   void PatternSearch() {
     for (const double factor : {1.41, 1.19, 1.09, 1.04}) {
       for (int repeat = 0; repeat < 2; ++repeat) {
@@ -146,6 +176,10 @@ class Screen {
             Try(d, fs * f, vs);
             At(d, &fs, &vs);
             Try(d, fs, vs * f * f);
+            if (measure_ == ScreenMeasure::kWindows) {
+              Scale(d, "Fd", f * f);
+              Scale(d, "b", f * f);
+            }
           }
         }
         if (!(out_->ranked_after < before)) break;
@@ -153,9 +187,52 @@ class Screen {
     }
   }
 
+  // The best so far with a direction's free Fd or b scaled by `f` (Fd at
+  // most Fs).
+  void Scale(const Direction& d, const std::string& coefficient, double f) {
+    const std::string path = d.prefix + coefficient;
+    if (!IsFree(spec_, path)) return;
+    Parameters p = out_->start;
+    double value = 0, fs = 0;
+    GetParameter(p, path, &value);
+    GetParameter(p, d.prefix + "Fs", &fs);
+    const double scaled = Bounded(path, value * f);
+    if (scaled == value || (coefficient == "Fd" && scaled > fs)) return;
+    SetParameter(&p, path, scaled);
+    Consider(std::move(p));
+  }
+
+  // Ranked by windows, two searches from `start`, each ending in the pattern
+  // search: a pair of coefficients at a time (FullGrid, SlidingGrid), and
+  // jointly (JointGrid). The windows rank sets near a basin otherwise than
+  // the fit's end does: on the sweep (N = 40, seed 12) the joint search alone
+  // took sweep-01, 21 and 36 into the truth's basin and lost sweep-33, which
+  // the pairwise search takes there. So the better ranked is the start and
+  // the other's best the first alternative (PickAlternatives), fitted when
+  // the fit from the start is not explained.
+  void SearchByWindows(const Parameters& start) {
+    FullGrid();
+    SlidingGrid();
+    PatternSearch();
+    Parameters pairwise = std::exchange(out_->start, start);
+    const double pairwise_measure = std::exchange(out_->ranked_after, out_->ranked_before);
+    JointGrid();
+    PatternSearch();
+    if (pairwise_measure < out_->ranked_after) {
+      std::swap(pairwise, out_->start);
+      out_->ranked_after = pairwise_measure;
+    }
+    runner_up_ = std::move(pairwise);
+  }
+
   // The next-best candidates that differ from `start`, from the best and
-  // from those already taken, up to `count`.
+  // from those already taken, up to `count`: the other search's best first
+  // (SearchByWindows), then by rank.
   void PickAlternatives(const Parameters& start, int count) {
+    if (runner_up_ && count > 0 && Distinct(*runner_up_, out_->start) &&
+        Distinct(*runner_up_, start)) {
+      out_->alternatives.push_back(std::move(*runner_up_));
+    }
     std::stable_sort(simulated_.begin(), simulated_.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     for (auto& [chi, p] : simulated_) {
@@ -242,6 +319,7 @@ class Screen {
   friction_internal::StrokeData data_;
   std::vector<Direction> directions_;
   std::vector<std::pair<double, Parameters>> simulated_;  // for the alternatives
+  std::optional<Parameters> runner_up_;                   // the other search's best
 };
 
 }  // namespace
@@ -269,14 +347,13 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   const bool windows = measure == ScreenMeasure::kWindows;
   out.ranked_before = out.ranked_after = windows ? screen.Score(start) : out.chi_square_before;
   if (windows) {
-    screen.FullGrid();
-    screen.SlidingGrid();
+    screen.SearchByWindows(start);
   } else {
     screen.ReadSlides();
     screen.SlidingFromSlides();
     screen.CoarseGrid();
+    screen.PatternSearch();
   }
-  screen.PatternSearch();
   screen.PickAlternatives(start, alternatives);
   ForgetMoved(start, spec, &out.start);
   for (Parameters& alternative : out.alternatives) ForgetMoved(start, spec, &alternative);

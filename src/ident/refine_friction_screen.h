@@ -9,10 +9,12 @@
 // then a pattern search in Fs and vs; every candidate is simulated once and
 // judged by the verdict's measure, 90 to 120 simulations. Ranked by the
 // windows instead (WindowedMeasure: each slide from its logged state, so an
-// error of one direction does not carry into the other's slides), the grid
-// is full in Fs and vs with the start's Fd and b (at most Fs), then a grid
-// in Fd and b, then the pattern search: about 560 simulations of the
-// windows. No Jacobian, no fit.
+// error of one direction does not carry into the other's slides), two
+// searches from the start: a pair of coefficients at a time (a full grid in
+// Fs and vs with the start's Fd and b, then a grid in Fd and b) and jointly
+// (a grid in all four per direction), each followed by a pattern search in
+// all four; the better ranked is the start, the other's best the first
+// alternative. About 2 800 simulations of the windows. No Jacobian, no fit.
 #pragma once
 
 #include <string>

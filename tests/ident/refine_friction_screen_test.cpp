@@ -249,48 +249,46 @@ TEST(RefineFrictionScreenTest, TheWindowsMisfitsOfTheTwoDirectionsAddUp) {
 
 // Ranked by windows, the screen from a start with both directions in the
 // wrong basin (Fs 0.45 and vs 2.2 of the truth's) moves them into the
-// truth's, and its start explains the whole runs: each direction's Fs to the
-// grid points around the truth's (factors of 2^(1/4), then the pattern
-// search), Fd and b within their grid's factor 2; with b at half the
-// truth's too, b back onto the truth's (the grid in Fd and b after the one
-// in Fs and vs). The windows tell vs least: on this heavy unit it ends
-// within a factor 3 (2.8 measured). The next-best candidates are ranked by
-// the windows too. Limits, measured: with Fd 2 and b 0.5 of the truth's, the
-// Fs-vs grid runs first under the wrong sliding friction and the screen ends
-// at 284, whether Fs and vs start right or off as above.
+// truth's, and its start explains the whole runs: each direction's Fs near
+// the truth's, vs within a factor 3 (the windows tell it least), Fd and b
+// within a factor 2; so it does with b at half the truth's too. The first
+// next-best candidate is the other search's best (pairwise or joint), the
+// rest follow by rank; all rank after the start. Limit, measured: from Fd
+// twice and b half the truth's as well (Fd capped at Fs) the screen ends at
+// 76.9, not explained (284 with the pairwise search alone, session 26).
 TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin) {
   const ScreenCase& c = HeavyUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   const RefineOptions options;
-  Parameters sliding_off = c.start;
-  for (StribeckParams* f : {&sliding_off.friction.positive, &sliding_off.friction.negative}) {
+  Parameters b_off = c.start;
+  for (StribeckParams* f : {&b_off.friction.positive, &b_off.friction.negative}) {
     f->viscous_N_s_per_m *= 0.5;
   }
-  const Parameters* const starts[] = {&c.start, &sliding_off};
+  const Parameters* const starts[] = {&c.start, &b_off};
   for (const Parameters* start : starts) {
     const refine_internal::FrictionScreen screen = refine_internal::ScreenFrictionStarts(
-        *start, c.unit, spec, options, false, 2, refine_internal::ScreenMeasure::kWindows);
+        *start, c.unit, spec, options, false, 3, refine_internal::ScreenMeasure::kWindows);
     std::cout << screen.report << "\n";
     ASSERT_TRUE(screen.moved);
     EXPECT_NE(screen.report.find("ranked by windows"), std::string::npos);
     EXPECT_LT(screen.ranked_after, 0.1 * screen.ranked_before);
     EXPECT_LE(screen.chi_square_after, options.acceptable_reduced_chi_square);
-    const double sliding_tolerance = start == &c.start ? std::log(2.0) : 0.01;
     for (const auto& [fit, truth] :
          {std::make_pair(screen.start.friction.positive, c.truth.friction.positive),
           std::make_pair(screen.start.friction.negative, c.truth.friction.negative)}) {
       EXPECT_NEAR(fit.static_force_N / truth.static_force_N, 1.0, 0.19);
       EXPECT_NEAR(std::log(fit.stribeck_velocity_m_per_s / truth.stribeck_velocity_m_per_s), 0.0,
                   std::log(3.0));
-      EXPECT_NEAR(std::log(fit.dynamic_force_N / truth.dynamic_force_N), 0.0, sliding_tolerance);
-      EXPECT_NEAR(std::log(fit.viscous_N_s_per_m / truth.viscous_N_s_per_m), 0.0,
-                  sliding_tolerance);
+      EXPECT_NEAR(std::log(fit.dynamic_force_N / truth.dynamic_force_N), 0.0, std::log(2.0));
+      EXPECT_NEAR(std::log(fit.viscous_N_s_per_m / truth.viscous_N_s_per_m), 0.0, std::log(2.0));
     }
-    ASSERT_EQ(screen.alternatives.size(), 2u);
+    ASSERT_EQ(screen.alternatives.size(), 3u);
     double previous = screen.ranked_after;
-    for (const Parameters& alternative : screen.alternatives) {
-      const double measure = refine_internal::WindowedMeasure(alternative, c.unit, spec, options);
-      EXPECT_GE(measure, previous);
+    for (size_t k = 0; k < screen.alternatives.size(); ++k) {
+      const double measure =
+          refine_internal::WindowedMeasure(screen.alternatives[k], c.unit, spec, options);
+      EXPECT_GE(measure, screen.ranked_after);
+      if (k > 1) EXPECT_GE(measure, previous);  // after the other search's best: by rank
       previous = measure;
     }
   }
