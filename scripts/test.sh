@@ -43,8 +43,8 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   # Whole batch processes with refinement, killed and resumed: process-level
   # behaviour the Release pass checks; the resume path's code runs in BatchTest.
   SLOW+='|AKilledRunResumesToTheSameResults'
-  # The windows' screen within a whole refinement (two searches of ~2 800
-  # simulations and their fits); the screen alone runs under the sanitizers
+  # The windows' screen within a whole refinement (two searches, ~2 800
+  # simulations in all, and their fits); the screen alone runs under the sanitizers
   # (RankedByWindowsTheScreenFindsEachDirectionsBasin).
   SLOW+='|TheScreenRankedByWindowsFindsTheSameBasin'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \

@@ -59,7 +59,7 @@ Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec&
   options.rescue_starts = 0;
   options.screened_alternatives = 0;  // as the rescue starts: one candidate fit each, for speed
   options.windowed_refit = false;     // the same: a fit with an effect missing rarely explains
-  options.screen_friction_windows = false;  // the same (560 simulations of windows)
+  options.screen_friction_windows = false;  // the same (~2 800 simulations of windows)
   options.coordinate_rounds = 0;            // the same (and its starts are refined sets already)
   options.start_prior = false;
   // The starts here are refinements of the same runs: no experiment of their

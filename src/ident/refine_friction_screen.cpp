@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -111,7 +110,7 @@ class Screen {
   // and 10.2), and the windows tell them apart.
   void SlidingGrid() {
     for (const Direction& d : directions_) {
-      if (!IsFree(spec_, d.prefix + "Fd") || !IsFree(spec_, d.prefix + "b")) continue;
+      if (!SlidingFree(d)) continue;
       const Parameters base = out_->start;
       double fs = 0, fd = 0, b = 0;
       GetParameter(base, d.prefix + "Fs", &fs);
@@ -141,12 +140,14 @@ class Screen {
   // and b 4.2 held it at Fs 4.8, vs 2.2 mm/s for 4.1 and 9.0).
   void JointGrid() {
     for (const Direction& d : directions_) {
-      if (!IsFree(spec_, d.prefix + "Fd") || !IsFree(spec_, d.prefix + "b")) continue;
+      if (!SlidingFree(d)) continue;
       const Parameters base = out_->start;
       for (int g = 0; g <= 10; ++g) {
-        const double fs = std::pow(2.0, 0.5 * g);
         for (int h = 0; h <= 5; ++h) {
-          const Parameters point = Candidate(d, fs, 1e-3 * std::ldexp(1.0, h), &base);
+          const Parameters point =
+              Candidate(d, std::pow(2.0, 0.5 * g), 1e-3 * std::ldexp(1.0, h), &base);
+          double fs = 0;  // within the spec's bounds
+          GetParameter(point, d.prefix + "Fs", &fs);
           for (const double share : {0.02, 0.1, 0.3, 0.6}) {
             for (const double b : {1.0, 2.5, 6.0, 15.0}) {
               Parameters p = point;
@@ -177,8 +178,8 @@ class Screen {
             At(d, &fs, &vs);
             Try(d, fs, vs * f * f);
             if (measure_ == ScreenMeasure::kWindows) {
-              Scale(d, "Fd", f * f);
-              Scale(d, "b", f * f);
+              Scale(d, Sliding::kDynamic, f * f);
+              Scale(d, Sliding::kViscous, f * f);
             }
           }
         }
@@ -187,52 +188,62 @@ class Screen {
     }
   }
 
+  enum class Sliding { kDynamic, kViscous };  // Fd, b
+
   // The best so far with a direction's free Fd or b scaled by `f` (Fd at
-  // most Fs).
-  void Scale(const Direction& d, const std::string& coefficient, double f) {
-    const std::string path = d.prefix + coefficient;
+  // most Fs; a coefficient at 0 stays there: the grids before move it).
+  void Scale(const Direction& d, Sliding which, double f) {
+    const bool dynamic = which == Sliding::kDynamic;
+    const std::string path = d.prefix + (dynamic ? "Fd" : "b");
     if (!IsFree(spec_, path)) return;
     Parameters p = out_->start;
     double value = 0, fs = 0;
     GetParameter(p, path, &value);
     GetParameter(p, d.prefix + "Fs", &fs);
     const double scaled = Bounded(path, value * f);
-    if (scaled == value || (coefficient == "Fd" && scaled > fs)) return;
+    if (scaled == value || (dynamic && scaled > fs)) return;
     SetParameter(&p, path, scaled);
     Consider(std::move(p));
   }
 
   // Ranked by windows, two searches from `start`, each ending in the pattern
-  // search: a pair of coefficients at a time (FullGrid, SlidingGrid), and
-  // jointly (JointGrid). The windows rank sets near a basin otherwise than
-  // the fit's end does: on the sweep (N = 40, seed 12) the joint search alone
-  // took sweep-01, 21 and 36 into the truth's basin and lost sweep-33, which
-  // the pairwise search takes there. So the better ranked is the start and
-  // the other's best the first alternative (PickAlternatives), fitted when
-  // the fit from the start is not explained.
+  // search: a pair of coefficients at a time (FullGrid, SlidingGrid), and,
+  // where some direction's Fd and b are free, jointly (JointGrid). The
+  // windows rank sets near a basin otherwise than the fits from them end: on
+  // the sweep (N = 40, seed 12) the joint search alone took sweep-01, 21 and
+  // 36 into the truth's basin and lost sweep-33, which the pairwise search
+  // takes there. So the better ranked of the two bests is the start (the
+  // joint one on a tie) and the other the first alternative
+  // (PickAlternatives), fitted when the fit from the start is not explained.
   void SearchByWindows(const Parameters& start) {
     FullGrid();
     SlidingGrid();
     PatternSearch();
-    Parameters pairwise = std::exchange(out_->start, start);
-    const double pairwise_measure = std::exchange(out_->ranked_after, out_->ranked_before);
+    if (std::none_of(directions_.begin(), directions_.end(),
+                     [this](const Direction& d) { return SlidingFree(d); }))
+      return;
+    Parameters pairwise = std::exchange(out_->start, start);  // the joint search from the start
+    const double pairwise_ranked = std::exchange(out_->ranked_after, out_->ranked_before);
     JointGrid();
     PatternSearch();
-    if (pairwise_measure < out_->ranked_after) {
-      std::swap(pairwise, out_->start);
-      out_->ranked_after = pairwise_measure;
+    if (pairwise_ranked < out_->ranked_after) {
+      std::swap(pairwise, out_->start);  // the pairwise best first, the joint one second
+      out_->ranked_after = pairwise_ranked;
     }
-    runner_up_ = std::move(pairwise);
+    runner_ups_.push_back(std::move(pairwise));
   }
 
   // The next-best candidates that differ from `start`, from the best and
   // from those already taken, up to `count`: the other search's best first
   // (SearchByWindows), then by rank.
   void PickAlternatives(const Parameters& start, int count) {
-    if (runner_up_ && count > 0 && Distinct(*runner_up_, out_->start) &&
-        Distinct(*runner_up_, start)) {
-      out_->alternatives.push_back(std::move(*runner_up_));
+    for (Parameters& p : runner_ups_) {
+      if (static_cast<int>(out_->alternatives.size()) >= count) break;
+      bool fresh = Distinct(p, out_->start) && Distinct(p, start);
+      for (const Parameters& taken : out_->alternatives) fresh = fresh && Distinct(p, taken);
+      if (fresh) out_->alternatives.push_back(std::move(p));
     }
+    out_->runner_ups = static_cast<int>(out_->alternatives.size());
     std::stable_sort(simulated_.begin(), simulated_.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     for (auto& [chi, p] : simulated_) {
@@ -269,8 +280,7 @@ class Screen {
     SetParameter(&p, d.prefix + "Fs", fs);
     SetParameter(&p, d.prefix + "vs", vs);
     double fd = 0, b = 0;
-    const bool sliding = measure_ == ScreenMeasure::kWholeRuns && IsFree(spec_, d.prefix + "Fd") &&
-                         IsFree(spec_, d.prefix + "b");
+    const bool sliding = measure_ == ScreenMeasure::kWholeRuns && SlidingFree(d);
     if (sliding && FitSliding(data_.clusters, d.sign, fs, vs, &fd, &b) < HUGE_VAL) {
       SetParameter(&p, d.prefix + "Fd", Bounded(d.prefix + "Fd", fd));
       SetParameter(&p, d.prefix + "b", Bounded(d.prefix + "b", b));
@@ -293,19 +303,23 @@ class Screen {
     if (measure < out_->ranked_after) out_->ranked_after = measure, out_->start = std::move(p);
   }
 
+  // Whether a direction's Fd and b are both free.
+  bool SlidingFree(const Direction& d) const {
+    return IsFree(spec_, d.prefix + "Fd") && IsFree(spec_, d.prefix + "b");
+  }
+
   // Whether two sets differ in some direction's Fs by kDistinctStatic or its
   // vs by kDistinctStribeck.
   bool Distinct(const Parameters& a, const Parameters& b) const {
-    const auto ratio = [](double x, double y) {
-      return std::max(x, y) / std::max(std::min(x, y), 1e-12);
+    const auto apart = [&](const std::string& path, double factor) {
+      double x = 0, y = 0;
+      GetParameter(a, path, &x);
+      GetParameter(b, path, &y);
+      return std::max(x, y) / std::max(std::min(x, y), 1e-12) > factor;
     };
     for (const Direction& d : directions_) {
-      double fa = 0, fb = 0, va = 0, vb = 0;
-      GetParameter(a, d.prefix + "Fs", &fa);
-      GetParameter(b, d.prefix + "Fs", &fb);
-      GetParameter(a, d.prefix + "vs", &va);
-      GetParameter(b, d.prefix + "vs", &vb);
-      if (ratio(fa, fb) > kDistinctStatic || ratio(va, vb) > kDistinctStribeck) return true;
+      if (apart(d.prefix + "Fs", kDistinctStatic) || apart(d.prefix + "vs", kDistinctStribeck))
+        return true;
     }
     return false;
   }
@@ -319,7 +333,7 @@ class Screen {
   friction_internal::StrokeData data_;
   std::vector<Direction> directions_;
   std::vector<std::pair<double, Parameters>> simulated_;  // for the alternatives
-  std::optional<Parameters> runner_up_;                   // the other search's best
+  std::vector<Parameters> runner_ups_;  // the other search's best (SearchByWindows)
 };
 
 }  // namespace

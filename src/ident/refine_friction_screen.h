@@ -10,10 +10,10 @@
 // judged by the verdict's measure, 90 to 120 simulations. Ranked by the
 // windows instead (WindowedMeasure: each slide from its logged state, so an
 // error of one direction does not carry into the other's slides), two
-// searches from the start: a pair of coefficients at a time (a full grid in
-// Fs and vs with the start's Fd and b, then a grid in Fd and b) and jointly
-// (a grid in all four per direction), each followed by a pattern search in
-// all four; the better ranked is the start, the other's best the first
+// searches from the start, each ending in a pattern search in Fs, vs, Fd
+// and b: a pair of coefficients at a time (a full grid in Fs and vs with the
+// start's Fd and b, then a grid in Fd and b) and jointly (a grid in all four
+// per direction); the better ranked is the start, the other's best the first
 // alternative. About 2 800 simulations of the windows. No Jacobian, no fit.
 #pragma once
 
@@ -37,10 +37,13 @@ struct FrictionScreen {
   int candidates = 0;                                  // simulated
   bool moved = false;                                  // a candidate ranks before the start
   std::string report;                                  // one line, empty when nothing moved
-  // Up to `alternatives` next-best candidates (lowest ranked first), each
-  // differing from `start` and from one another in some direction's Fs by a
-  // factor kDistinctStatic or its vs by kDistinctStribeck.
+  // Up to `alternatives` next-best candidates, each differing from `start`
+  // and from one another in some direction's Fs by a factor kDistinctStatic
+  // or its vs by kDistinctStribeck, lowest ranked first; ranked by windows,
+  // the first `runner_ups` (0 or 1) is the other search's best, then the
+  // rest lowest ranked first.
   std::vector<Parameters> alternatives;
+  int runner_ups = 0;
 };
 
 inline constexpr double kDistinctStatic = 1.15, kDistinctStribeck = 1.3;

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 
@@ -251,11 +252,13 @@ TEST(RefineFrictionScreenTest, TheWindowsMisfitsOfTheTwoDirectionsAddUp) {
 // wrong basin (Fs 0.45 and vs 2.2 of the truth's) moves them into the
 // truth's, and its start explains the whole runs: each direction's Fs near
 // the truth's, vs within a factor 3 (the windows tell it least), Fd and b
-// within a factor 2; so it does with b at half the truth's too. The first
-// next-best candidate is the other search's best (pairwise or joint), the
-// rest follow by rank; all rank after the start. Limit, measured: from Fd
-// twice and b half the truth's as well (Fd capped at Fs) the screen ends at
-// 76.9, not explained (284 with the pairwise search alone, session 26).
+// within a factor 2 (they land on the grids' and the pattern's values); so
+// it does with b at half the truth's too. With Fd twice and b half the
+// truth's as well (Fd capped at Fs) the screen's start is not explained:
+// 76.9 with the joint search, 284 with the pairwise search alone (session
+// 26); the test asks below 150, between the two. Each time the other
+// search's best is the first next-best candidate, the rest follow by rank,
+// and all rank after the start.
 TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin) {
   const ScreenCase& c = HeavyUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
@@ -264,7 +267,11 @@ TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin)
   for (StribeckParams* f : {&b_off.friction.positive, &b_off.friction.negative}) {
     f->viscous_N_s_per_m *= 0.5;
   }
-  const Parameters* const starts[] = {&c.start, &b_off};
+  Parameters fd_b_off = b_off;
+  for (StribeckParams* f : {&fd_b_off.friction.positive, &fd_b_off.friction.negative}) {
+    f->dynamic_force_N = std::min(2 * f->dynamic_force_N, f->static_force_N);
+  }
+  const Parameters* const starts[] = {&c.start, &b_off, &fd_b_off};
   for (const Parameters* start : starts) {
     const refine_internal::FrictionScreen screen = refine_internal::ScreenFrictionStarts(
         *start, c.unit, spec, options, false, 3, refine_internal::ScreenMeasure::kWindows);
@@ -272,6 +279,22 @@ TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin)
     ASSERT_TRUE(screen.moved);
     EXPECT_NE(screen.report.find("ranked by windows"), std::string::npos);
     EXPECT_LT(screen.ranked_after, 0.1 * screen.ranked_before);
+    ASSERT_EQ(screen.alternatives.size(), 3u);
+    ASSERT_EQ(screen.runner_ups, 1);
+    double previous = screen.ranked_after;
+    for (size_t k = 0; k < screen.alternatives.size(); ++k) {
+      const double measure =
+          refine_internal::WindowedMeasure(screen.alternatives[k], c.unit, spec, options);
+      EXPECT_GE(measure, screen.ranked_after);
+      if (static_cast<int>(k) != screen.runner_ups) {
+        EXPECT_GE(measure, previous);  // by rank within each group
+      }
+      previous = measure;
+    }
+    if (start == &fd_b_off) {
+      EXPECT_LT(screen.chi_square_after, 150);
+      continue;
+    }
     EXPECT_LE(screen.chi_square_after, options.acceptable_reduced_chi_square);
     for (const auto& [fit, truth] :
          {std::make_pair(screen.start.friction.positive, c.truth.friction.positive),
@@ -281,15 +304,6 @@ TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin)
                   std::log(3.0));
       EXPECT_NEAR(std::log(fit.dynamic_force_N / truth.dynamic_force_N), 0.0, std::log(2.0));
       EXPECT_NEAR(std::log(fit.viscous_N_s_per_m / truth.viscous_N_s_per_m), 0.0, std::log(2.0));
-    }
-    ASSERT_EQ(screen.alternatives.size(), 3u);
-    double previous = screen.ranked_after;
-    for (size_t k = 0; k < screen.alternatives.size(); ++k) {
-      const double measure =
-          refine_internal::WindowedMeasure(screen.alternatives[k], c.unit, spec, options);
-      EXPECT_GE(measure, screen.ranked_after);
-      if (k > 1) EXPECT_GE(measure, previous);  // after the other search's best: by rank
-      previous = measure;
     }
   }
 }

@@ -99,9 +99,10 @@ struct RefineOptions {
   bool screen_friction_starts = true;
   // While the fit from the screened start is not explained either: up to
   // this many more fits, from the screen's next-best candidates that differ
-  // from the ones fitted (some direction's Fs by a factor 1.15 or vs by 1.3):
-  // under stick-slip the best simulated candidate is not always in the basin
-  // that explains the runs, the second or third can be.
+  // from the ones fitted (some direction's Fs by a factor 1.15 or vs by 1.3;
+  // ranked by windows, the other search's best first): under stick-slip the
+  // best simulated candidate is not always in the basin that explains the
+  // runs, the second or third can be.
   int screened_alternatives = 2;
   // When the fits from the screened starts are not explained either (and
   // screen_friction_starts is on): the
