@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -230,28 +231,25 @@ class Screen {
       std::swap(pairwise, out_->start);  // the pairwise best first, the joint one second
       out_->ranked_after = pairwise_ranked;
     }
-    runner_ups_.push_back(std::move(pairwise));
+    runner_up_ = std::move(pairwise);
   }
 
   // The next-best candidates that differ from `start`, from the best and
   // from those already taken, up to `count`: the other search's best first
   // (SearchByWindows), then by rank.
   void PickAlternatives(const Parameters& start, int count) {
-    for (Parameters& p : runner_ups_) {
-      if (static_cast<int>(out_->alternatives.size()) >= count) break;
+    // Takes `p` when there is room and it differs from those fitted before it.
+    const auto take = [&](Parameters& p) {
+      if (static_cast<int>(out_->alternatives.size()) >= count) return;
       bool fresh = Distinct(p, out_->start) && Distinct(p, start);
       for (const Parameters& taken : out_->alternatives) fresh = fresh && Distinct(p, taken);
       if (fresh) out_->alternatives.push_back(std::move(p));
-    }
+    };
+    if (runner_up_) take(*runner_up_);
     out_->runner_ups = static_cast<int>(out_->alternatives.size());
     std::stable_sort(simulated_.begin(), simulated_.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (auto& [chi, p] : simulated_) {
-      if (static_cast<int>(out_->alternatives.size()) >= count) break;
-      bool fresh = Distinct(p, out_->start) && Distinct(p, start);
-      for (const Parameters& taken : out_->alternatives) fresh = fresh && Distinct(p, taken);
-      if (fresh) out_->alternatives.push_back(std::move(p));
-    }
+    for (auto& [chi, p] : simulated_) take(p);
   }
 
  private:
@@ -333,7 +331,7 @@ class Screen {
   friction_internal::StrokeData data_;
   std::vector<Direction> directions_;
   std::vector<std::pair<double, Parameters>> simulated_;  // for the alternatives
-  std::vector<Parameters> runner_ups_;  // the other search's best (SearchByWindows)
+  std::optional<Parameters> runner_up_;  // the other search's best (SearchByWindows)
 };
 
 }  // namespace
