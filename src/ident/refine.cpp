@@ -129,6 +129,7 @@ bool RefineOptions::IsValid(std::string* error) const {
     return fail("acceptable_reduced_chi_square must be >= 1");
   if (rescue_starts < 0) return fail("rescue_starts must be >= 0");
   if (screened_alternatives < 0) return fail("screened_alternatives must be >= 0");
+  if (screen_windows_max < 0) return fail("screen_windows_max must be >= 0");
   if (coordinate_rounds < 0) return fail("coordinate_rounds must be >= 0");
   if (!(coordinate_span > 1)) return fail("coordinate_span must be > 1");
   if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");

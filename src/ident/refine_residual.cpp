@@ -1,17 +1,25 @@
 #include "refine_residual.h"
 
+#include <algorithm>
+#include <cstdint>
+#include <utility>
+
 #include "pneumaid/validate/validate.h"
 
 namespace pneumaid::refine_internal {
 
 std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Unit& unit,
                                              const FitSpec& spec, const RefineOptions& options,
-                                             bool windows) {
+                                             bool windows, std::size_t max_runs) {
   const Parameters conditioned = WithRigConditions(params, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
   const std::vector<double> theta = map.ThetaOf(conditioned);
+  std::vector<FitExperiment> runs = FittedRuns(conditioned, unit, spec, windows);
+  const std::vector<bool> kept = SubsetByHash(runs.size(), max_runs);
   std::vector<RunResiduals> out;
-  for (FitExperiment& run : FittedRuns(conditioned, unit, spec, windows)) {
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    if (!kept[k]) continue;
+    FitExperiment& run = runs[k];
     const ExperimentResidual residual(&conditioned, &map, &run, &options.simulation,
                                       options.jacobian);
     Eigen::VectorXd r(residual.num_residuals());
@@ -21,6 +29,22 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
     out.push_back({std::move(run), std::move(r)});
   }
   return out;
+}
+
+std::vector<bool> SubsetByHash(std::size_t n, std::size_t count) {
+  if (count == 0 || count >= n) return std::vector<bool>(n, true);
+  const auto hash = [](std::uint64_t z) {  // splitmix64's finaliser
+    z += 0x9e3779b97f4a7c15ULL;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  };
+  std::vector<std::pair<std::uint64_t, std::size_t>> keys(n);
+  for (std::size_t i = 0; i < n; ++i) keys[i] = {hash(i), i};
+  std::nth_element(keys.begin(), keys.begin() + static_cast<std::ptrdiff_t>(count), keys.end());
+  std::vector<bool> kept(n, false);
+  for (std::size_t i = 0; i < count; ++i) kept[keys[i].second] = true;
+  return kept;
 }
 
 std::vector<ExperimentCost> CostsOf(const std::vector<RunResiduals>& runs) {

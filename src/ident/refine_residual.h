@@ -244,13 +244,19 @@ class ExperimentResidual final : public ceres::CostFunction {
 // Each fitted run at `params` with its weighted residuals (NaN where it
 // cannot be simulated): whole, simulated from its logged start, or cut into
 // the windows of multiple shooting (Windows), each from its logged state.
+// With max_runs > 0, at most that many of them (SubsetByHash), in their order.
 struct RunResiduals {
   FitExperiment run;
   Eigen::VectorXd residuals;
 };
 std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Unit& unit,
                                              const FitSpec& spec, const RefineOptions& options,
-                                             bool windows);
+                                             bool windows, std::size_t max_runs = 0);
+
+// Which `count` of `n` indices to keep (all when count is 0 or >= n): those
+// whose fixed hash (splitmix64 of the index) ranks lowest. Deterministic, the
+// same for every call, and without the period of an every-k-th stride.
+std::vector<bool> SubsetByHash(std::size_t n, std::size_t count);
 inline std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit& unit,
                                                    const FitSpec& spec,
                                                    const RefineOptions& options) {

@@ -63,7 +63,8 @@ double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec
                        const RefineOptions& options) {
   double squares = 0;
   long rows = 0;
-  for (const RunResiduals& w : FittedRunResiduals(params, unit, spec, options, true)) {
+  const auto max_windows = static_cast<std::size_t>(options.screen_windows_max);
+  for (const RunResiduals& w : FittedRunResiduals(params, unit, spec, options, true, max_windows)) {
     const auto data = w.residuals.head(w.run.data_rows());
     if (!data.allFinite()) return HUGE_VAL;
     squares += data.squaredNorm();

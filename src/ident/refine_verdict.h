@@ -40,7 +40,8 @@ double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec&
 // multiple shooting (each from its logged state, v = 0), HUGE_VAL where a
 // window cannot be simulated. A window holds one slide, so an error of one
 // direction's friction does not carry into the slides after it: what the
-// windowed friction screen ranks candidates by.
+// windowed friction screen ranks candidates by. At most
+// RefineOptions::screen_windows_max windows (SubsetByHash).
 double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
                        const RefineOptions& options);
 

@@ -521,6 +521,7 @@ TEST(RefineOptionsTest, IsValidNamesTheBadField) {
        [](RefineOptions* o) { o->earlier_stage_stall_tolerance = -1; }},
       {"clustered_error_block_s", [](RefineOptions* o) { o->clustered_error_block_s = -0.1; }},
       {"cost_resolution_directions", [](RefineOptions* o) { o->cost_resolution_directions = -1; }},
+      {"screen_windows_max", [](RefineOptions* o) { o->screen_windows_max = -1; }},
   };
   for (const auto& [field, spoil] : bad) {
     RefineOptions options;

@@ -112,6 +112,13 @@ struct RefineOptions {
   // other's slides), and fits from its best and next-best candidates. Where
   // both directions start off, the whole runs can hide the basin of each.
   bool screen_friction_windows = true;
+  // That screen ranks each candidate by at most this many windows (0: all),
+  // picked by a fixed hash of their index (so a subset does not follow the
+  // alternation of the directions' slides), the same ones for every
+  // candidate. A unit logged at a high rate with many slides cuts its runs
+  // into over 1 000 windows; the measure's mean square is set by a few
+  // hundred, and its cost by all of them.
+  int screen_windows_max = 256;
   // When the fits from the given and the screened starts are not explained:
   // a start one friction coefficient away from the given one. Up to this many
   // rounds, each scanning every free friction coefficient on its own within
