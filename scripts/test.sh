@@ -44,9 +44,10 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   # behaviour the Release pass checks; the resume path's code runs in BatchTest.
   SLOW+='|AKilledRunResumesToTheSameResults'
   # The windows' screen within a whole refinement (two searches, ~2 800
-  # simulations in all, and their fits); the screen alone runs under the sanitizers
+  # simulations in all, and their fits), and its third start on the heavy unit;
+  # the screen alone runs under the sanitizers from two starts
   # (RankedByWindowsTheScreenFindsEachDirectionsBasin).
-  SLOW+='|TheScreenRankedByWindowsFindsTheSameBasin'
+  SLOW+='|TheScreenRankedByWindowsFindsTheSameBasin|RankedByWindowsTheJointSearchMovesFdAndBToo'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
 fi

@@ -257,6 +257,8 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
 // whose fixed hash (splitmix64 of the index) ranks lowest. Deterministic, the
 // same for every call, and without the period of an every-k-th stride.
 std::vector<bool> SubsetByHash(std::size_t n, std::size_t count);
+
+// FittedRunResiduals of the whole runs.
 inline std::vector<RunResiduals> WholeRunResiduals(const Parameters& params, const Unit& unit,
                                                    const FitSpec& spec,
                                                    const RefineOptions& options) {

@@ -38,10 +38,11 @@ double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec&
 // The windows' measure of `params` with no fit: the mean square of the
 // weighted data residuals over the fitted runs cut into the windows of
 // multiple shooting (each from its logged state, v = 0), HUGE_VAL where a
-// window cannot be simulated. A window holds one slide, so an error of one
-// direction's friction does not carry into the slides after it: what the
-// windowed friction screen ranks candidates by. At most
-// RefineOptions::screen_windows_max windows (SubsetByHash).
+// measured window cannot be simulated. A window holds one slide, so an error
+// of one direction's friction does not carry into the slides after it: what
+// the windowed friction screen ranks candidates by. It measures at most
+// RefineOptions::screen_windows_max windows (SubsetByHash; 0: all), so a
+// window outside them that cannot be simulated does not count.
 double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
                        const RefineOptions& options);
 

@@ -253,7 +253,8 @@ TEST(RefineFrictionScreenTest, TheWindowsMisfitsOfTheTwoDirectionsAddUp) {
 // The windows a screen ranks by on a unit with many (refine_residual.h):
 // exactly the count asked for, the same ones on every call, and spread
 // over the indices without the period of a stride: of 1 000 windows taken
-// 250, each residue modulo 2, 3 and 4 holds its share within a fifth (a
+// 250, each tenth of the range holds 25 within 12, and each residue modulo
+// 2, 3 and 4 its share within a fifth (a
 // stride of 2 or 4 would take only even indices, one direction's slides
 // where the directions alternate).
 TEST(RefineFrictionScreenTest, TheWindowsSubsetIsFixedAndSpreadOverTheIndices) {
@@ -264,6 +265,11 @@ TEST(RefineFrictionScreenTest, TheWindowsSubsetIsFixedAndSpreadOverTheIndices) {
   const std::vector<bool> kept = SubsetByHash(1000, 250);
   EXPECT_EQ(kept, SubsetByHash(1000, 250));
   EXPECT_EQ(std::count(kept.begin(), kept.end(), true), 250);
+  for (int tenth = 0; tenth < 10; ++tenth) {  // spread over the range, not its first part
+    EXPECT_NEAR(std::count(kept.begin() + 100 * tenth, kept.begin() + 100 * (tenth + 1), true), 25,
+                12)
+        << "indices " << 100 * tenth << " to " << 100 * tenth + 99;
+  }
   for (const int modulus : {2, 3, 4}) {
     for (int residue = 0; residue < modulus; ++residue) {
       int count = 0;
@@ -273,10 +279,12 @@ TEST(RefineFrictionScreenTest, TheWindowsSubsetIsFixedAndSpreadOverTheIndices) {
   }
 }
 
-// Ranked by half its windows (89 of the light unit's 179), a candidate's
-// windows' measure stays near the measure over all of them (within 25 %;
-// 12 % at the truth, 14 % at a start in the wrong basin measured), and the
-// order of the two stays: what RefineOptions::screen_windows_max relies on.
+// Ranked by half its windows (89 of the light unit's 179), candidates rank
+// in the same order as by all of them: the truth, its positive Fs 10 % and
+// 25 % high, its negative vs 50 % high, and a start in the wrong basin.
+// What RefineOptions::screen_windows_max relies on. The measure itself moves
+// more: 0.57 to 1.14 of the measure over all windows (a few slides carry
+// most of an Fs error's misfit); the test asks within a factor 2.
 TEST(RefineFrictionScreenTest, HalfTheWindowsRankAsAllOfThemDo) {
   const ScreenCase& c = LightUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
@@ -285,21 +293,71 @@ TEST(RefineFrictionScreenTest, HalfTheWindowsRankAsAllOfThemDo) {
   const std::size_t windows =
       refine_internal::FittedRunResiduals(c.truth, c.unit, spec, all, true).size();
   ASSERT_GT(windows, 20u);
+  EXPECT_EQ(
+      refine_internal::FittedRunResiduals(c.truth, c.unit, spec, all, true, windows / 2).size(),
+      windows / 2);
   RefineOptions half = all;
   half.screen_windows_max = static_cast<int>(windows / 2);
-  EXPECT_EQ(
-      refine_internal::FittedRunResiduals(c.truth, c.unit, spec, half, true, windows / 2).size(),
-      windows / 2);
-  double measures[2][2];
-  for (const int k : {0, 1}) {
-    const Parameters& p = k == 0 ? c.truth : c.start;
-    measures[k][0] = refine_internal::WindowedMeasure(p, c.unit, spec, all);
-    measures[k][1] = refine_internal::WindowedMeasure(p, c.unit, spec, half);
-    std::cout << (k == 0 ? "truth" : "start") << ": all " << windows << " windows "
-              << measures[k][0] << ", half " << measures[k][1] << "\n";
-    EXPECT_NEAR(measures[k][1] / measures[k][0], 1.0, 0.25);
+  std::vector<Parameters> candidates(4, c.truth);
+  candidates[1].friction.positive.static_force_N *= 1.1;
+  candidates[2].friction.positive.static_force_N *= 1.25;
+  candidates[3].friction.negative.stribeck_velocity_m_per_s *= 1.5;
+  candidates.push_back(c.start);
+  std::vector<std::pair<double, double>> measures;  // over all windows, over half
+  for (const Parameters& p : candidates) {
+    measures.emplace_back(refine_internal::WindowedMeasure(p, c.unit, spec, all),
+                          refine_internal::WindowedMeasure(p, c.unit, spec, half));
+    std::cout << "all " << windows << " windows " << measures.back().first << ", half "
+              << measures.back().second << "\n";
+    EXPECT_NEAR(std::log(measures.back().second / measures.back().first), 0.0, std::log(2.0));
   }
-  EXPECT_LT(measures[0][1], measures[1][1]);
+  for (std::size_t a = 0; a < measures.size(); ++a) {
+    for (std::size_t b = 0; b < measures.size(); ++b) {
+      if (measures[a].first < measures[b].first) {
+        EXPECT_LT(measures[a].second, measures[b].second) << a << " before " << b;
+      }
+    }
+  }
+}
+
+// The screen ranked by windows from `start` on the heavy unit, with what
+// holds for every start: it moves the start, the windows' measure drops
+// tenfold, the other search's best is the first next-best candidate, the
+// rest follow by rank, and all rank after the start.
+refine_internal::FrictionScreen ScreenedByWindows(const Parameters& start) {
+  const ScreenCase& c = HeavyUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineOptions options;
+  refine_internal::FrictionScreen screen = refine_internal::ScreenFrictionStarts(
+      start, c.unit, spec, options, false, 3, refine_internal::ScreenMeasure::kWindows);
+  std::cout << screen.report << "\n";
+  EXPECT_TRUE(screen.moved);
+  EXPECT_NE(screen.report.find("ranked by windows (11 of 11)"), std::string::npos);
+  EXPECT_LT(screen.ranked_after, 0.1 * screen.ranked_before);
+  EXPECT_EQ(screen.alternatives.size(), 3u);
+  EXPECT_EQ(screen.runner_ups, 1);
+  double previous = screen.ranked_after;
+  for (size_t k = 0; k < screen.alternatives.size(); ++k) {
+    const double measure =
+        refine_internal::WindowedMeasure(screen.alternatives[k], c.unit, spec, options);
+    EXPECT_GE(measure, screen.ranked_after);
+    if (static_cast<int>(k) != screen.runner_ups) {
+      EXPECT_GE(measure, previous);  // by rank within each group
+    }
+    previous = measure;
+  }
+  return screen;
+}
+
+// The heavy unit's start with b at half the truth's, and with Fd twice
+// the truth's as well (capped at Fs).
+Parameters WithSlidingOff(bool fd_too) {
+  Parameters p = HeavyUnit().start;
+  for (StribeckParams* f : {&p.friction.positive, &p.friction.negative}) {
+    f->viscous_N_s_per_m *= 0.5;
+    if (fd_too) f->dynamic_force_N = std::min(2 * f->dynamic_force_N, f->static_force_N);
+  }
+  return p;
 }
 
 // Ranked by windows, the screen from a start with both directions in the
@@ -307,49 +365,13 @@ TEST(RefineFrictionScreenTest, HalfTheWindowsRankAsAllOfThemDo) {
 // truth's, and its start explains the whole runs: each direction's Fs near
 // the truth's, vs within a factor 3 (the windows tell it least), Fd and b
 // within a factor 2 (they land on the grids' and the pattern's values); so
-// it does with b at half the truth's too. With Fd twice and b half the
-// truth's as well (Fd capped at Fs) the screen's start is not explained:
-// 76.9 with the joint search, 284 with the pairwise search alone (session
-// 26); the test asks below 150, between the two. Each time the other
-// search's best is the first next-best candidate, the rest follow by rank,
-// and all rank after the start.
+// it does with b at half the truth's too.
 TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin) {
   const ScreenCase& c = HeavyUnit();
-  const FitSpec spec = LoadFitSpec(kDefaultSpec);
-  const RefineOptions options;
-  Parameters b_off = c.start;
-  for (StribeckParams* f : {&b_off.friction.positive, &b_off.friction.negative}) {
-    f->viscous_N_s_per_m *= 0.5;
-  }
-  Parameters fd_b_off = b_off;
-  for (StribeckParams* f : {&fd_b_off.friction.positive, &fd_b_off.friction.negative}) {
-    f->dynamic_force_N = std::min(2 * f->dynamic_force_N, f->static_force_N);
-  }
-  const Parameters* const starts[] = {&c.start, &b_off, &fd_b_off};
-  for (const Parameters* start : starts) {
-    const refine_internal::FrictionScreen screen = refine_internal::ScreenFrictionStarts(
-        *start, c.unit, spec, options, false, 3, refine_internal::ScreenMeasure::kWindows);
-    std::cout << screen.report << "\n";
-    ASSERT_TRUE(screen.moved);
-    EXPECT_NE(screen.report.find("ranked by windows"), std::string::npos);
-    EXPECT_LT(screen.ranked_after, 0.1 * screen.ranked_before);
-    ASSERT_EQ(screen.alternatives.size(), 3u);
-    ASSERT_EQ(screen.runner_ups, 1);
-    double previous = screen.ranked_after;
-    for (size_t k = 0; k < screen.alternatives.size(); ++k) {
-      const double measure =
-          refine_internal::WindowedMeasure(screen.alternatives[k], c.unit, spec, options);
-      EXPECT_GE(measure, screen.ranked_after);
-      if (static_cast<int>(k) != screen.runner_ups) {
-        EXPECT_GE(measure, previous);  // by rank within each group
-      }
-      previous = measure;
-    }
-    if (start == &fd_b_off) {
-      EXPECT_LT(screen.chi_square_after, 150);
-      continue;
-    }
-    EXPECT_LE(screen.chi_square_after, options.acceptable_reduced_chi_square);
+  const Parameters b_off = WithSlidingOff(false);
+  for (const Parameters* start : {&c.start, &b_off}) {
+    const refine_internal::FrictionScreen screen = ScreenedByWindows(*start);
+    EXPECT_LE(screen.chi_square_after, RefineOptions{}.acceptable_reduced_chi_square);
     for (const auto& [fit, truth] :
          {std::make_pair(screen.start.friction.positive, c.truth.friction.positive),
           std::make_pair(screen.start.friction.negative, c.truth.friction.negative)}) {
@@ -360,6 +382,14 @@ TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin)
       EXPECT_NEAR(std::log(fit.viscous_N_s_per_m / truth.viscous_N_s_per_m), 0.0, std::log(2.0));
     }
   }
+}
+
+// With Fd twice and b half the truth's as well, the screen's start is not
+// explained: 76.9 with the joint search, 284 with the pairwise search alone
+// (session 26); the test asks below 150, between the two. (Release pass
+// only, scripts/test.sh: a third screen of this unit.)
+TEST(RefineFrictionScreenTest, RankedByWindowsTheJointSearchMovesFdAndBToo) {
+  EXPECT_LT(ScreenedByWindows(WithSlidingOff(true)).chi_square_after, 150);
 }
 
 }  // namespace

@@ -117,7 +117,7 @@ struct RefineOptions {
   // alternation of the directions' slides), the same ones for every
   // candidate. A unit logged at a high rate with many slides cuts its runs
   // into over 1 000 windows; the measure's mean square is set by a few
-  // hundred, and its cost by all of them.
+  // hundred, and its run time by all of them.
   int screen_windows_max = 256;
   // When the fits from the given and the screened starts are not explained:
   // a start one friction coefficient away from the given one. Up to this many
