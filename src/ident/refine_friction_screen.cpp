@@ -377,12 +377,13 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
     out.chi_square_after = VerdictMeasure(out.start, unit, spec, options);
     ++out.candidates;
     const std::size_t all = FittedRuns(WithRigConditions(start, unit), unit, spec, true).size();
-    const auto ranked = std::min(all, static_cast<std::size_t>(options.screen_windows_max));
+    const std::size_t ranked =
+        SubsetSize(all, static_cast<std::size_t>(options.screen_windows_max));
     std::snprintf(line, sizeof(line),
                   "friction start read off the logs, ranked by windows (%zu of %zu): mean square "
                   "%.3g -> %.3g, median reduced chi-square %.3g -> %.3g (%d candidates simulated)",
-                  ranked > 0 ? ranked : all, all, out.ranked_before, out.ranked_after,
-                  out.chi_square_before, out.chi_square_after, out.candidates);
+                  ranked, all, out.ranked_before, out.ranked_after, out.chi_square_before,
+                  out.chi_square_after, out.candidates);
   } else {
     out.chi_square_after = out.ranked_after;
     std::snprintf(line, sizeof(line),

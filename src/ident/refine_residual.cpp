@@ -32,7 +32,8 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
 }
 
 std::vector<bool> SubsetByHash(std::size_t n, std::size_t count) {
-  if (count == 0 || count >= n) return std::vector<bool>(n, true);
+  count = SubsetSize(n, count);
+  if (count == n) return std::vector<bool>(n, true);
   const auto hash = [](std::uint64_t z) {  // splitmix64's finaliser
     z += 0x9e3779b97f4a7c15ULL;
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;

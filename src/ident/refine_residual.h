@@ -253,9 +253,15 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
                                              const FitSpec& spec, const RefineOptions& options,
                                              bool windows, std::size_t max_runs = 0);
 
-// Which `count` of `n` indices to keep (all when count is 0 or >= n): those
-// whose fixed hash (splitmix64 of the index) ranks lowest. Deterministic, the
-// same for every call, and without the period of an every-k-th stride.
+// How many of `n` indices SubsetByHash keeps: all when count is 0 or >= n,
+// else `count`.
+inline std::size_t SubsetSize(std::size_t n, std::size_t count) {
+  return count == 0 ? n : std::min(n, count);
+}
+
+// Which SubsetSize(n, count) of `n` indices to keep: those whose fixed hash
+// (splitmix64 of the index) ranks lowest. Deterministic, the same for every
+// call, and without the period of an every-k-th stride.
 std::vector<bool> SubsetByHash(std::size_t n, std::size_t count);
 
 // FittedRunResiduals of the whole runs.
