@@ -47,7 +47,7 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   # simulations in all, and their fits), and its third start on the heavy unit;
   # the screen alone runs under the sanitizers from two starts
   # (RankedByWindowsTheScreenFindsEachDirectionsBasin).
-  SLOW+='|TheScreenRankedByWindowsFindsTheSameBasin|RankedByWindowsTheJointSearchMovesFdAndBToo'
+  SLOW+='|TheScreenRankedByWindowsFindsTheSameBasin|RankedByWindowsTheJointSearchMovesFdAndBToo|TheProfiledSearchRanksNearTheTruth'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
 fi

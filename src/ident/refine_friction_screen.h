@@ -14,9 +14,13 @@
 // and b: a pair of coefficients at a time (a full grid in Fs and vs with the
 // start's Fd and b, then a grid in Fd and b) and jointly (a grid in all four
 // per direction); the better ranked is the start, the other's best the first
-// alternative. About 2 800 simulations of the windows. No Jacobian, no fit.
+// alternative. With alternatives asked for, a third search, profiled (a grid
+// in vs, Fd and b with each point at its best Fs within 15 % of the start's),
+// gives one more alternative. About 2 800 simulations of the windows, 3 800
+// with the third search. No Jacobian, no fit.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,10 +44,15 @@ struct FrictionScreen {
   // Up to `alternatives` next-best candidates, each differing from `start`
   // and from one another in some direction's Fs by a factor kDistinctStatic
   // or its vs by kDistinctStribeck, lowest ranked first; ranked by windows,
-  // the first `runner_ups` (0 or 1) is the other search's best, then the
-  // rest lowest ranked first.
+  // up to `alternatives` + 1: the first `runner_ups` (0 to 2) are the other
+  // search's best and the profiled search's best (which may rank before
+  // `start`: a lower measure there is not a better start, docs/refinement.md),
+  // then the rest lowest ranked first.
   std::vector<Parameters> alternatives;
   int runner_ups = 0;
+  // Ranked by windows with alternatives asked for: the profiled search's
+  // best, also among `alternatives` where it differs from the others.
+  std::optional<Parameters> profiled;
 };
 
 inline constexpr double kDistinctStatic = 1.15, kDistinctStribeck = 1.3;

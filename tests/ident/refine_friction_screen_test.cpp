@@ -322,8 +322,10 @@ TEST(RefineFrictionScreenTest, HalfTheWindowsRankAsAllOfThemDo) {
 
 // The screen ranked by windows from `start` on the heavy unit, with what
 // holds for every start: it moves the start, the windows' measure drops
-// tenfold, the other search's best is the first next-best candidate, the
-// rest follow by rank, and all rank after the start.
+// tenfold, the other search's best is the first next-best candidate (ranked
+// after the start), the profiled search's best the second (ranked anywhere)
+// where it differs from those, and the rest follow by rank, after the start:
+// three of them and the profiled search's slot.
 refine_internal::FrictionScreen ScreenedByWindows(const Parameters& start) {
   const ScreenCase& c = HeavyUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
@@ -334,16 +336,15 @@ refine_internal::FrictionScreen ScreenedByWindows(const Parameters& start) {
   EXPECT_TRUE(screen.moved);
   EXPECT_NE(screen.report.find("ranked by windows (11 of 11)"), std::string::npos);
   EXPECT_LT(screen.ranked_after, 0.1 * screen.ranked_before);
-  EXPECT_EQ(screen.alternatives.size(), 3u);
-  EXPECT_EQ(screen.runner_ups, 1);
+  EXPECT_EQ(screen.alternatives.size(), 4u);
+  EXPECT_GE(screen.runner_ups, 1);
+  EXPECT_LE(screen.runner_ups, 2);
   double previous = screen.ranked_after;
-  for (size_t k = 0; k < screen.alternatives.size(); ++k) {
+  for (int k = 0; k < static_cast<int>(screen.alternatives.size()); ++k) {
     const double measure =
         refine_internal::WindowedMeasure(screen.alternatives[k], c.unit, spec, options);
-    EXPECT_GE(measure, screen.ranked_after);
-    if (static_cast<int>(k) != screen.runner_ups) {
-      EXPECT_GE(measure, previous);  // by rank within each group
-    }
+    if (k == 0 || k >= screen.runner_ups) EXPECT_GE(measure, screen.ranked_after) << k;
+    if (k > screen.runner_ups) EXPECT_GE(measure, previous) << k;  // by rank
     previous = measure;
   }
   return screen;
@@ -390,6 +391,43 @@ TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin)
 // only, scripts/test.sh: a third screen of this unit.)
 TEST(RefineFrictionScreenTest, RankedByWindowsTheJointSearchMovesFdAndBToo) {
   EXPECT_LT(ScreenedByWindows(WithSlidingOff(true)).chi_square_after, 150);
+}
+
+// The profiled search (a grid in vs, Fd and b, each point at its best Fs
+// within 15 % of the start's, then the pattern search) from a start with
+// each direction's Fs 10 % high, vs twice, Fd twice (at most Fs) and b half
+// the truth's, ranked 1 500 times the truth's friction: its best ranks
+// within a factor 2 of the truth's (1.46 measured) with each direction's Fs
+// within 20 % (measured: positive 14.7 for 12.6, a weak coefficient of
+// these windows with Fd at 0.7 Fs; negative 14.5 for 13.8). On sweep-01's
+// needle basins it is what leads into the truth's (docs/refinement.md).
+TEST(RefineFrictionScreenTest, TheProfiledSearchRanksNearTheTruth) {
+  const ScreenCase& c = HeavyUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineOptions options;
+  Parameters start = c.truth;
+  for (StribeckParams* f : {&start.friction.positive, &start.friction.negative}) {
+    f->static_force_N *= 1.1;
+    f->stribeck_velocity_m_per_s *= 2;
+    f->viscous_N_s_per_m *= 0.5;
+    f->dynamic_force_N = std::min(2 * f->dynamic_force_N, f->static_force_N);
+  }
+  const refine_internal::FrictionScreen screen = refine_internal::ScreenFrictionStarts(
+      start, c.unit, spec, options, true, 1, refine_internal::ScreenMeasure::kWindows);
+  ASSERT_TRUE(screen.profiled.has_value());
+  const Parameters& p = *screen.profiled;
+  const double at_truth = refine_internal::WindowedMeasure(c.truth, c.unit, spec, options);
+  const double at_start = refine_internal::WindowedMeasure(start, c.unit, spec, options);
+  const double profiled = refine_internal::WindowedMeasure(p, c.unit, spec, options);
+  std::cout << "profiled: positive Fs " << p.friction.positive.static_force_N << ", negative Fs "
+            << p.friction.negative.static_force_N << ", ranked " << profiled << " (the truth "
+            << at_truth << ", the start " << at_start << ")\n";
+  EXPECT_GT(at_start, 100 * at_truth);
+  EXPECT_LT(profiled, 2 * at_truth);
+  EXPECT_NEAR(p.friction.positive.static_force_N / c.truth.friction.positive.static_force_N, 1.0,
+              0.2);
+  EXPECT_NEAR(p.friction.negative.static_force_N / c.truth.friction.negative.static_force_N, 1.0,
+              0.2);
 }
 
 }  // namespace
