@@ -43,10 +43,11 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   # Whole batch processes with refinement, killed and resumed: process-level
   # behaviour the Release pass checks; the resume path's code runs in BatchTest.
   SLOW+='|AKilledRunResumesToTheSameResults'
-  # The windows' screen within a whole refinement (two searches, ~2 800
-  # simulations in all, and their fits), and its third start on the heavy unit;
-  # the screen alone runs under the sanitizers from two starts
-  # (RankedByWindowsTheScreenFindsEachDirectionsBasin).
+  # The windows' screen within a whole refinement (three searches, ~3 800
+  # simulations in all, and their fits), its third start on the heavy unit,
+  # and its profiled search from a fourth start; the screen alone runs under
+  # the sanitizers from two starts (RankedByWindowsTheScreenFindsEachDirectionsBasin,
+  # the profiled search included).
   SLOW+='|TheScreenRankedByWindowsFindsTheSameBasin|RankedByWindowsTheJointSearchMovesFdAndBToo|TheProfiledSearchRanksNearTheTruth'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <utility>
 
 #include "pneumaid/ident/friction_fit.h"
@@ -78,10 +79,10 @@ StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spe
 // `stages` with their last stage first by multiple shooting (windows),
 // then as it is: restarted at every stuck phase, a slip at another instant
 // cannot carry into the rest of a run, so a chaotic stick-slip no longer
-// makes the cost rugged around the optimum. `stages` as they are when the
-// last is windowed already.
-std::vector<FitStage> ShootingFirst(const std::vector<FitStage>& stages) {
-  if (stages.back().windows) return stages;
+// makes the cost rugged around the optimum. Nothing when the last stage is
+// windowed already.
+std::optional<std::vector<FitStage>> ShootingFirst(const std::vector<FitStage>& stages) {
+  if (stages.back().windows) return std::nullopt;
   std::vector<FitStage> windowed = stages;
   FitStage shooting = stages.back();
   shooting.windows = true;
@@ -101,11 +102,16 @@ StagedFit FitCandidate(const Parameters& from, const Unit& unit, const FitSpec& 
                        bool shooting_too) {
   StagedFit fit = FitStages(from, unit, spec, stages, options);
   fit.from_moved_start = true;
-  if (!shooting_too || fit.result.explained() || stages.back().windows) return fit;
-  StagedFit shooting = FitStages(from, unit, spec, ShootingFirst(stages), options);
+  const std::optional<std::vector<FitStage>> windowed = ShootingFirst(stages);
+  if (!shooting_too || fit.result.explained() || !windowed) return fit;
+  StagedFit shooting = FitStages(from, unit, spec, *windowed, options);
   shooting.from_moved_start = true;
+  shooting.shot_too = fit.shot_too = true;
   shooting.result.iterations += fit.result.iterations;
-  if (Better(shooting.result, fit.result)) return shooting;
+  if (Better(shooting.result, fit.result)) {
+    shooting.by_windows_first = true;
+    return shooting;
+  }
   fit.result.iterations = shooting.result.iterations;
   return fit;
 }
@@ -194,30 +200,45 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::st
   *report = screen.report;
   if (!screen.moved) return;
   const Parameters previous_start = moved_start_;
+  const bool previous_shot = moved_start_shot_;
   moved_start_ = std::move(screen.start);
   // Candidates ranked by windows are fitted by windows first too (with
   // windowed_refit on) where the whole runs do not explain the logs.
   const bool shooting_too = measure == ScreenMeasure::kWindows && options_.windowed_refit;
-  bool kept =
-      Offer(FitCandidate(moved_start_, unit_, spec_, stages_, options_, shooting_too), report);
+  // Offers the fit from a candidate; true when kept.
+  bool by_windows_first = false;
+  const auto offer = [&](const Parameters& from) {
+    StagedFit fit = FitCandidate(from, unit_, spec_, stages_, options_, shooting_too);
+    const bool shot = fit.shot_too, first = fit.by_windows_first;
+    if (!Offer(std::move(fit), report)) return false;
+    moved_start_shot_ = shot;
+    by_windows_first = first;
+    return true;
+  };
+  bool kept = offer(moved_start_);
   if (!kept) *report += "; not kept: the fit kept before ends lower";
   // Not explained from the best candidate either: the next-best ones.
   int tried = 0, kept_alternative = 0;
   for (Parameters& alternative : screen.alternatives) {
     if (Explained()) break;
     ++tried;
-    if (Offer(FitCandidate(alternative, unit_, spec_, stages_, options_, shooting_too), report)) {
+    if (offer(alternative)) {
       kept_alternative = tried;
       kept = true;
       moved_start_ = std::move(alternative);
     }
   }
   if (tried > 0) {
+    std::string which;
+    if (kept_alternative > 0) {
+      which = ", the fit from candidate " + std::to_string(kept_alternative + 1);
+      if (kept_alternative - 1 == screen.profiled_alternative) which += " (the profiled search's)";
+      which += " kept";
+    }
     *report += "; " + std::to_string(tried) + " next-best candidate(s) fitted" +
-               (kept_alternative > 0
-                    ? ", the fit from candidate " + std::to_string(kept_alternative + 1) + " kept"
-                    : ", none ended lower");
+               (kept_alternative > 0 ? which : ", none ended lower");
   }
+  if (kept && by_windows_first) *report += ", its fit by windows first";
   // The later attempts start from the screened start: the whole runs'
   // screen's even when its fit was not kept (its best candidate by the
   // verdict's own measure), the windows' only when its fit was.
@@ -225,6 +246,7 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::st
     moved_ = true;
   } else {
     moved_start_ = previous_start;
+    moved_start_shot_ = previous_shot;
   }
 }
 
@@ -246,6 +268,7 @@ void Attempts::CoordinateStart() {
   const bool kept = Offer(std::move(candidate), &coordinate_report_);
   if (kept) {
     moved_start_ = std::move(moved.start);
+    moved_start_shot_ = false;
     moved_ = true;
   }
   char line[160];
@@ -275,8 +298,15 @@ void Attempts::RobustRefit() {
 }
 
 void Attempts::WindowedRefit() {
-  if (Explained() || !options_.windowed_refit || stages_.back().windows) return;
-  Refit("windowed refit (the last stage by multiple shooting first)", ShootingFirst(stages_), false,
+  const std::optional<std::vector<FitStage>> windowed = ShootingFirst(stages_);
+  if (Explained() || !options_.windowed_refit || !windowed) return;
+  if (moved_start_shot_) {
+    windowed_report_ =
+        "windowed refit (the last stage by multiple shooting first): not run, the screened start "
+        "was fitted so already";
+    return;
+  }
+  Refit("windowed refit (the last stage by multiple shooting first)", *windowed, false,
         &windowed_report_);
 }
 

@@ -4,7 +4,9 @@
 //   1. the friction screen (refine_friction_screen.h): a start whose
 //      friction is read off the logs, and its next-best candidates (also
 //      when the given fit is explained but leaves friction at a bound);
-//      when still not explained, the same ranked by the windows;
+//      when still not explained, the same ranked by the windows, each of
+//      its candidates whose fit is not explained fitted once more with the
+//      last stage by multiple shooting first (with windowed_refit on);
 //   2. a start one friction coefficient away from the given one
 //      (refine_coordinate_start.h);
 //   3. a robust refit (each run through a Cauchy loss);
@@ -36,6 +38,9 @@ struct StagedFit {
   // From a start a later attempt moved (the screen's, the coordinate
   // start's), else from the caller's.
   bool from_moved_start = false;
+  // Its start was fitted with the last stage by multiple shooting first too
+  // (ShootingFirst), the Better of the two kept; `by_windows_first`: that fit.
+  bool shot_too = false, by_windows_first = false;
 };
 
 // The verdict on a fit's last stage: a windowed stage's runs are judged
@@ -100,6 +105,9 @@ class Attempts {
   Parameters given_before_last_;
   Parameters moved_start_;
   bool moved_ = false;  // moved_start_ differs from start_
+  // moved_start_ was fitted by windows first already (a candidate of the
+  // windows' screen): the windowed refit from it would repeat that fit.
+  bool moved_start_shot_ = false;
   std::string screen_report_, windows_screen_report_, coordinate_report_, robust_report_,
       windowed_report_;
   int screened_candidates_ = 0;

@@ -303,9 +303,11 @@ class Screen {
     };
     if (runner_up_) take(*runner_up_);
     if (profiled_) {
-      ++count;  // fitted in addition to the `count` others
+      ++count;  // one more slot: the profiled best where distinct, else the next by rank
       out_->profiled = *profiled_;
+      const std::size_t before = out_->alternatives.size();
       take(*profiled_);
+      if (out_->alternatives.size() > before) out_->profiled_alternative = static_cast<int>(before);
     }
     out_->runner_ups = static_cast<int>(out_->alternatives.size());
     std::stable_sort(simulated_.begin(), simulated_.end(),

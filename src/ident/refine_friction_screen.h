@@ -44,15 +44,19 @@ struct FrictionScreen {
   // Up to `alternatives` next-best candidates, each differing from `start`
   // and from one another in some direction's Fs by a factor kDistinctStatic
   // or its vs by kDistinctStribeck, lowest ranked first; ranked by windows,
-  // up to `alternatives` + 1: the first `runner_ups` (0 to 2) are the other
-  // search's best and the profiled search's best (which may rank before
-  // `start`: a lower measure there is not a better start, docs/refinement.md),
-  // then the rest lowest ranked first.
+  // up to `alternatives` + 1 after a profiled search: the first `runner_ups`
+  // (0 to 2) are the other search's best and the profiled search's best
+  // (which may rank before `start`: a lower measure there is not a better
+  // start, docs/refinement.md), then the rest lowest ranked first.
   std::vector<Parameters> alternatives;
   int runner_ups = 0;
   // Ranked by windows with alternatives asked for: the profiled search's
-  // best, also among `alternatives` where it differs from the others.
+  // best (the given start when nothing ranked before it), and its index in
+  // `alternatives` (-1 when it is not one: not distinct from the start, the
+  // screen's best or the other search's). A profiled search adds one slot
+  // to `alternatives` either way: its best, else the next by rank.
   std::optional<Parameters> profiled;
+  int profiled_alternative = -1;
 };
 
 inline constexpr double kDistinctStatic = 1.15, kDistinctStribeck = 1.3;

@@ -337,8 +337,9 @@ refine_internal::FrictionScreen ScreenedByWindows(const Parameters& start) {
   EXPECT_NE(screen.report.find("ranked by windows (11 of 11)"), std::string::npos);
   EXPECT_LT(screen.ranked_after, 0.1 * screen.ranked_before);
   EXPECT_EQ(screen.alternatives.size(), 4u);
-  EXPECT_GE(screen.runner_ups, 1);
-  EXPECT_LE(screen.runner_ups, 2);
+  // The other search's best and the profiled search's, distinct here.
+  EXPECT_EQ(screen.runner_ups, 2);
+  EXPECT_EQ(screen.profiled_alternative, 1);
   double previous = screen.ranked_after;
   for (int k = 0; k < static_cast<int>(screen.alternatives.size()); ++k) {
     const double measure =
@@ -396,11 +397,12 @@ TEST(RefineFrictionScreenTest, RankedByWindowsTheJointSearchMovesFdAndBToo) {
 // The profiled search (a grid in vs, Fd and b, each point at its best Fs
 // within 15 % of the start's, then the pattern search) from a start with
 // each direction's Fs 10 % high, vs twice, Fd twice (at most Fs) and b half
-// the truth's, ranked 1 500 times the truth's friction: its best ranks
-// within a factor 2 of the truth's (1.46 measured) with each direction's Fs
-// within 20 % (measured: positive 14.7 for 12.6, a weak coefficient of
-// these windows with Fd at 0.7 Fs; negative 14.5 for 13.8). On sweep-01's
-// needle basins it is what leads into the truth's (docs/refinement.md).
+// the truth's, which the windows rank 1 500 times the truth's friction: its
+// best ranks within a factor 2 of the truth's (measured 9.40 against 6.44)
+// and is the second next-best candidate. (On the heavy rod Fs is a weak
+// coefficient of these windows: positive 14.7 for 12.6, negative 14.5 for
+// 13.8. On sweep-01's needle basins it is what leads into the truth's,
+// docs/refinement.md.)
 TEST(RefineFrictionScreenTest, TheProfiledSearchRanksNearTheTruth) {
   const ScreenCase& c = HeavyUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
@@ -421,13 +423,12 @@ TEST(RefineFrictionScreenTest, TheProfiledSearchRanksNearTheTruth) {
   const double profiled = refine_internal::WindowedMeasure(p, c.unit, spec, options);
   std::cout << "profiled: positive Fs " << p.friction.positive.static_force_N << ", negative Fs "
             << p.friction.negative.static_force_N << ", ranked " << profiled << " (the truth "
-            << at_truth << ", the start " << at_start << ")\n";
+            << at_truth << ", the start " << at_start << "), alternative "
+            << screen.profiled_alternative << " of " << screen.alternatives.size() << "\n";
   EXPECT_GT(at_start, 100 * at_truth);
   EXPECT_LT(profiled, 2 * at_truth);
-  EXPECT_NEAR(p.friction.positive.static_force_N / c.truth.friction.positive.static_force_N, 1.0,
-              0.2);
-  EXPECT_NEAR(p.friction.negative.static_force_N / c.truth.friction.negative.static_force_N, 1.0,
-              0.2);
+  EXPECT_EQ(screen.alternatives.size(), 2u);  // one asked for, one more for the profiled search
+  EXPECT_EQ(screen.profiled_alternative, 1);
 }
 
 }  // namespace

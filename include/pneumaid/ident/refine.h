@@ -77,7 +77,11 @@ struct RefineOptions {
   // stick-slip sequence changes with small moves of friction, so whole runs
   // are a rugged cost even next to the optimum; windows are not. Not first:
   // where whole runs already find the basin, the windowed stage can lead
-  // elsewhere (docs/refinement.md). The lower median is kept.
+  // elsewhere (docs/refinement.md). The lower median is kept. The same
+  // switch has the windows' screen (screen_friction_windows) fit each of its
+  // candidates so too when the fit from it is not explained, the Better of
+  // the two kept; the windowed refit then does not repeat that fit from the
+  // start it kept.
   bool windowed_refit = true;
   // When the verdict still fails (after the screen, the robust and the
   // windowed refit above): this many more
@@ -100,9 +104,10 @@ struct RefineOptions {
   // While the fit from the screened start is not explained either: up to
   // this many more fits, from the screen's next-best candidates that differ
   // from the ones fitted (some direction's Fs by a factor 1.15 or vs by 1.3;
-  // ranked by windows, the other search's best first): under stick-slip the
-  // best simulated candidate is not always in the basin that explains the
-  // runs, the second or third can be.
+  // ranked by windows, the other search's best first, and one more after
+  // its profiled search, that search's best where distinct): under
+  // stick-slip the best simulated candidate is not always in the basin that
+  // explains the runs, the second or third can be.
   int screened_alternatives = 2;
   // When the fits from the screened starts are not explained either (and
   // screen_friction_starts is on): the
