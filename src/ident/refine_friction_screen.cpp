@@ -180,10 +180,9 @@ class Screen {
         for (const double share : {0.1, 0.3, 0.6}) {
           for (const double b : {2.5, 6.0, 15.0}) {
             const auto at = [&](int k) {
-              Parameters p = base;
-              const double fs = Bounded(d.prefix + "Fs", centre * (1 + 0.015 * k));
-              SetParameter(&p, d.prefix + "Fs", fs);
-              SetParameter(&p, d.prefix + "vs", Bounded(d.prefix + "vs", vs));
+              Parameters p = Candidate(d, centre * (1 + 0.015 * k), vs, &base);
+              double fs = 0;  // within the spec's bounds
+              GetParameter(p, d.prefix + "Fs", &fs);
               SetParameter(&p, d.prefix + "Fd", std::min(Bounded(d.prefix + "Fd", share * fs), fs));
               SetParameter(&p, d.prefix + "b", Bounded(d.prefix + "b", b));
               return Consider(std::move(p));
