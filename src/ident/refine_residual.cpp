@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <utility>
 
+#include "../util/splitmix64.h"
 #include "pneumaid/validate/validate.h"
 
 namespace pneumaid::refine_internal {
@@ -34,14 +35,9 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
 std::vector<bool> SubsetByHash(std::size_t n, std::size_t count) {
   count = SubsetSize(n, count);
   if (count == n) return std::vector<bool>(n, true);
-  const auto hash = [](std::uint64_t z) {  // splitmix64's finaliser
-    z += 0x9e3779b97f4a7c15ULL;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  };
   std::vector<std::pair<std::uint64_t, std::size_t>> keys(n);
-  for (std::size_t i = 0; i < n; ++i) keys[i] = {hash(i), i};
+  for (std::size_t i = 0; i < n; ++i)
+    keys[i] = {internal::SplitMix64Mix(i + internal::kSplitMix64Increment), i};
   std::nth_element(keys.begin(), keys.begin() + static_cast<std::ptrdiff_t>(count), keys.end());
   std::vector<bool> kept(n, false);
   for (std::size_t i = 0; i < count; ++i) kept[keys[i].second] = true;

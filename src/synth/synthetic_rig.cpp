@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "../util/splitmix64.h"
 #include "pneumaid/eval/lag.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
@@ -27,10 +28,7 @@ constexpr std::uint64_t kDroppedRowsStream = 1000003;
 // One random stream per experiment, derived from the seed and the experiment
 // index, so adding an experiment does not change the noise of the others.
 std::uint64_t StreamSeed(std::uint64_t seed, std::uint64_t index) {
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ULL * (index + 1);  // splitmix64
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
+  return internal::SplitMix64Mix(seed + internal::kSplitMix64Increment * (index + 1));
 }
 
 double EffectValue(const Parameters& p, const char* name, const char* key) {

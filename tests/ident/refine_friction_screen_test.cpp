@@ -344,8 +344,12 @@ refine_internal::FrictionScreen ScreenedByWindows(const Parameters& start) {
   for (int k = 0; k < static_cast<int>(screen.alternatives.size()); ++k) {
     const double measure =
         refine_internal::WindowedMeasure(screen.alternatives[k], c.unit, spec, options);
-    if (k == 0 || k >= screen.runner_ups) EXPECT_GE(measure, screen.ranked_after) << k;
-    if (k > screen.runner_ups) EXPECT_GE(measure, previous) << k;  // by rank
+    if (k == 0 || k >= screen.runner_ups) {
+      EXPECT_GE(measure, screen.ranked_after) << k;
+    }
+    if (k > screen.runner_ups) {
+      EXPECT_GE(measure, previous) << k;  // by rank
+    }
     previous = measure;
   }
   return screen;
