@@ -9,7 +9,8 @@
 //                    [--min-units-valve-tube K]
 //                    [--start-prior on|off] [--start identify|truth|rig]
 //                    [--held-out-probe K] [--error-blocks S]
-//                    [--cost-resolution-directions K] [--units I,J,...]
+//                    [--cost-resolution-directions K] [--relative-tolerance R]
+//                    [--units I,J,...]
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
@@ -28,7 +29,9 @@
 // with the tolerances on this unit?). --error-blocks S and
 // --cost-resolution-directions K set the refinement's options of those names
 // (RefineOptions::clustered_error_block_s, cost_resolution_directions; 0:
-// off), to measure what they give. --units I,J: only those units of the N
+// off), to measure what they give; --relative-tolerance R the fits'
+// simulations' (RefineOptions::simulation.relative_tolerance, 1e-5 by
+// default). --units I,J: only those units of the N
 // (each unit's draw depends on the seed and its index alone).
 #include <unistd.h>
 
@@ -461,7 +464,8 @@ int main(int argc, char** argv) {
                                   : Start::kRig;
     else if (flag == "--start-prior" && (value == "on" || value == "off"))
       refine_options.start_prior = value == "on";
-    else if (flag == "--error-blocks" || flag == "--cost-resolution-directions") {
+    else if (flag == "--error-blocks" || flag == "--cost-resolution-directions" ||
+             flag == "--relative-tolerance") {
       char* end = nullptr;
       const double number = std::strtod(value.c_str(), &end);
       if (end == value.c_str() || *end != '\0') {
@@ -470,6 +474,8 @@ int main(int argc, char** argv) {
       }
       if (flag == "--error-blocks")
         refine_options.clustered_error_block_s = number;
+      else if (flag == "--relative-tolerance")
+        refine_options.simulation.relative_tolerance = number;
       else
         refine_options.cost_resolution_directions = static_cast<int>(number);
     } else if (flag == "--start" || flag == "--start-prior") {
