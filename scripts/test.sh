@@ -37,7 +37,7 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   SLOW+='|RecoversAHorizontalCylindersFriction|RecoversTheTenDefaultParametersFromTheComponentFits'
   # Diagnose: one run under the sanitizers (the cross-leakage unit), the rest
   # in the Release pass.
-  SLOW+='|ClosesMostOfItsGap/(ValveLag|FlowSensorLag|PipelineLag|HeatTransfer|SupplyDroop|FrictionPressure|ValveDeadzone)'
+  SLOW+='|ClosesMostOfItsGap/(ValveLag|FlowSensorLag|PipelineLag|HeatTransfer|SupplyDroop|FrictionPressure|ValveDeadzone|StickCreep)'
   SLOW+='|NamesNothingOnCleanUnits|SlightlyOffBaseCoefficients|NamesTwoHiddenEffects'
   SLOW+='|TellsAValveLagFromAFlowMeterLag|ValidatesAndDiagnosesEachUnitWhenAsked'
   # Whole batch processes with refinement, killed and resumed: process-level
