@@ -94,7 +94,7 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
     outcome.verdict = "up to date";
     return outcome;
   }
-  RefineOptions refine;
+  RefineOptions refine = RefineOptions::ForIdentify();
   refine.simulation.stop = stop;
   refine.validation.stop = stop;
   if (options.refine) CheckRefinable(options.prior, unit, options.spec, refine);

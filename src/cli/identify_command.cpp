@@ -23,6 +23,7 @@ struct IdentifyArgs {
   bool refine = false;
   bool fit_u_sat = false;  // accepted: fitting u_sat is the default
   bool fix_u_sat = false;
+  bool no_stick_creep = false;
   std::string spec_path = DefaultConfig("fit-default.yaml");
   int threads = 1;
   std::string html_path;
@@ -58,7 +59,8 @@ int RunIdentify(const IdentifyArgs& args) {
   options.date = UtcNow();
   // A unit the refinement would refuse is refused before the component fits.
   std::optional<FitSpec> spec;
-  RefineOptions refine;
+  RefineOptions refine = RefineOptions::ForIdentify();
+  refine.fit_stick_creep = !args.no_stick_creep;
   refine.threads = args.threads;
   if (args.refine) {
     spec = LoadFitSpec(args.spec_path);
@@ -108,6 +110,10 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
                     "after the component fits, refine through the simulator (see --spec)");
   app->add_option("--spec", args->spec_path, "fit spec for --refine")
       ->capture_default_str()
+      ->needs(refine);
+  app->add_flag("--no-stick-creep", args->no_stick_creep,
+                "--refine: fit the paper model's event stick only, no creep speed "
+                "(effects.stick_creep.v; docs/refinement.md)")
       ->needs(refine);
   app->add_option("--threads", args->threads, "--refine: experiments simulated in parallel")
       ->check(CLI::Range(1, 256))

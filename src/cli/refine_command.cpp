@@ -17,6 +17,7 @@ struct RefineArgs {
   std::string out_path;
   int threads = 1;
   bool verbose = false;
+  bool no_stick_creep = false;
   std::string html_path;
 };
 
@@ -24,7 +25,8 @@ int RunRefine(const RefineArgs& args) {
   const Parameters start = LoadParams(args.params_path);
   const Unit unit = ReadUnit(args.unit_dir);
   const FitSpec spec = LoadFitSpec(args.spec_path);
-  RefineOptions options;
+  RefineOptions options = RefineOptions::ForIdentify();
+  options.fit_stick_creep = !args.no_stick_creep;
   options.threads = args.threads;
   if (args.verbose) options.log = [](const std::string& line) { std::cout << line << "\n"; };
   const RefineResult result = Refine(start, unit, spec, options);
@@ -68,6 +70,9 @@ CommandRunner AddRefineCommand(CLI::App* app) {
   app->add_option("--threads", args->threads, "experiments simulated in parallel")
       ->check(CLI::Range(1, 256));
   app->add_flag("--verbose", args->verbose, "print the solver's progress");
+  app->add_flag("--no-stick-creep", args->no_stick_creep,
+                "fit the spec's model only, no creep speed (effects.stick_creep.v; "
+                "docs/refinement.md)");
   AddHtmlOption(app, &args->html_path);
   return [args]() { return RunRefine(*args); };
 }

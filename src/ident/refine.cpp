@@ -11,11 +11,13 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/provenance.h"
+#include "pneumaid/model/actuator.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/logged_run.h"
 #include "refine_attempts.h"
 #include "refine_covariance.h"
+#include "refine_creep.h"
 #include "refine_residual.h"
 #include "refine_verdict.h"
 
@@ -74,6 +76,7 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   for (const FittedCoefficient& c : r.coefficients)
     if (c.at_bound) at_bound.push_back(c.path);
   entry["at_bound"] = at_bound;
+  if (!r.creep_report.empty()) entry["creep_fit"] = r.creep_report;
   return WithProvenanceEntry(provenance, "refine", entry);
 }
 
@@ -138,14 +141,24 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (cost_resolution_directions < 0) return fail("cost_resolution_directions must be >= 0");
   if (!(start_prior_errors > 0) || !(start_prior_fraction > 0))
     return fail("start_prior_errors and start_prior_fraction must be > 0");
+  if (!(stick_creep_keep_ratio > 0 && stick_creep_keep_ratio <= 1))
+    return fail("stick_creep_keep_ratio must be in (0, 1]");
+  const EffectParameterInfo& creep = *FindEffectParameter("effects.stick_creep.v");
+  for (double v : stick_creep_profile) {
+    if (!(v >= creep.plausible_min && v <= creep.plausible_max))
+      return fail("stick_creep_profile: each creep speed must lie in the catalog's range");
+  }
   if (!(correlation_flag > 0 && correlation_flag < 1)) {
     return fail("correlation_flag must be in (0, 1)");
   }
   return simulation.IsValid(error);
 }
 
-RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                    const RefineOptions& options) {
+namespace {
+
+// The fit of the spec's model (Refine without the creep fit).
+RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                         const RefineOptions& options) {
   const auto clock = std::chrono::steady_clock::now();
   CheckInputs(spec, options);
   CheckReplayModel(start, spec);
@@ -198,6 +211,27 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   return r;
 }
 
+}  // namespace
+
+RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                    const RefineOptions& options) {
+  const auto clock = std::chrono::steady_clock::now();
+  RefineResult r = RefineModel(start, unit, spec, options);
+  if (!options.fit_stick_creep) return r;
+  r = WithStickCreep(std::move(r), start, unit, spec, options);
+  if (Creeps(r.params) && !Creeps(start)) {
+    // The creep fit kept: validated on the held-out runs (its inner fits are
+    // not), and widened by the component fits it started from, as the paper
+    // fit was.
+    r.held_out_after = HeldOut(r.params, unit, Select(unit, spec.hold_out, spec, false), options);
+    if (options.start_disagreement_errors && !RefinedBefore(start))
+      WidenByStartDisagreement(start, &r);
+  }
+  if (r.has_values()) r.params.provenance_yaml = WithRefineEntry(r.params.provenance_yaml, r, spec);
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+  return r;
+}
+
 void CheckRefinable(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options) {
   CheckInputs(spec, options);
@@ -242,6 +276,7 @@ std::string RefineResult::BriefReport() const {
   if (!coordinate_report.empty()) out << "  " << coordinate_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
+  if (!creep_report.empty()) out << "  " << creep_report << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (estimated_starts > 0) {
     std::snprintf(line, sizeof(line),

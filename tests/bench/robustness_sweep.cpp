@@ -10,7 +10,7 @@
 //                    [--start-prior on|off] [--start identify|truth|rig]
 //                    [--held-out-probe K] [--error-blocks S]
 //                    [--cost-resolution-directions K] [--relative-tolerance R]
-//                    [--units I,J,...]
+//                    [--units I,J,...] [--stick-creep on|off] [--rig-creep V]
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
@@ -33,6 +33,11 @@
 // simulations' (RefineOptions::simulation.relative_tolerance, 1e-5 by
 // default). --units I,J: only those units of the N
 // (each unit's draw depends on the seed and its index alone).
+// --stick-creep off: the refinement without its creep fit
+// (RefineOptions::fit_stick_creep, on as in `identify --refine`).
+// --rig-creep V: every unit's rig sticks by the smooth law with creep speed
+// V [m/s] (the draw's other values unchanged): a rig regularised wider than
+// the sweep draws.
 #include <unistd.h>
 
 #include <algorithm>
@@ -331,12 +336,20 @@ struct UnitResult {
 enum class Start { kIdentify, kTruth, kRig };
 
 UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& scratch, bool keep,
-                   const RefineOptions& refine_options, Start start, int probe_sets) {
+                   const RefineOptions& refine_options, Start start, int probe_sets,
+                   double rig_creep_m_per_s) {
   UnitResult out;
   char id[32];
   std::snprintf(id, sizeof(id), "sweep-%02d", index);
   out.id = id;
-  const Draw d = MakeDraw(seed, index);
+  Draw d = MakeDraw(seed, index);
+  if (rig_creep_m_per_s > 0) {
+    d.protocol.mismatch.regularized_friction = true;
+    d.protocol.mismatch.stick_velocity_m_per_s = rig_creep_m_per_s;
+    char creep[48];
+    std::snprintf(creep, sizeof(creep), " (rig creep %.2g m/s)", rig_creep_m_per_s);
+    d.summary += creep;
+  }
   out.summary = d.summary;
   try {
     const std::filesystem::path dir = scratch / id;
@@ -376,7 +389,8 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
                    (refined.screen_report.empty() ? "" : "\n  " + refined.screen_report) +
                    (refined.coordinate_report.empty() ? "" : "\n  " + refined.coordinate_report) +
                    (refined.robust_report.empty() ? "" : "\n  " + refined.robust_report) +
-                   (refined.windowed_report.empty() ? "" : "\n  " + refined.windowed_report);
+                   (refined.windowed_report.empty() ? "" : "\n  " + refined.windowed_report) +
+                   (refined.creep_report.empty() ? "" : "\n  " + refined.creep_report);
     for (const FittedCoefficient& rp : refined.coefficients) {
       double truth = 0, value = 0;
       if (!GetParameter(t, rp.path, &truth)) continue;
@@ -415,14 +429,16 @@ int main(int argc, char** argv) {
     std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K] "
                  "[--min-units-valve-tube K] [--keep DIR] [--start-prior on|off] "
                  "[--start identify|truth|rig] [--held-out-probe K] [--error-blocks S] "
-                 "[--cost-resolution-directions K] [--units I,J,...]\n";
+                 "[--cost-resolution-directions K] [--units I,J,...] [--stick-creep on|off] "
+                 "[--rig-creep V]\n";
     return 2;
   }
   const int n = std::atoi(argv[1]);
   std::uint64_t seed = 12;
   int jobs = 1, min_units = -1, min_units_valve_tube = -1, probe_sets = 0;
   std::string keep;  // --keep DIR: the units are written there and kept
-  RefineOptions refine_options;
+  RefineOptions refine_options = RefineOptions::ForIdentify();
+  double rig_creep = 0;  // --rig-creep
   Start start = Start::kIdentify;
   std::vector<int> indices;  // --units: the units to run (default: all N)
   if (argc % 2 != 0) {
@@ -464,8 +480,10 @@ int main(int argc, char** argv) {
                                   : Start::kRig;
     else if (flag == "--start-prior" && (value == "on" || value == "off"))
       refine_options.start_prior = value == "on";
+    else if (flag == "--stick-creep" && (value == "on" || value == "off"))
+      refine_options.fit_stick_creep = value == "on";
     else if (flag == "--error-blocks" || flag == "--cost-resolution-directions" ||
-             flag == "--relative-tolerance") {
+             flag == "--relative-tolerance" || flag == "--rig-creep") {
       char* end = nullptr;
       const double number = std::strtod(value.c_str(), &end);
       if (end == value.c_str() || *end != '\0') {
@@ -476,9 +494,15 @@ int main(int argc, char** argv) {
         refine_options.clustered_error_block_s = number;
       else if (flag == "--relative-tolerance")
         refine_options.simulation.relative_tolerance = number;
-      else
+      else if (flag == "--rig-creep") {
+        if (!(number > 0)) {
+          std::cerr << "--rig-creep: a creep speed > 0 m/s, not " << value << "\n";
+          return 2;
+        }
+        rig_creep = number;
+      } else
         refine_options.cost_resolution_directions = static_cast<int>(number);
-    } else if (flag == "--start" || flag == "--start-prior") {
+    } else if (flag == "--start" || flag == "--start-prior" || flag == "--stick-creep") {
       std::cerr << flag << ": unknown value " << value << "\n";
       return 2;
     } else {
@@ -518,8 +542,8 @@ int main(int argc, char** argv) {
   for (int w = 0; w < jobs; ++w) {
     workers.emplace_back([&] {
       for (int k = next++; k < count; k = next++) {
-        results[k] =
-            RunUnit(seed, indices[k], scratch, !keep.empty(), refine_options, start, probe_sets);
+        results[k] = RunUnit(seed, indices[k], scratch, !keep.empty(), refine_options, start,
+                             probe_sets, rig_creep);
         const UnitResult& r = results[k];
         std::lock_guard<std::mutex> lock(print);
         std::printf("%s: %s\n", r.id.c_str(), r.summary.c_str());

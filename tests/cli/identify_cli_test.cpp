@@ -40,6 +40,11 @@ TEST_F(IdentifyCliTest, AUnitWithoutDeclaredNoiseIsIdentifiedAndRefined) {
   EXPECT_NE(Stdout().find("noise not declared, estimated from the logs: x "), std::string::npos)
       << Stdout();
   EXPECT_NE(Stdout().find("Refinement: converged"), std::string::npos) << Stdout();
+  // identify --refine fits the creep speed too (RefineOptions::ForIdentify).
+  EXPECT_NE(
+      Stdout().find("creep fit (effects.stick_creep.v), median reduced chi-square: v held at"),
+      std::string::npos)
+      << Stdout();
   EXPECT_TRUE(std::filesystem::exists(out));
 }
 
@@ -52,6 +57,9 @@ TEST_F(IdentifyCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_EQ(Run("identify " + testing::Source("datasets/paper-rig") + " --spec " +
                 testing::Source("configs/fit-default.yaml") + " --out " + out),
             2);
+  EXPECT_EQ(
+      Run("identify " + testing::Source("datasets/paper-rig") + " --no-stick-creep --out " + out),
+      2);
   EXPECT_FALSE(std::filesystem::exists(out));
 }
 

@@ -1,0 +1,176 @@
+#include "refine_creep.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pneumaid/model/actuator.h"
+#include "pneumaid/model/effects.h"
+#include "refine_attempts.h"
+
+namespace pneumaid::refine_internal {
+namespace {
+
+constexpr const char* kEffect = "stick_creep";
+constexpr const char* kPath = "effects.stick_creep.v";
+
+bool Stopped(const RefineOptions& options) {
+  return options.simulation.stop != nullptr && options.simulation.stop->load();
+}
+
+// Why the creep fit does not apply to this refinement (empty: it does).
+std::string NotApplicable(const RefineResult& paper, const Parameters& start, const FitSpec& spec,
+                          const RefineOptions& options) {
+  if (Stopped(options)) return "stopped";
+  if (!paper.has_values()) return "the paper model's fit has no values";
+  if (Creeps(start)) return "the start has stick_creep already";
+  if (spec.FindParameter(kPath) != nullptr) return "the spec frees it itself";
+  for (const FitStage& stage : spec.stages) {
+    if (stage.friction_replay) return "the spec replays the friction fit, an event-stick model";
+  }
+  // What the last stage frees: the creep fit refits that stage alone.
+  const std::vector<std::string> named =
+      spec.stages.empty() ? std::vector<std::string>{} : spec.stages.back().parameters;
+  for (const FreeParameter& p : spec.parameters) {
+    const bool in_last =
+        named.empty() || std::find(named.begin(), named.end(), p.path) != named.end();
+    if (in_last && p.path.rfind("friction.", 0) == 0) return "";
+  }
+  return "the spec's last stage frees no friction coefficient";
+}
+
+// The inner fits start in the paper fit's basin: its last stage alone, none
+// of the searches for another basin, no creep fit of their own.
+RefineOptions InnerOptions(const RefineOptions& options) {
+  RefineOptions inner = options;
+  inner.fit_stick_creep = false;
+  inner.screen_friction_starts = false;
+  inner.screen_friction_windows = false;
+  inner.coordinate_rounds = 0;
+  inner.robust_refit = false;
+  inner.windowed_refit = false;
+  inner.rescue_starts = 0;
+  return inner;
+}
+
+// The spec's last stage alone, without held-out runs (Refine validates the
+// creep fit it keeps, once).
+FitSpec LastStageOnly(const FitSpec& spec) {
+  FitSpec last = spec;
+  if (!last.stages.empty()) last.stages = {last.stages.back()};
+  last.multistart = 0;
+  last.hold_out.clear();
+  return last;
+}
+
+// `held` with v freed too (in its last stage when that names its parameters).
+FitSpec WithCreepFreed(const FitSpec& held) {
+  FitSpec freed = held;
+  const EffectParameterInfo& v = *FindEffectParameter(kPath);
+  freed.parameters.push_back({kPath, v.plausible_min, v.plausible_max, ParameterScale::kLog});
+  if (!freed.stages.empty() && !freed.stages.back().parameters.empty())
+    freed.stages.back().parameters.push_back(kPath);
+  return freed;
+}
+
+std::string Measure(const RefineResult& r) {
+  if (!r.has_values()) return "no values";
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3g", r.reduced_chi_square);
+  return text;
+}
+
+// `creep` told in the frame of the paper fit it replaces: the given start's
+// costs, held-out runs and coefficient values, the paper fit's reports.
+void InPaperFrame(const RefineResult& paper, RefineResult* creep) {
+  creep->initial_cost = paper.initial_cost;
+  for (ExperimentCost& e : creep->fitted) {
+    for (const ExperimentCost& p : paper.fitted) {
+      if (p.id == e.id) e.before = p.before;
+    }
+  }
+  for (FittedCoefficient& c : creep->coefficients) {
+    for (const FittedCoefficient& p : paper.coefficients) {
+      if (p.path == c.path) c.start = p.start;
+    }
+  }
+  creep->held_out_before = paper.held_out_before;
+  creep->rescue_starts_tried = paper.rescue_starts_tried;
+  creep->screen_report = paper.screen_report;
+  creep->screened_candidates = paper.screened_candidates;
+  creep->coordinate_report = paper.coordinate_report;
+  creep->robust_report = paper.robust_report;
+  creep->windowed_report = paper.windowed_report;
+  creep->stages = paper.stages;
+}
+
+}  // namespace
+
+RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
+                            const FitSpec& spec, const RefineOptions& options) {
+  const std::string name = "creep fit (" + std::string(kPath) + ")";
+  if (const std::string why = NotApplicable(paper, start, spec, options); !why.empty()) {
+    paper.creep_report = name + ": not run, " + why;
+    return paper;
+  }
+  const RefineOptions inner = InnerOptions(options);
+  const FitSpec held = LastStageOnly(spec);
+  std::string report = name + ", median reduced chi-square: v held at";
+  std::optional<RefineResult> best;
+  int iterations = 0;  // of the inner fits
+  for (const double v : options.stick_creep_profile) {
+    if (Stopped(options)) break;
+    Parameters from = paper.params;
+    from.effects[kEffect]["v"] = v;
+    RefineResult r = Refine(from, unit, held, inner);
+    iterations += r.iterations;
+    char item[64];
+    std::snprintf(item, sizeof(item), " %.2g m/s %s,", v, Measure(r).c_str());
+    report += item;
+    if (r.has_values() && (!best || Better(r, *best))) best = std::move(r);
+  }
+  if (!best || Stopped(options)) {
+    paper.creep_report =
+        report + (best ? " stopped" : " none with values") + "; the paper model's fit kept";
+    paper.iterations += iterations;
+    return paper;
+  }
+  RefineResult free = Refine(best->params, unit, WithCreepFreed(held), inner);
+  iterations += free.iterations;
+  // The freed fit unless it ended higher (beyond 1 %: a v of its own, with its
+  // standard error, is worth a tie).
+  const bool freed_kept = free.has_values() && free.explained() == best->explained() &&
+                          free.reduced_chi_square <= 1.01 * best->reduced_chi_square;
+  RefineResult& creep = freed_kept || (free.has_values() && !Better(*best, free)) ? free : *best;
+  double fitted_v = 0;
+  GetParameter(creep.params, kPath, &fitted_v);
+  // Kept where it is Better (never a fit out of iterations over an explained
+  // one) and explains the runs clearly better, or explains them where the
+  // paper model does not.
+  const bool better = Better(creep, paper);
+  const bool keep = better && (creep.reduced_chi_square <=
+                                   options.stick_creep_keep_ratio * paper.reduced_chi_square ||
+                               (creep.explained() && !paper.explained()));
+  char tail[256];
+  std::snprintf(tail, sizeof(tail),
+                " freed %s; v %.3g m/s (%s) at %s against the paper model's %s: %s",
+                Measure(free).c_str(), fitted_v, &creep == &free ? "fitted" : "held",
+                Measure(creep).c_str(), Measure(paper).c_str(),
+                keep     ? "kept"
+                : better ? "not kept (above the keep ratio)"
+                         : "not kept (not better)");
+  report += tail;
+  if (!keep) {
+    paper.creep_report = report;
+    paper.iterations += iterations;
+    return paper;
+  }
+  InPaperFrame(paper, &creep);
+  creep.iterations = paper.iterations + iterations;
+  creep.creep_report = report;
+  return std::move(creep);
+}
+
+}  // namespace pneumaid::refine_internal

@@ -1,0 +1,27 @@
+#pragma once
+
+// The refinement's creep fit (RefineOptions::fit_stick_creep): the stick's
+// creep speed fitted after the paper model's, kept where the runs show it.
+
+#include "pneumaid/ident/fit_spec.h"
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/model/parameters.h"
+
+namespace pneumaid::refine_internal {
+
+// From `paper` (the fit of the spec's parameters from `start`): each creep
+// speed of options.stick_creep_profile held while the spec's last stage is
+// fitted again from paper's set (no screens: it starts in the paper fit's
+// basin), then effects.stick_creep.v freed from the best. The creep fit is
+// returned, in the paper fit's frame (its start's costs, held-out runs
+// before and coefficient starts; its reports; held_out_after is the
+// caller's to fill: the inner fits validate nothing), when it is Better
+// than paper and its verdict measure is at most
+// options.stick_creep_keep_ratio of paper's (or it is explained and paper is
+// not); otherwise paper. Either way creep_report says what was tried, or why
+// nothing was.
+RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
+                            const FitSpec& spec, const RefineOptions& options);
+
+}  // namespace pneumaid::refine_internal
