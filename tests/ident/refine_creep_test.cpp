@@ -67,6 +67,9 @@ TEST(RefineCreepTest, ARodThatCreepsGetsItsFrictionBackWithTheCreepSpeed) {
   EXPECT_GT(r.initial_cost, r.final_cost);
   EXPECT_EQ(r.held_out_after.experiments.size(), r.held_out_before.experiments.size());
   EXPECT_NE(r.params.provenance_yaml.find("creep_fit"), std::string::npos);
+  // Freed from the profile's best, so it has a standard error of its own.
+  EXPECT_NE(r.creep_report.find("(fitted)"), std::string::npos) << r.creep_report;
+  EXPECT_EQ(r.params.uncertainty.count("effects.stick_creep.v"), 1u);
   const double v = testing::ParameterValue(r.params, "effects.stick_creep.v");
   EXPECT_GT(v, 0.5e-3);
   EXPECT_LT(v, 2e-3);
