@@ -37,7 +37,8 @@ TEST_F(RefineCliTest, RefinesAndWritesUncertaintyAndProvenance) {
 }
 
 // --verbose: the solver's progress reaches stdout through the library's log
-// sink (the library itself prints nothing); without it, none.
+// sink (the library itself prints nothing); without it, none. The creep fit
+// runs by default and not with --no-stick-creep.
 TEST_F(RefineCliTest, VerboseShowsTheSolversProgressThroughTheLogSink) {
   const std::string spec = Write("small.yaml", kSmallSpec);
   const std::string out = (dir_ / "refined.yaml").string();
@@ -47,9 +48,12 @@ TEST_F(RefineCliTest, VerboseShowsTheSolversProgressThroughTheLogSink) {
   ASSERT_EQ(Run(command + " --verbose"), 0) << Stdout() << Stderr();
   EXPECT_NE(Stdout().find("iteration   1: cost"), std::string::npos) << Stdout();
   EXPECT_NE(Stdout().find("Solver Summary"), std::string::npos) << Stdout();
+  EXPECT_NE(Stdout().find("creep fit (effects.stick_creep.v)"), std::string::npos) << Stdout();
   std::filesystem::remove(out);
-  ASSERT_EQ(Run(command), 0) << Stdout() << Stderr();
+  // --no-stick-creep: the spec's model only.
+  ASSERT_EQ(Run(command + " --no-stick-creep"), 0) << Stdout() << Stderr();
   EXPECT_EQ(Stdout().find("iteration   1: cost"), std::string::npos) << Stdout();
+  EXPECT_EQ(Stdout().find("creep fit"), std::string::npos) << Stdout();
 }
 
 TEST_F(RefineCliTest, IdentifyRefineRunsTheComponentFitsThenTheRefinement) {
