@@ -139,11 +139,11 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   }
   RefineResult free = Refine(best->params, unit, WithCreepFreed(held), inner);
   iterations += free.iterations;
-  // The freed fit unless it ended higher (beyond 1 %: a v of its own, with its
-  // standard error, is worth a tie).
-  const bool freed_kept = free.has_values() && free.explained() == best->explained() &&
-                          free.reduced_chi_square <= 1.01 * best->reduced_chi_square;
-  RefineResult& creep = freed_kept || (free.has_values() && !Better(*best, free)) ? free : *best;
+  // The freed fit when Better, or within 1 % of the profile's best (a v of
+  // its own, with its standard error, is worth a tie).
+  const bool within_a_percent = free.has_values() && free.explained() == best->explained() &&
+                                free.reduced_chi_square <= 1.01 * best->reduced_chi_square;
+  RefineResult& creep = within_a_percent || Better(free, *best) ? free : *best;
   double fitted_v = 0;
   GetParameter(creep.params, kPath, &fitted_v);
   // Kept where it is Better (never a fit out of iterations over an explained
