@@ -55,6 +55,10 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   # The friction fit's replays of every stop of many strokes (11 s in
   # Release); the stop segments' code runs in the other friction tests.
   SLOW+='|AnFsTheMidStrokeSlidesLeaveOpenIsReadAtTheStops'
+  # identify --refine of the bundled unit with the creep fit (11 s in Release,
+  # five more fits of the last stage); the creep fit runs under the sanitizers
+  # in RefineCreepTest, identify --refine in RefineCliTest.
+  SLOW+='|AUnitWithoutDeclaredNoiseIsIdentifiedAndRefined'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
 fi

@@ -1,5 +1,7 @@
 // pneumaid: parse the command line, run one workflow, map errors to the exit
 // statuses of the params spec. No numerics here.
+#include <glog/logging.h>
+
 #include <iostream>
 #include <map>
 
@@ -9,6 +11,11 @@
 
 int main(int argc, char** argv) {
   using namespace pneumaid::cli;
+  // Ceres 2.1 logs an ERROR through glog, whatever its logging_type, when a
+  // Jacobian evaluation fails after an accepted step; the fit reports that
+  // failure itself (its status and message), so the program keeps glog to
+  // fatal messages. The library leaves the embedding program's glog alone.
+  FLAGS_minloglevel = google::GLOG_FATAL;
   CLI::App app{"pneumaid: identify pneumatic actuators from rig logs"};
   app.set_version_flag("--version", std::string(PNEUMAID_VERSION));
   app.require_subcommand(1);

@@ -1,7 +1,11 @@
 // Ceres' solver options as every fit of the identification starts from them:
 // nothing logged. The library prints nothing (not even when the embedding
 // program raises glog's verbosity); a fit that reports its progress does so
-// through its own log sink (RefineOptions::log).
+// through its own log sink (RefineOptions::log). One message escapes this:
+// Ceres 2.1 logs an ERROR through glog when a Jacobian evaluation fails after
+// an accepted step, whatever logging_type says; the fit reports that failure
+// in its own result, and the pneumaid programs set glog's minloglevel to
+// fatal (the library does not touch the embedding program's glog).
 #pragma once
 
 #include <ceres/ceres.h>

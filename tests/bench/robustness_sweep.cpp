@@ -38,6 +38,7 @@
 // --rig-creep V: every unit's rig sticks by the smooth law with creep speed
 // V [m/s] (the draw's other values unchanged): a rig regularised wider than
 // the sweep draws.
+#include <glog/logging.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -425,6 +426,7 @@ double Median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   using namespace pneumaid;
+  FLAGS_minloglevel = google::GLOG_FATAL;  // as the CLI (src/cli/main.cpp)
   if (argc < 2) {
     std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K] "
                  "[--min-units-valve-tube K] [--keep DIR] [--start-prior on|off] "
