@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -115,7 +116,12 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
     paper.creep_report = name + ": not run, " + why;
     return paper;
   }
-  const RefineOptions inner = InnerOptions(options);
+  RefineOptions inner = InnerOptions(options);
+  // The prior of the paper fit's refinement (toward the component fits), not
+  // one toward the paper fit: that fit is of the same runs, and its errors
+  // are conditional on the stick the creep fit replaces.
+  if (!inner.start_prior_centre)
+    inner.start_prior_centre = std::make_shared<const Parameters>(start);
   const FitSpec held = LastStageOnly(spec);
   std::string report = name + ", median reduced chi-square: v held at";
   std::optional<RefineResult> best;

@@ -94,14 +94,16 @@ std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Paramet
   return points;
 }
 
-StartPrior MakeStartPrior(const ParameterMap& map, const Parameters& start, double errors,
-                          double fraction) {
+StartPrior MakeStartPrior(const ParameterMap& map, const Parameters& centre,
+                          const Parameters& start, double errors, double fraction) {
   StartPrior prior;
   for (int j = 0; j < map.size(); ++j) {
+    const std::string& path = map.free[j].path;
     double value = 0;
-    GetParameter(start, map.free[j].path, &value);
-    const auto error = start.uncertainty.find(map.free[j].path);
-    const bool known = error != start.uncertainty.end() && error->second > 0;
+    const bool centred = GetParameter(centre, path, &value) && (!map.IsLog(j) || value > 0);
+    if (!centred) GetParameter(start, path, &value);
+    const auto error = centre.uncertainty.find(path);
+    const bool known = centred && error != centre.uncertainty.end() && error->second > 0;
     const double span = map.free[j].upper - map.free[j].lower;
     if (map.IsLog(j)) {
       prior.w.push_back(std::log(value));

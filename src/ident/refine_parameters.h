@@ -95,8 +95,10 @@ std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Paramet
 struct StartPrior {
   std::vector<double> w, sigma;
 };
-StartPrior MakeStartPrior(const ParameterMap& map, const Parameters& start, double errors,
-                          double fraction);
+// Centred on `centre`; a free parameter it lacks (or lacks a positive value
+// of, on a log scale) on `start`, as one without a standard error.
+StartPrior MakeStartPrior(const ParameterMap& map, const Parameters& centre,
+                          const Parameters& start, double errors, double fraction);
 
 // (w_j(theta_j) - w_start_j) / sigma_j for every free parameter: keeps what
 // the fitted runs do not determine near the start (instead of at a bound),

@@ -295,8 +295,11 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
   const Parameters conditioned = WithRigConditions(start, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
   const std::vector<FitExperiment> experiments = FittedRuns(conditioned, unit, spec, windows);
-  const StartPrior prior =
-      MakeStartPrior(map, conditioned, options.start_prior_errors, options.start_prior_fraction);
+  const StartPrior prior = MakeStartPrior(
+      map,
+      options.start_prior_centre ? WithRigConditions(*options.start_prior_centre, unit)
+                                 : conditioned,
+      conditioned, options.start_prior_errors, options.start_prior_fraction);
   Problem p;
   std::vector<double> run_scale;
   BuildProblem(conditioned, map, experiments, prior, options, robust_runs, &p, &run_scale);

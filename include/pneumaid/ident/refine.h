@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -191,6 +192,14 @@ struct RefineOptions {
   bool start_prior = true;
   double start_prior_errors = 3.0;
   double start_prior_fraction = 0.02;
+  // The prior's centre and the standard errors it takes, when not each
+  // stage's start (null: the start). A refit that starts from another fit of
+  // the same runs sets it to the component fits that fit started from:
+  // centred on that fit, with its errors, the prior would count the runs
+  // twice (the creep fit's refits do, refine_creep.h). A free parameter the
+  // centre lacks is centred on the stage's start, as one without a standard
+  // error.
+  std::shared_ptr<const Parameters> start_prior_centre;
   // Where the report looks for the worst stretch of a run [s].
   double misfit_window_s = 0.2;
   // Where the solver's progress goes, a line per iteration and a report per
