@@ -173,10 +173,29 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
     paper.iterations += iterations;
     return paper;
   }
+  if (&creep != &free) {
+    ListHeldCreepSpeed(fitted_v,
+                       "held at a point of the creep fit's profile (freed, the fit ended at " +
+                           Measure(free) + " against " + Measure(creep) +
+                           "); the other coefficients' errors are conditional on it",
+                       &creep);
+  }
   InPaperFrame(paper, &creep);
   creep.iterations = paper.iterations + iterations;
   creep.creep_report = report;
   return std::move(creep);
+}
+
+void ListHeldCreepSpeed(double v_m_per_s, const std::string& why, RefineResult* creep) {
+  FitResult held;
+  held.status = FitStatus::kNotFitted;  // adds nothing to the status
+  FittedCoefficient v;
+  v.path = kPath;
+  v.start = v.value = v_m_per_s;
+  v.held = why;
+  held.coefficients.push_back(v);
+  AppendFit(held, "creep fit", creep);
+  creep->params.uncertainty.erase(kPath);
 }
 
 }  // namespace pneumaid::refine_internal

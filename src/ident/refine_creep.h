@@ -3,6 +3,8 @@
 // The refinement's creep fit (RefineOptions::fit_stick_creep): the stick's
 // creep speed fitted after the paper model's, kept where the runs show it.
 
+#include <string>
+
 #include "pneumaid/ident/fit_spec.h"
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/rig_data.h"
@@ -23,5 +25,10 @@ namespace pneumaid::refine_internal {
 // nothing was.
 RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
                             const FitSpec& spec, const RefineOptions& options);
+
+// A creep fit kept with v held at a profile point (the fit with it freed
+// ended higher): v listed among its coefficients as held, by name, with
+// `why`; no standard error, the others' errors conditional on it.
+void ListHeldCreepSpeed(double v_m_per_s, const std::string& why, RefineResult* creep);
 
 }  // namespace pneumaid::refine_internal

@@ -4,6 +4,8 @@
 // with its friction; fitted with the creep speed, the friction comes back.
 // Logs written with model mismatch (the rig integrated at rtol 1e-8), the
 // stick as the rig's smooth law or as events.
+#include "../../src/ident/refine_creep.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -114,6 +116,32 @@ TEST(RefineCreepTest, NotRunForAStartThatCreepsAlreadyOrAnEventStickReplay) {
   EXPECT_NE(e.creep_report.find("not run, the spec replays the friction fit"), std::string::npos)
       << e.creep_report;
   EXPECT_FALSE(Creeps(e.params));
+}
+
+TEST(RefineCreepTest, ACreepSpeedHeldAtAProfilePointIsListedAsHeldWithWhy) {
+  RefineResult r;
+  r.status = FitStatus::kConverged;
+  FittedCoefficient fs;
+  fs.path = "friction.positive.Fs";
+  fs.value = 11;
+  fs.standard_error = 0.2;
+  r.coefficients = {fs};
+  r.covariance = Eigen::MatrixXd::Constant(1, 1, 0.04);
+  r.params.effects["stick_creep"]["v"] = 1e-4;
+  refine_internal::ListHeldCreepSpeed(1e-4, "held at a point of the creep fit's profile", &r);
+  const FittedCoefficient* v = r.Find("effects.stick_creep.v");
+  ASSERT_NE(v, nullptr);
+  EXPECT_FALSE(v->determined());
+  EXPECT_DOUBLE_EQ(v->value, 1e-4);
+  EXPECT_EQ(v->standard_error, 0);
+  EXPECT_EQ(r.status, FitStatus::kConverged);  // held is no failure of the fit
+  ASSERT_EQ(r.covariance.rows(), 2);
+  EXPECT_DOUBLE_EQ(r.covariance(0, 0), 0.04);
+  EXPECT_EQ(r.covariance(1, 1), 0);
+  EXPECT_EQ(r.params.uncertainty.count("effects.stick_creep.v"), 0u);
+  EXPECT_NE(r.CoefficientReport("", 0.95).find("held: held at a point of the creep fit's profile"),
+            std::string::npos)
+      << r.CoefficientReport("", 0.95);
 }
 
 TEST(RefineCreepTest, OptionsNameTheBadField) {
