@@ -143,6 +143,7 @@ bool RefineOptions::IsValid(std::string* error) const {
     return fail("start_prior_errors and start_prior_fraction must be > 0");
   if (!(stick_creep_keep_ratio > 0 && stick_creep_keep_ratio <= 1))
     return fail("stick_creep_keep_ratio must be in (0, 1]");
+  if (!(stick_creep_freed_ratio >= 1)) return fail("stick_creep_freed_ratio must be >= 1");
   const EffectParameterInfo& creep = *FindEffectParameter("effects.stick_creep.v");
   for (double v : stick_creep_profile) {
     if (!(v >= creep.plausible_min && v <= creep.plausible_max))

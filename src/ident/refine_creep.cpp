@@ -145,11 +145,12 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   }
   RefineResult free = Refine(best->params, unit, WithCreepFreed(held), inner);
   iterations += free.iterations;
-  // The freed fit when Better, or within 1 % of the profile's best (a v of
-  // its own, with its standard error, is worth a tie).
-  const bool within_a_percent = free.has_values() && free.explained() == best->explained() &&
-                                free.reduced_chi_square <= 1.01 * best->reduced_chi_square;
-  RefineResult& creep = within_a_percent || Better(free, *best) ? free : *best;
+  // The freed fit when Better, or within stick_creep_freed_ratio of the
+  // profile's best (a v of its own, with its standard error, is worth that).
+  const bool close =
+      free.has_values() && free.explained() == best->explained() &&
+      free.reduced_chi_square <= options.stick_creep_freed_ratio * best->reduced_chi_square;
+  RefineResult& creep = close || Better(free, *best) ? free : *best;
   double fitted_v = 0;
   GetParameter(creep.params, kPath, &fitted_v);
   // Kept where it is Better (never a fit out of iterations over an explained

@@ -155,6 +155,10 @@ TEST(RefineCreepTest, OptionsNameTheBadField) {
   o.stick_creep_profile = {1e-4, 1e-2};
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("stick_creep_profile"), std::string::npos) << error;
+  o = RefineOptions::ForIdentify();
+  o.stick_creep_freed_ratio = 0.9;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("stick_creep_freed_ratio"), std::string::npos) << error;
   EXPECT_FALSE(RefineOptions{}.fit_stick_creep);  // diagnose's base refits keep their model
 }
 
