@@ -145,21 +145,26 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   }
   RefineResult free = Refine(best->params, unit, WithCreepFreed(held), inner);
   iterations += free.iterations;
-  // The freed fit when Better, or within stick_creep_freed_ratio of the
-  // profile's best (a v of its own, with its standard error, is worth that).
-  const bool close =
-      free.has_values() && free.explained() == best->explained() &&
-      free.reduced_chi_square <= options.stick_creep_freed_ratio * best->reduced_chi_square;
-  RefineResult& creep = close || Better(free, *best) ? free : *best;
-  double fitted_v = 0;
-  GetParameter(creep.params, kPath, &fitted_v);
   // Kept where it is Better (never a fit out of iterations over an explained
   // one) and explains the runs clearly better, or explains them where the
   // paper model does not.
+  const auto keeps = [&](const RefineResult& c) {
+    return Better(c, paper) &&
+           (c.reduced_chi_square <= options.stick_creep_keep_ratio * paper.reduced_chi_square ||
+            (c.explained() && !paper.explained()));
+  };
+  // The freed fit when Better, or within stick_creep_freed_ratio of the
+  // profile's best with as good a status (a v of its own, with its standard
+  // error, is worth that) unless that costs the creep fit its keep.
+  const bool close =
+      free.has_values() && free.status <= best->status &&
+      free.reduced_chi_square <= options.stick_creep_freed_ratio * best->reduced_chi_square &&
+      (keeps(free) || !keeps(*best));
+  RefineResult& creep = close || Better(free, *best) ? free : *best;
+  double fitted_v = 0;
+  GetParameter(creep.params, kPath, &fitted_v);
   const bool better = Better(creep, paper);
-  const bool keep = better && (creep.reduced_chi_square <=
-                                   options.stick_creep_keep_ratio * paper.reduced_chi_square ||
-                               (creep.explained() && !paper.explained()));
+  const bool keep = keeps(creep);
   char tail[256];
   std::snprintf(tail, sizeof(tail),
                 " freed %s; v %.3g m/s (%s) at %s against the paper model's %s: %s",
@@ -195,8 +200,10 @@ void ListHeldCreepSpeed(double v_m_per_s, const std::string& why, RefineResult* 
   v.start = v.value = v_m_per_s;
   v.held = why;
   held.coefficients.push_back(v);
+  const bool with_covariance =
+      creep->covariance.rows() == static_cast<Eigen::Index>(creep->coefficients.size());
   AppendFit(held, "creep fit", creep);
-  creep->params.uncertainty.erase(kPath);
+  if (!with_covariance) creep->covariance.resize(0, 0);  // none stays none
 }
 
 }  // namespace pneumaid::refine_internal

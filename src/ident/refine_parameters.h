@@ -86,10 +86,11 @@ std::vector<std::vector<double>> LatinHypercube(const ParameterMap& map, int cou
 std::vector<std::vector<double>> TrustBox(const ParameterMap& map, const Parameters& start,
                                           int count, double box, std::uint64_t seed);
 
-// The weak prior toward the start (RefineOptions::start_prior): per free
-// parameter its start in the scale coordinate w (p, or ln p) and a standard
-// deviation there: the larger of start_prior_errors of its standard errors
-// (start.uncertainty) and start_prior_fraction of its value, or, without a
+// The weak prior toward the start, or toward RefineOptions::
+// start_prior_centre (RefineOptions::start_prior): per free parameter its
+// centre in the scale coordinate w (p, or ln p) and a standard deviation
+// there: the larger of start_prior_errors of its standard errors (the
+// centre's uncertainty) and start_prior_fraction of its value, or, without a
 // standard error (the component fits did not determine it), a factor 3 (log
 // scale) or its own size (linear).
 struct StartPrior {

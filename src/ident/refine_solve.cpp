@@ -235,8 +235,8 @@ Eigen::MatrixXd RecordCoefficients(const Parameters& conditioned, const Paramete
     if (normal(j, j) < slope * slope) {
       char why[200];
       std::snprintf(why, sizeof(why),
-                    "not determined by the fitted runs (less information than the prior "
-                    "toward the start, sigma %.3g in %s); regularised toward the start",
+                    "not determined by the fitted runs (less information than the weak "
+                    "prior, sigma %.3g in %s); regularised toward its centre",
                     prior.sigma[j], map.IsLog(j) ? "ln" : "SI");
       r->coefficients[j].held = why;
     }

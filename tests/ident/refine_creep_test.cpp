@@ -138,10 +138,15 @@ TEST(RefineCreepTest, ACreepSpeedHeldAtAProfilePointIsListedAsHeldWithWhy) {
   ASSERT_EQ(r.covariance.rows(), 2);
   EXPECT_DOUBLE_EQ(r.covariance(0, 0), 0.04);
   EXPECT_EQ(r.covariance(1, 1), 0);
-  EXPECT_EQ(r.params.uncertainty.count("effects.stick_creep.v"), 0u);
   EXPECT_NE(r.CoefficientReport("", 0.95).find("held: held at a point of the creep fit's profile"),
             std::string::npos)
       << r.CoefficientReport("", 0.95);
+  // A fit without a covariance gets none from the held coefficient either.
+  RefineResult bare;
+  bare.coefficients = {fs};
+  refine_internal::ListHeldCreepSpeed(1e-4, "held", &bare);
+  EXPECT_EQ(bare.coefficients.size(), 2u);
+  EXPECT_EQ(bare.covariance.size(), 0);
 }
 
 TEST(RefineCreepTest, OptionsNameTheBadField) {
