@@ -51,9 +51,9 @@ namespace {
 
 // One stage's Ceres problem: a residual block per fitted run (or window),
 // each through the Cauchy loss of a robust refit (its scale a^2 in
-// run_scale; 0: plain least squares), then the weak prior toward the start
-// (after the runs: Ceres' cost includes it, the costs reported are the
-// runs').
+// run_scale; 0: plain least squares), then the weak prior toward its centre
+// (the start, or RefineOptions::start_prior_centre; after the runs: Ceres' cost includes it, the
+// costs reported are the runs').
 void BuildProblem(const Parameters& conditioned, const ParameterMap& map,
                   const std::vector<FitExperiment>& experiments, const StartPrior& prior,
                   const RefineOptions& options, bool robust_runs, Problem* p,
@@ -215,7 +215,7 @@ AtBest EvaluateAtBest(const std::vector<FitExperiment>& experiments, const Param
 // The free parameters' values at `theta` into r->coefficients (start, value,
 // at a bound); one whose information from the runs is below the prior's
 // (its standard error from the runs alone above the prior's sigma) is held
-// toward the start. Returns the information with the prior's added.
+// toward the prior's centre. Returns the information with the prior's added.
 Eigen::MatrixXd RecordCoefficients(const Parameters& conditioned, const ParameterMap& map,
                                    const std::vector<double>& theta, const Eigen::MatrixXd& normal,
                                    const StartPrior& prior, const RefineOptions& options,
