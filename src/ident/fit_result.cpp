@@ -34,6 +34,14 @@ const FittedCoefficient* FitResult::Find(const std::string& path) const {
   return nullptr;
 }
 
+std::map<std::string, std::string> FitResult::Held() const {
+  std::map<std::string, std::string> held;
+  for (const FittedCoefficient& c : coefficients) {
+    if (!c.determined()) held[c.path] = c.held;
+  }
+  return held;
+}
+
 double FitResult::Correlation(std::size_t i, std::size_t j) const {
   const auto n = static_cast<std::size_t>(covariance.rows());
   if (i >= n || j >= n) return NAN;

@@ -108,6 +108,16 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
     entry["segments"] = report.friction.segments;
     root["friction"] = entry;
   }
+  // The coefficients a fit that ran did not determine, with why (its value
+  // the prior's or a reading off the logs, no `uncertainty` entry).
+  YAML::Node held(YAML::NodeType::Map);
+  for (const FitResult* fit : {static_cast<const FitResult*>(&report.valve),
+                               static_cast<const FitResult*>(&report.pipeline),
+                               static_cast<const FitResult*>(&report.friction)}) {
+    if (!fit->has_values()) continue;
+    for (const auto& [path, why] : fit->Held()) held[path] = why;
+  }
+  if (held.size() > 0) root["held"] = held;
   return EmitProvenance(root);
 }
 

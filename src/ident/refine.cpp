@@ -10,6 +10,7 @@
 #include "../io/provenance_map.h"
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/provenance.h"
 #include "pneumaid/model/actuator.h"
 #include "pneumaid/model/effects.h"
@@ -66,6 +67,18 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   entry["starts"] = r.starts;
   entry["experiments"] = r.fitted.size();
   entry["initial_pressures"] = spec.fit_initial_pressures ? "fit" : "logged";
+  // The estimates the verdict holds from, per run: [p1, p2] in Pa absolute
+  // (the logged ones leave a worse fit; docs/refinement.md).
+  if (!r.estimated_starts.empty()) {
+    YAML::Node starts(YAML::NodeType::Map);
+    for (const EstimatedStart& e : r.estimated_starts) {
+      YAML::Node pair(YAML::NodeType::Sequence);
+      pair.push_back(FormatDouble(e.p1_Pa));
+      pair.push_back(FormatDouble(e.p2_Pa));
+      starts[e.run] = pair;
+    }
+    entry["initial_pressures_Pa"] = starts;
+  }
   entry["status"] = ToString(r.status);
   entry["reduced_chi_square"] = r.reduced_chi_square;
   entry["acceptable_reduced_chi_square"] = r.acceptable_reduced_chi_square;
@@ -76,6 +89,11 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   for (const FittedCoefficient& c : r.coefficients)
     if (c.at_bound) at_bound.push_back(c.path);
   entry["at_bound"] = at_bound;
+  // Not determined by the fitted runs, with why: their `uncertainty` is the
+  // prior's pull, not the runs' (the report tells them from the fitted).
+  YAML::Node held(YAML::NodeType::Map);
+  for (const auto& [path, why] : r.Held()) held[path] = why;
+  entry["held"] = held;
   if (!r.creep_report.empty()) entry["creep_fit"] = r.creep_report;
   return WithProvenanceEntry(provenance, "refine", entry);
 }
@@ -279,11 +297,21 @@ std::string RefineResult::BriefReport() const {
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
   if (!creep_report.empty()) out << "  " << creep_report << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
-  if (estimated_starts > 0) {
+  if (!estimated_starts.empty()) {
+    double largest_sigma = 0, largest_Pa = 0;  // the largest move of either pressure
+    for (const EstimatedStart& e : estimated_starts) {
+      for (const auto& [sigmas, pascals] :
+           {std::make_pair(e.p1_offset_sigma, e.p1_Pa - e.logged_p1_Pa),
+            std::make_pair(e.p2_offset_sigma, e.p2_Pa - e.logged_p2_Pa)}) {
+        if (std::fabs(sigmas) <= largest_sigma) continue;
+        largest_sigma = std::fabs(sigmas);
+        largest_Pa = std::fabs(pascals);
+      }
+    }
     std::snprintf(line, sizeof(line),
-                  "  initial pressures of %d run(s) estimated: largest move %.2g standard errors "
+                  "  initial pressures of %zu run(s) estimated: largest move %.2g standard errors "
                   "(%.3g Pa) from the logged values\n",
-                  estimated_starts, largest_start_offset_sigma, largest_start_offset_Pa);
+                  estimated_starts.size(), largest_sigma, largest_Pa);
     out << line;
   }
   if (cost_resolution > 0) {

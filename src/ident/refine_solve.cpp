@@ -36,15 +36,17 @@ ceres::Solver::Options SolverOptions(const FitSpec& spec, const RefineOptions& o
   return s;
 }
 
-// Counts an estimated start and keeps the largest move of its pressures.
+// An estimated start: the logged and the fitted initial pressures.
 void RecordStartOffset(const FitExperiment& e, const StartOffsets& offsets, RefineResult* r) {
-  ++r->estimated_starts;
-  for (int k = 0; k < kStartOffsets; ++k) {
-    if (std::fabs(offsets[k]) > r->largest_start_offset_sigma) {
-      r->largest_start_offset_sigma = std::fabs(offsets[k]);
-      r->largest_start_offset_Pa = std::fabs(offsets[k]) * e.start_sigma_Pa[k];
-    }
-  }
+  EstimatedStart start;
+  start.run = e.id;
+  start.logged_p1_Pa = e.initial.p1_Pa;
+  start.logged_p2_Pa = e.initial.p2_Pa;
+  start.p1_offset_sigma = offsets[0];
+  start.p2_offset_sigma = offsets[1];
+  start.p1_Pa = e.initial.p1_Pa + offsets[0] * e.start_sigma_Pa[0];
+  start.p2_Pa = e.initial.p2_Pa + offsets[1] * e.start_sigma_Pa[1];
+  r->estimated_starts.push_back(start);
 }
 
 namespace {

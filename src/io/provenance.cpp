@@ -61,4 +61,20 @@ std::vector<std::string> ProvenanceList(const std::string& provenance, const std
   return items;
 }
 
+std::map<std::string, std::string> ProvenanceStrings(const std::string& provenance,
+                                                     const std::string& key,
+                                                     const std::string& field) {
+  std::map<std::string, std::string> items;
+  YAML::Node root = ProvenanceMap(provenance);  // not const: see ProvenanceList
+  YAML::Node entry = key.empty() ? root : root[key];
+  if (!entry.IsMap()) return items;
+  YAML::Node mapping = entry[field];
+  if (!mapping.IsMap()) return items;
+  for (const auto& item : mapping) {
+    if (item.first.IsScalar() && item.second.IsScalar())
+      items[item.first.Scalar()] = item.second.Scalar();
+  }
+  return items;
+}
+
 }  // namespace pneumaid

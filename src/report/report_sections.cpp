@@ -1,5 +1,6 @@
 #include "report_sections.h"
 
+#include <map>
 #include <set>
 #include <vector>
 
@@ -37,21 +38,50 @@ std::set<std::string> AtBound(const Parameters& params) {
   return {paths.begin(), paths.end()};
 }
 
+// Where a parameter's value comes from, as the table's source column says it:
+// held by the refinement (refine.held: its `uncertainty` is the prior's pull),
+// fitted (an `uncertainty` entry), fitted on a bound (refine.at_bound), held
+// by a component fit that ran (identify's `held`), else the prior or given.
+class ValueSource {
+ public:
+  explicit ValueSource(const Parameters& params)
+      : params_(params),
+        at_bound_(AtBound(params)),
+        refine_held_(ProvenanceStrings(params.provenance_yaml, "refine", "held")),
+        identify_held_(ProvenanceStrings(params.provenance_yaml, "", "held")) {}
+
+  // The text of the source column; *fitted: whether the row is a fit's.
+  std::string Of(const std::string& path, bool* fitted) const {
+    *fitted = true;
+    if (const auto held = refine_held_.find(path); held != refine_held_.end())
+      return "held by the refinement: " + held->second;
+    if (params_.uncertainty.count(path) > 0) return "fitted";
+    if (at_bound_.count(path) > 0) return "fitted, at a bound (no standard error)";
+    *fitted = false;
+    if (const auto held = identify_held_.find(path); held != identify_held_.end())
+      return "held by its component fit: " + held->second;
+    return "prior / given";
+  }
+
+ private:
+  const Parameters& params_;
+  std::set<std::string> at_bound_;
+  std::map<std::string, std::string> refine_held_, identify_held_;
+};
+
 std::string ParameterTable(const Parameters& params) {
   std::ostringstream out;
   out << "<table><tr><th class=l>parameter</th><th>value</th><th class=l>unit</th>"
          "<th>standard error</th><th class=l>source</th></tr>\n";
-  const std::set<std::string> at_bound = AtBound(params);
+  const ValueSource source(params);
   const auto row = [&](const std::string& path, double value, const std::string& unit) {
     const auto error = params.uncertainty.find(path);
     const bool with_error = error != params.uncertainty.end();
-    const bool bounded = !with_error && at_bound.count(path) > 0;
-    out << "<tr" << (with_error || bounded ? "" : " class=prior") << "><td class=l>" << Html(path)
-        << "</td><td>" << Printf("%.6g", value) << "</td><td class=l>" << Html(unit) << "</td><td>"
-        << (with_error ? Printf("%.3g", error->second) : "") << "</td><td class=l>"
-        << (with_error ? "fitted"
-            : bounded  ? "fitted, at a bound (no standard error)"
-                       : "prior / given")
+    bool fitted = false;
+    const std::string from = source.Of(path, &fitted);
+    out << "<tr" << (fitted ? "" : " class=prior") << "><td class=l>" << Html(path) << "</td><td>"
+        << Printf("%.6g", value) << "</td><td class=l>" << Html(unit) << "</td><td>"
+        << (with_error ? Printf("%.3g", error->second) : "") << "</td><td class=l>" << Html(from)
         << "</td></tr>\n";
   };
   for (const ScalarParameterInfo& info : ScalarParameterTable())

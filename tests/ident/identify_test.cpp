@@ -5,9 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
+#include <string>
 
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/provenance.h"
 
 namespace pneumaid {
 namespace {
@@ -66,6 +69,29 @@ TEST(IdentifyTest, ThePriorsEffectsAreListedAsFromThePrior) {
                     "effects.valve_lag.tau (an effect of the prior; the component "
                     "fits do not model it)"))
       << report.BriefReport();
+}
+
+// A coefficient a fit that ran held (here u_sat, kept at the prior's) is
+// named with why in the provenance's `held`, which the report reads; the
+// coefficients the fits determined and the components not fitted are not.
+TEST(IdentifyTest, TheProvenanceNamesTheHeldCoefficientsWithWhy) {
+  const Unit unit = ReadUnit(kUnit);
+  IdentifyOptions options;
+  options.valve.fit_u_sat = false;
+  options.components = {Component::kValve};
+  IdentifyReport report;
+  const Parameters p = Identify(unit, Parameters{}, options, &report);
+  const std::map<std::string, std::string> held = ProvenanceStrings(p.provenance_yaml, "", "held");
+  for (const FittedCoefficient& c : report.valve.coefficients) {
+    if (c.determined()) {
+      EXPECT_EQ(held.count(c.path), 0u) << c.path;
+    } else {
+      ASSERT_EQ(held.count(c.path), 1u) << c.path << "\n" << p.provenance_yaml;
+      EXPECT_EQ(held.at(c.path), c.held);
+    }
+  }
+  EXPECT_EQ(held.at("valve.increasing.u_sat"), "fixed at the prior's (fit_u_sat is off)");
+  EXPECT_EQ(held.count("friction.positive.Fs"), 0u);  // not requested: no fit ran
 }
 
 TEST(IdentifyTest, ComponentsWithoutDataAreRefusedWhenAskedForAndPriorsOtherwise) {

@@ -4,8 +4,11 @@
 #include "pneumaid/ident/refine.h"
 
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <map>
+#include <string>
 
 #include "../../src/ident/refine_residual.h"
 #include "../synth/synth_test_util.h"
@@ -370,6 +373,32 @@ TEST_F(RefineSpecTest, ACoefficientOnItsBoundIsNamedInTheProvenance) {
   EXPECT_FALSE(result.Find("friction.negative.Fd")->at_bound);
 }
 
+// A coefficient whose prior (here its start's error, 1e-9 N, and a fraction
+// of 1e-6) carries more information than the fitted runs is held toward the
+// prior's centre: named with why in the result and in the provenance's
+// refine.held (the report's "held by the refinement"); the other is fitted
+// and not named.
+TEST_F(RefineSpecTest, ACoefficientThePriorDeterminesIsNamedHeldInTheProvenance) {
+  Parameters start;
+  start.friction.positive.dynamic_force_N = 0.55;
+  start.uncertainty = {{"friction.positive.Fd", 1e-9}};
+  RefineOptions options;
+  options.start_prior_fraction = 1e-6;
+  const RefineResult result = Refine(start, *unit_, TwoParameters(), options);
+  std::cout << result.BriefReport();
+  ASSERT_TRUE(result.has_values()) << result.reason;
+  const FittedCoefficient* held = result.Find("friction.positive.Fd");
+  ASSERT_NE(held, nullptr);
+  EXPECT_FALSE(held->determined());
+  EXPECT_NEAR(held->value, 0.55, 1e-6);  // where the prior holds it
+  EXPECT_TRUE(result.Find("friction.negative.Fd")->determined());
+  const std::map<std::string, std::string> named =
+      ProvenanceStrings(result.params.provenance_yaml, "refine", "held");
+  ASSERT_EQ(named.size(), 1u);
+  EXPECT_EQ(named.count("friction.positive.Fd"), 1u);
+  EXPECT_EQ(named.at("friction.positive.Fd"), held->held);
+}
+
 // A last stage by multiple shooting fits windows, but its costs and verdict
 // are the whole runs' (one simulation of them gives both): the reported cost
 // is the whole run's at the fitted values, the verdict that of EvaluateFit.
@@ -422,7 +451,19 @@ initial_pressures: fit
   start.friction.negative.dynamic_force_N *= 0.95;
   const RefineResult result = Refine(start, *unit_, spec, RefineOptions{});
   ASSERT_TRUE(result.has_values()) << result.reason;
-  EXPECT_EQ(result.estimated_starts, 1);
+  ASSERT_EQ(result.estimated_starts.size(), 1u);
+  // The estimates are written for whoever simulates the run again: the
+  // logged values moved by their offsets, in Pa absolute, under the run's id.
+  const EstimatedStart& e = result.estimated_starts.front();
+  EXPECT_EQ(e.run, "stroke-100");
+  EXPECT_GT(e.logged_p1_Pa, 0.5e5);  // absolute: about 1 bar at this start
+  EXPECT_NE(e.p1_Pa, e.logged_p1_Pa);
+  EXPECT_EQ(e.p1_offset_sigma == 0, e.p1_Pa == e.logged_p1_Pa);
+  const YAML::Node written =
+      YAML::Load(result.params.provenance_yaml)["refine"]["initial_pressures_Pa"]["stroke-100"];
+  ASSERT_TRUE(written.IsSequence()) << result.params.provenance_yaml;
+  EXPECT_EQ(written[0].as<double>(), e.p1_Pa);  // shortest text that reads back the same
+  EXPECT_EQ(written[1].as<double>(), e.p2_Pa);
 }
 
 // The InputError of Refine(start, unit, spec), which must name each of `names`.

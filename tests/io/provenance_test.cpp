@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,20 @@ TEST(ProvenanceTest, ReadsAnEntryAndItsList) {
             (std::vector<std::string>{"friction.positive.Fd", "friction.negative.b"}));
   EXPECT_TRUE(ProvenanceList(provenance, "refine", "missing").empty());
   EXPECT_TRUE(ProvenanceList(provenance, "identify", "unit").empty());  // not a list
+}
+
+TEST(ProvenanceTest, ReadsAMappingOfAnEntryOrOfTheTopLevel) {
+  const std::string provenance =
+      "{tool: pneumaid, held: {friction.positive.vs: \"no slide below 5 mm/s\"}, refine: "
+      "{held: {effects.stick_creep.v: \"held at a point: 1e-4\", bad: [1, 2]}, at_bound: [x]}}";
+  using Strings = std::map<std::string, std::string>;
+  EXPECT_EQ(ProvenanceStrings(provenance, "refine", "held"),
+            (Strings{{"effects.stick_creep.v", "held at a point: 1e-4"}}));  // not a string: left
+  EXPECT_EQ(ProvenanceStrings(provenance, "", "held"),
+            (Strings{{"friction.positive.vs", "no slide below 5 mm/s"}}));
+  EXPECT_TRUE(ProvenanceStrings(provenance, "refine", "at_bound").empty());  // a list
+  EXPECT_TRUE(ProvenanceStrings(provenance, "identify", "held").empty());
+  EXPECT_TRUE(ProvenanceStrings("free text", "", "held").empty());
 }
 
 TEST(ProvenanceTest, TextThatIsNotAMappingIsOneEntryGiven) {

@@ -83,6 +83,32 @@ TEST(ReportTest, TheParameterTableTellsACoefficientAtABoundFromThePriors) {
   }
 }
 
+// A coefficient a fit held (not determined by its logs) says so with why:
+// the refinement's (refine.held) even though its `uncertainty` entry is the
+// prior's pull; a component fit's (identify's `held`) when the refinement did
+// not fit it again. The fitted and the prior's rows stay as they were.
+TEST(ReportTest, TheParameterTableNamesTheHeldCoefficientsWithWhy) {
+  const Unit unit = ReadUnit(kRoot + "/datasets/paper-rig");
+  Parameters params = LoadParams(kRoot + "/datasets/paper-rig/truth.yaml");
+  params.uncertainty = {{"friction.positive.Fs", 0.1}, {"friction.positive.vs", 0.004}};
+  params.provenance_yaml =
+      "{held: {friction.negative.vs: \"no slide below 10 mm/s\", friction.positive.vs: "
+      "\"read off\"}, refine: {status: converged, held: {friction.positive.vs: \"not "
+      "determined by the fitted runs; regularised toward its centre\"}}}";
+  const std::string html = UnitReportHtml(params, unit, ReportOptions{});
+  const auto row_of = [&html](const std::string& path) {
+    const std::size_t at = html.find("<td class=l>" + path + "</td>");
+    return at == std::string::npos ? std::string() : html.substr(at, html.find("</tr>", at) - at);
+  };
+  EXPECT_NE(row_of("friction.positive.vs")
+                .find("held by the refinement: not determined by the fitted runs; regularised"),
+            std::string::npos);
+  EXPECT_NE(row_of("friction.negative.vs").find("held by its component fit: no slide below 10"),
+            std::string::npos);
+  EXPECT_NE(row_of("friction.positive.Fs").find(">fitted<"), std::string::npos);
+  EXPECT_NE(row_of("friction.negative.Fs").find("prior / given"), std::string::npos);
+}
+
 TEST(ReportTest, LongRunsAreDecimatedKeepingExtremes) {
   const Unit unit = ReadUnit(kRoot + "/datasets/paper-rig");
   const Parameters params = LoadParams(kRoot + "/datasets/paper-rig/truth.yaml");

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -57,6 +58,8 @@ struct FitResult {
 
   // There are values to write (every status but kNotFitted).
   bool has_values() const { return status != FitStatus::kNotFitted; }
+  // The coefficients not determined (path -> why).
+  std::map<std::string, std::string> Held() const;
   // nullptr when no coefficient has this path.
   const FittedCoefficient* Find(const std::string& path) const;
   // The correlation of coefficients i and j; NaN where the covariance is not available.

@@ -247,6 +247,16 @@ struct ChannelMisfit {
   double worst_from_s = 0, worst_to_s = 0, worst_reduced_chi_square = 0;
 };
 
+// One fitted run's initial chamber pressures [Pa absolute]: as logged (the
+// first samples' mean) and as the fit estimated them, and the move of each in
+// the logged value's standard errors.
+struct EstimatedStart {
+  std::string run;
+  double logged_p1_Pa = 0, logged_p2_Pa = 0;
+  double p1_Pa = 0, p2_Pa = 0;
+  double p1_offset_sigma = 0, p2_offset_sigma = 0;
+};
+
 // The fit's status: kConverged when the solver stopped and the verdict holds
 // (the median run's reduced chi-square at most the acceptable); kNotExplained
 // when the best point found leaves more; kNotConverged when the solver ran
@@ -275,11 +285,11 @@ struct RefineResult : FitResult {
   // (RefineOptions::cost_resolution_directions).
   double cost_resolution = 0;
   bool cost_resolution_measured = false;  // the stencil's, above stall_tolerance
-  // Estimated starts (FitSpec::fit_initial_pressures), last stage: how many,
-  // and the largest move of an initial pressure from its logged value, in
-  // the logged value's standard errors and in Pa.
-  int estimated_starts = 0;
-  double largest_start_offset_sigma = 0, largest_start_offset_Pa = 0;
+  // Estimated starts (FitSpec::fit_initial_pressures), last stage: one per
+  // fitted run (or window) whose initial pressures were fitted. The fit's
+  // verdict holds from these, not from the logged values; provenance keeps
+  // them (refine.initial_pressures_Pa) for whoever simulates the runs again.
+  std::vector<EstimatedStart> estimated_starts;
   // Of the fitted channels whose noise the spec does not give: those the unit
   // does not declare, with the estimates from the logs that weighted them, and
   // the declared ones whose logs show far more (ChannelNoiseNote); empty when

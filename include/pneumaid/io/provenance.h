@@ -4,6 +4,7 @@
 // entry `given`. The one home for reading it and adding to it.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -17,5 +18,12 @@ bool HasProvenanceEntry(const std::string& provenance, const std::string& key);
 // when there is none.
 std::vector<std::string> ProvenanceList(const std::string& provenance, const std::string& key,
                                         const std::string& field);
+
+// The string values of the mapping `key`.`field` (`refine`.`held`: path ->
+// why), or of the top-level mapping `field` when `key` is empty (identify's
+// `held`); empty when there is none.
+std::map<std::string, std::string> ProvenanceStrings(const std::string& provenance,
+                                                     const std::string& key,
+                                                     const std::string& field);
 
 }  // namespace pneumaid
