@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <sstream>
 
 #include "../io/provenance_map.h"
@@ -88,11 +89,19 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   YAML::Node at_bound(YAML::NodeType::Sequence);
   for (const FittedCoefficient& c : r.coefficients)
     if (c.at_bound) at_bound.push_back(c.path);
-  entry["at_bound"] = at_bound;
   // Not determined by the fitted runs, with why: their `uncertainty` is the
   // prior's pull, not the runs' (the report tells them from the fitted).
   YAML::Node held(YAML::NodeType::Map);
   for (const auto& [path, why] : r.Held()) held[path] = why;
+  // A set refined before: what that refinement said of a coefficient this one
+  // did not free still holds (its value and error are that refinement's).
+  std::set<std::string> freed;
+  for (const FittedCoefficient& c : r.coefficients) freed.insert(c.path);
+  for (const std::string& path : ProvenanceList(provenance, "refine", "at_bound"))
+    if (freed.count(path) == 0) at_bound.push_back(path);
+  for (const auto& [path, why] : ProvenanceStrings(provenance, "refine", "held"))
+    if (freed.count(path) == 0) held[path] = why;
+  entry["at_bound"] = at_bound;
   entry["held"] = held;
   if (!r.creep_report.empty()) entry["creep_fit"] = r.creep_report;
   return WithProvenanceEntry(provenance, "refine", entry);
@@ -153,6 +162,9 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (screen_windows_max < 0) return fail("screen_windows_max must be >= 0");
   if (coordinate_rounds < 0) return fail("coordinate_rounds must be >= 0");
   if (!(coordinate_span > 1)) return fail("coordinate_span must be > 1");
+  if (!(coordinate_start_above >= 1)) return fail("coordinate_start_above must be >= 1");
+  if (!(coordinate_start_keep_ratio > 0 && coordinate_start_keep_ratio <= 1))
+    return fail("coordinate_start_keep_ratio must be in (0, 1]");
   if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");
   if (!(misfit_window_s > 0)) return fail("misfit_window_s must be > 0");
   if (!(clustered_error_block_s >= 0)) return fail("clustered_error_block_s must be >= 0");

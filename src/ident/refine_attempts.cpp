@@ -253,19 +253,29 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::st
 void Attempts::CoordinateStart() {
   // A spec whose first stage replays the friction fit would refit the moved
   // coefficients before any simulation fit: nothing to search for.
-  if (Explained() || options_.coordinate_rounds <= 0 || stages_.front().friction_replay) return;
-  // Neither start explains the runs: the given one with one friction
-  // coefficient at a time moved (the others the component fits').
+  const bool well_above_noise = best_.result.reduced_chi_square > options_.coordinate_start_above;
+  if ((Explained() && !well_above_noise) || options_.coordinate_rounds <= 0 ||
+      stages_.front().friction_replay)
+    return;
+  // Neither start explains the runs, or the kept fit is well above the
+  // noise: the given one with one friction coefficient at a time moved (the
+  // others the component fits').
   CoordinateSearch moved = SearchFrictionCoordinates(start_, unit_, spec_, options_);
   if (!moved.moved) {
     coordinate_report_ = moved.report;
     return;
   }
+  const bool explained_before = Explained();
   const double before = best_.result.reduced_chi_square;
   StagedFit candidate = FitStages(moved.start, unit_, spec_, stages_, options_);
   candidate.from_moved_start = true;
   const double after = candidate.result.reduced_chi_square;
-  const bool kept = Offer(std::move(candidate), &coordinate_report_);
+  // An explained fit gives way to a clear gain only.
+  const bool has_values = candidate.result.has_values();
+  const bool clear_gain =
+      !explained_before || (has_values && after <= options_.coordinate_start_keep_ratio * before);
+  if (!clear_gain) best_.result.iterations += candidate.result.iterations;
+  const bool kept = clear_gain && Offer(std::move(candidate), &coordinate_report_);
   if (kept) {
     moved_start_ = std::move(moved.start);
     moved_start_shot_ = false;
@@ -273,7 +283,9 @@ void Attempts::CoordinateStart() {
   }
   char line[160];
   std::snprintf(line, sizeof(line), "; the fit from it: %.3g against %.3g, %s", after, before,
-                kept ? "kept" : "not kept");
+                kept                        ? "kept"
+                : clear_gain || !has_values ? "not kept"
+                                            : "not kept (explained before, no clear gain)");
   coordinate_report_ = moved.report + line;
 }
 

@@ -8,7 +8,9 @@
 //      its candidates whose fit is not explained fitted once more with the
 //      last stage by multiple shooting first (with windowed_refit on);
 //   2. a start one friction coefficient away from the given one
-//      (refine_coordinate_start.h);
+//      (refine_coordinate_start.h; also on an explained fit whose measure is
+//      above RefineOptions::coordinate_start_above, which then gives way to
+//      a clear gain only);
 //   3. a robust refit (each run through a Cauchy loss);
 //   4. a windowed refit (the last stage by multiple shooting first);
 //   5. rescue starts in a trust box around the given start (the last stage
@@ -62,7 +64,8 @@ class Attempts {
            const std::vector<FitStage>& stages, const RefineOptions& options);
 
   // The later attempts, in order; each does nothing once the kept fit is
-  // explained (or when its option is off).
+  // explained (but the coordinate start above coordinate_start_above), or
+  // when its option is off.
   void ScreenFriction();
   void CoordinateStart();
   void RobustRefit();

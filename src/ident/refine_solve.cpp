@@ -204,7 +204,10 @@ AtBest EvaluateAtBest(const std::vector<FitExperiment>& experiments, const Param
           at.time_blocks.Add(weight * block);
       }
     }
-    if (experiments[k].FitsStart()) RecordStartOffset(experiments[k], p.offsets[k], r);
+    // A window's start is one logged sample, and a windowed stage is judged
+    // on the whole runs from their logged starts (JudgeLastStage): whole
+    // runs' estimates only.
+    if (experiments[k].FitsStart() && !windows) RecordStartOffset(experiments[k], p.offsets[k], r);
     if (!windows) {
       for (const ChannelMisfit& m :
            RunMisfits(experiments[k], cache->residuals, options.misfit_window_s))

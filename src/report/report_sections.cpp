@@ -42,6 +42,7 @@ std::set<std::string> AtBound(const Parameters& params) {
 // held by the refinement (refine.held: its `uncertainty` is the prior's pull),
 // fitted (an `uncertainty` entry), fitted on a bound (refine.at_bound), held
 // by a component fit that ran (identify's `held`), else the prior or given.
+// Only the fitted ones are a fit's rows (the held ones grey, as the prior's).
 class ValueSource {
  public:
   explicit ValueSource(const Parameters& params)
@@ -52,9 +53,10 @@ class ValueSource {
 
   // The text of the source column; *fitted: whether the row is a fit's.
   std::string Of(const std::string& path, bool* fitted) const {
-    *fitted = true;
+    *fitted = false;
     if (const auto held = refine_held_.find(path); held != refine_held_.end())
       return "held by the refinement: " + held->second;
+    *fitted = true;
     if (params_.uncertainty.count(path) > 0) return "fitted";
     if (at_bound_.count(path) > 0) return "fitted, at a bound (no standard error)";
     *fitted = false;

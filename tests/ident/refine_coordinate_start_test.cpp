@@ -84,6 +84,34 @@ TEST(RefineCoordinateStartTest, TheFitFromItExplainsTheRunsWhereTheGivenStartSta
   testing::ExpectFrictionWithinTolerance(result.params, c.truth);
 }
 
+// A fit the verdict calls explained (here by a threshold of 1e6) but whose
+// measure is above coordinate_start_above gets the coordinate start too, and
+// gives way to its fit on a clear gain only (coordinate_start_keep_ratio).
+TEST(RefineCoordinateStartTest, AnExplainedFitWellAboveTheNoiseGivesWayToAClearGainOnly) {
+  const testing::RefineCase& c = OneCoefficientOff();
+  const FitSpec spec = LoadFitSpec(testing::kDefaultFitSpec);
+  RefineOptions options = OnlyTheCoordinateStart(2);
+  options.acceptable_reduced_chi_square = 1e6;
+  options.coordinate_start_above = 1e300;  // only when not explained: not run
+  const RefineResult given = Refine(c.start, c.unit, spec, options);
+  ASSERT_TRUE(given.explained()) << given.reason;
+  EXPECT_GT(given.reduced_chi_square, 100.0);
+  EXPECT_TRUE(given.coordinate_report.empty()) << given.coordinate_report;
+  options.coordinate_start_above = 3.0;
+  const RefineResult moved = Refine(c.start, c.unit, spec, options);
+  std::cout << moved.BriefReport();
+  EXPECT_NE(moved.coordinate_report.find(", kept"), std::string::npos) << moved.coordinate_report;
+  EXPECT_LT(moved.reduced_chi_square, 0.01 * given.reduced_chi_square);
+  testing::ExpectFrictionWithinTolerance(moved.params, c.truth);
+  options.coordinate_start_keep_ratio = 1e-6;  // no gain is clear enough
+  const RefineResult kept = Refine(c.start, c.unit, spec, options);
+  EXPECT_NE(kept.coordinate_report.find("not kept (explained before, no clear gain)"),
+            std::string::npos)
+      << kept.coordinate_report;
+  EXPECT_EQ(kept.final_cost, given.final_cost);
+  EXPECT_GT(kept.iterations, given.iterations);  // the candidate was fitted, and counted
+}
+
 TEST(RefineCoordinateStartTest, OptionsNameTheBadField) {
   RefineOptions options;
   std::string error;
@@ -94,6 +122,18 @@ TEST(RefineCoordinateStartTest, OptionsNameTheBadField) {
   options.coordinate_span = 1.0;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("coordinate_span"), std::string::npos) << error;
+  options.coordinate_span = 1.5;
+  options.coordinate_start_above = 0.5;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("coordinate_start_above"), std::string::npos) << error;
+  options.coordinate_start_above = 3.0;
+  for (const double ratio : {0.0, 1.5}) {
+    options.coordinate_start_keep_ratio = ratio;
+    EXPECT_FALSE(options.IsValid(&error)) << ratio;
+    EXPECT_NE(error.find("coordinate_start_keep_ratio"), std::string::npos) << error;
+  }
+  options.coordinate_start_keep_ratio = 0.85;
+  EXPECT_TRUE(options.IsValid(&error)) << error;
 }
 
 }  // namespace

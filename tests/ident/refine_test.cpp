@@ -384,6 +384,7 @@ TEST_F(RefineSpecTest, ACoefficientThePriorDeterminesIsNamedHeldInTheProvenance)
   start.uncertainty = {{"friction.positive.Fd", 1e-9}};
   RefineOptions options;
   options.start_prior_fraction = 1e-6;
+  options.coordinate_rounds = 0;  // the prior alone (that start would move the coefficient off it)
   const RefineResult result = Refine(start, *unit_, TwoParameters(), options);
   std::cout << result.BriefReport();
   ASSERT_TRUE(result.has_values()) << result.reason;
@@ -397,6 +398,18 @@ TEST_F(RefineSpecTest, ACoefficientThePriorDeterminesIsNamedHeldInTheProvenance)
   ASSERT_EQ(named.size(), 1u);
   EXPECT_EQ(named.count("friction.positive.Fd"), 1u);
   EXPECT_EQ(named.at("friction.positive.Fd"), held->held);
+  // Refined again with the other coefficient alone free: what the first
+  // refinement said of the one held stays (its value and error are still
+  // that refinement's).
+  const FitSpec other = ParseFitSpec(R"(format: pneumaid-fit/1
+parameters:
+  friction.negative.Fd: {min: 0.5, max: 20}
+experiments: {fit: [stroke-100], hold_out: []}
+)",
+                                     "other.yaml");
+  const RefineResult again = Refine(result.params, *unit_, other, RefineOptions{});
+  ASSERT_TRUE(again.has_values()) << again.reason;
+  EXPECT_EQ(ProvenanceStrings(again.params.provenance_yaml, "refine", "held"), named);
 }
 
 // A last stage by multiple shooting fits windows, but its costs and verdict
@@ -458,7 +471,10 @@ initial_pressures: fit
   EXPECT_EQ(e.run, "stroke-100");
   EXPECT_GT(e.logged_p1_Pa, 0.5e5);  // absolute: about 1 bar at this start
   EXPECT_NE(e.p1_Pa, e.logged_p1_Pa);
-  EXPECT_EQ(e.p1_offset_sigma == 0, e.p1_Pa == e.logged_p1_Pa);
+  // A start estimated within a few kPa of its log (the moves are tens of
+  // standard errors of a mean of 0.1 bar noise at most).
+  EXPECT_LT(std::fabs(e.p1_Pa - e.logged_p1_Pa), 5e3);
+  EXPECT_LT(std::fabs(e.p2_Pa - e.logged_p2_Pa), 5e3);
   const YAML::Node written =
       YAML::Load(result.params.provenance_yaml)["refine"]["initial_pressures_Pa"]["stroke-100"];
   ASSERT_TRUE(written.IsSequence()) << result.params.provenance_yaml;

@@ -90,11 +90,14 @@ TEST(ReportTest, TheParameterTableTellsACoefficientAtABoundFromThePriors) {
 TEST(ReportTest, TheParameterTableNamesTheHeldCoefficientsWithWhy) {
   const Unit unit = ReadUnit(kRoot + "/datasets/paper-rig");
   Parameters params = LoadParams(kRoot + "/datasets/paper-rig/truth.yaml");
-  params.uncertainty = {{"friction.positive.Fs", 0.1}, {"friction.positive.vs", 0.004}};
+  params.uncertainty = {
+      {"friction.positive.Fs", 0.1}, {"friction.positive.vs", 0.004}, {"friction.negative.b", 0.2}};
+  // friction.negative.b: held by identify, fitted by the refinement since.
   params.provenance_yaml =
       "{held: {friction.negative.vs: \"no slide below 10 mm/s\", friction.positive.vs: "
-      "\"read off\"}, refine: {status: converged, held: {friction.positive.vs: \"not "
-      "determined by the fitted runs; regularised toward its centre\"}}}";
+      "\"read off\", friction.negative.b: \"no slide\"}, refine: {status: converged, held: "
+      "{friction.positive.vs: \"not determined by the fitted runs; regularised toward its "
+      "centre\"}}}";
   const std::string html = UnitReportHtml(params, unit, ReportOptions{});
   const auto row_of = [&html](const std::string& path) {
     const std::size_t at = html.find("<td class=l>" + path + "</td>");
@@ -106,7 +109,18 @@ TEST(ReportTest, TheParameterTableNamesTheHeldCoefficientsWithWhy) {
   EXPECT_NE(row_of("friction.negative.vs").find("held by its component fit: no slide below 10"),
             std::string::npos);
   EXPECT_NE(row_of("friction.positive.Fs").find(">fitted<"), std::string::npos);
+  EXPECT_NE(row_of("friction.negative.b").find(">fitted<"), std::string::npos);
   EXPECT_NE(row_of("friction.negative.Fs").find("prior / given"), std::string::npos);
+  // Grey (class=prior) unless a fit determined it.
+  const auto grey = [&html](const std::string& path) {
+    const std::size_t at = html.find("<td class=l>" + path + "</td>");
+    const std::size_t row = html.rfind("<tr", at);
+    return html.compare(row, 16, "<tr class=prior>") == 0;
+  };
+  EXPECT_TRUE(grey("friction.positive.vs"));
+  EXPECT_TRUE(grey("friction.negative.vs"));
+  EXPECT_FALSE(grey("friction.negative.b"));
+  EXPECT_FALSE(grey("friction.positive.Fs"));
 }
 
 TEST(ReportTest, LongRunsAreDecimatedKeepingExtremes) {

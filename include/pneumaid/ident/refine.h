@@ -150,7 +150,8 @@ struct RefineOptions {
   // into over 1 000 windows; the measure's mean square is set by a few
   // hundred, and its run time by all of them.
   int screen_windows_max = 256;
-  // When the fits from the given and the screened starts are not explained:
+  // When the fits from the given and the screened starts are not explained
+  // (or the kept fit's measure is above coordinate_start_above, below):
   // a start one friction coefficient away from the given one. Up to this many
   // rounds, each scanning every free friction coefficient on its own within
   // a factor coordinate_span of its value (16 points, the others held) and
@@ -161,6 +162,14 @@ struct RefineOptions {
   // fit (it would refit the moved coefficients). 0: off.
   int coordinate_rounds = 2;
   double coordinate_span = 1.5;
+  // The coordinate start also runs on an explained fit whose median reduced
+  // chi-square is above coordinate_start_above (explained, but well above
+  // the noise: a Stribeck velocity's basin the runs can tell; infinity: only
+  // when not explained). Its fit then replaces the explained one only when
+  // Better and its measure is at most coordinate_start_keep_ratio of it: a
+  // few per cent are within what the creep fit after it turns on its start.
+  double coordinate_start_above = 3.0;
+  double coordinate_start_keep_ratio = 0.85;
   // Standard errors robust over runs: each parameter's error is widened to
   // the run-clustered sandwich's (how much the fitted runs, windows summed
   // per run, disagree about it) where that is larger than the misfit-scaled
@@ -286,9 +295,10 @@ struct RefineResult : FitResult {
   double cost_resolution = 0;
   bool cost_resolution_measured = false;  // the stencil's, above stall_tolerance
   // Estimated starts (FitSpec::fit_initial_pressures), last stage: one per
-  // fitted run (or window) whose initial pressures were fitted. The fit's
-  // verdict holds from these, not from the logged values; provenance keeps
-  // them (refine.initial_pressures_Pa) for whoever simulates the runs again.
+  // fitted run whose initial pressures were fitted. The fit's verdict holds
+  // from these, not from the logged values; provenance keeps them
+  // (refine.initial_pressures_Pa) for whoever simulates the runs again. None
+  // after a windowed last stage (judged on the whole runs as logged).
   std::vector<EstimatedStart> estimated_starts;
   // Of the fitted channels whose noise the spec does not give: those the unit
   // does not declare, with the estimates from the logs that weighted them, and
