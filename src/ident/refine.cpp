@@ -103,6 +103,11 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
     if (freed.count(path) == 0) held[path] = why;
   entry["at_bound"] = at_bound;
   entry["held"] = held;
+  // What this refinement freed: a component fit's word on these (identify's
+  // `held`) no longer holds, whether or not they got a standard error.
+  YAML::Node free(YAML::NodeType::Sequence);
+  for (const std::string& path : freed) free.push_back(path);
+  entry["free"] = free;
   if (!r.creep_report.empty()) entry["creep_fit"] = r.creep_report;
   return WithProvenanceEntry(provenance, "refine", entry);
 }

@@ -41,7 +41,9 @@ std::set<std::string> AtBound(const Parameters& params) {
 // Where a parameter's value comes from, as the table's source column says it:
 // held by the refinement (refine.held: its `uncertainty` is the prior's pull),
 // fitted (an `uncertainty` entry), fitted on a bound (refine.at_bound), held
-// by a component fit that ran (identify's `held`), else the prior or given.
+// by a component fit that ran (identify's `held`) and not freed by the
+// refinement since (refine.free), refined without a standard error (freed,
+// but the refinement gave no covariance), else the prior or given.
 // Only the fitted ones are a fit's rows (the held ones grey, as the prior's).
 class ValueSource {
  public:
@@ -49,7 +51,12 @@ class ValueSource {
       : params_(params),
         at_bound_(AtBound(params)),
         refine_held_(ProvenanceStrings(params.provenance_yaml, "refine", "held")),
-        identify_held_(ProvenanceStrings(params.provenance_yaml, "", "held")) {}
+        identify_held_(ProvenanceStrings(params.provenance_yaml, "", "held")) {
+    for (const std::string& path : ProvenanceList(params.provenance_yaml, "refine", "free")) {
+      identify_held_.erase(path);
+      refine_free_.insert(path);
+    }
+  }
 
   // The text of the source column; *fitted: whether the row is a fit's.
   std::string Of(const std::string& path, bool* fitted) const {
@@ -59,6 +66,7 @@ class ValueSource {
     *fitted = true;
     if (params_.uncertainty.count(path) > 0) return "fitted";
     if (at_bound_.count(path) > 0) return "fitted, at a bound (no standard error)";
+    if (refine_free_.count(path) > 0) return "refined (no standard error)";
     *fitted = false;
     if (const auto held = identify_held_.find(path); held != identify_held_.end())
       return "held by its component fit: " + held->second;
@@ -67,7 +75,7 @@ class ValueSource {
 
  private:
   const Parameters& params_;
-  std::set<std::string> at_bound_;
+  std::set<std::string> at_bound_, refine_free_;
   std::map<std::string, std::string> refine_held_, identify_held_;
 };
 

@@ -398,6 +398,8 @@ TEST_F(RefineSpecTest, ACoefficientThePriorDeterminesIsNamedHeldInTheProvenance)
   ASSERT_EQ(named.size(), 1u);
   EXPECT_EQ(named.count("friction.positive.Fd"), 1u);
   EXPECT_EQ(named.at("friction.positive.Fd"), held->held);
+  EXPECT_EQ(ProvenanceList(result.params.provenance_yaml, "refine", "free"),
+            (std::vector<std::string>{"friction.negative.Fd", "friction.positive.Fd"}));
   // Refined again with the other coefficient alone free: what the first
   // refinement said of the one held stays (its value and error are still
   // that refinement's).

@@ -95,7 +95,8 @@ TEST(ReportTest, TheParameterTableNamesTheHeldCoefficientsWithWhy) {
   // friction.negative.b: held by identify, fitted by the refinement since.
   params.provenance_yaml =
       "{held: {friction.negative.vs: \"no slide below 10 mm/s\", friction.positive.vs: "
-      "\"read off\", friction.negative.b: \"no slide\"}, refine: {status: converged, held: "
+      "\"read off\", friction.negative.b: \"no slide\", friction.negative.Fd: \"no slide\"}, "
+      "refine: {status: converged, free: [friction.negative.Fd], held: "
       "{friction.positive.vs: \"not determined by the fitted runs; regularised toward its "
       "centre\"}}}";
   const std::string html = UnitReportHtml(params, unit, ReportOptions{});
@@ -111,6 +112,9 @@ TEST(ReportTest, TheParameterTableNamesTheHeldCoefficientsWithWhy) {
   EXPECT_NE(row_of("friction.positive.Fs").find(">fitted<"), std::string::npos);
   EXPECT_NE(row_of("friction.negative.b").find(">fitted<"), std::string::npos);
   EXPECT_NE(row_of("friction.negative.Fs").find("prior / given"), std::string::npos);
+  // Freed by the refinement, which gave it no error (no covariance): identify's
+  // word no longer holds.
+  EXPECT_NE(row_of("friction.negative.Fd").find("refined (no standard error)"), std::string::npos);
   // Grey (class=prior) unless a fit determined it.
   const auto grey = [&html](const std::string& path) {
     const std::size_t at = html.find("<td class=l>" + path + "</td>");
@@ -120,6 +124,7 @@ TEST(ReportTest, TheParameterTableNamesTheHeldCoefficientsWithWhy) {
   EXPECT_TRUE(grey("friction.positive.vs"));
   EXPECT_TRUE(grey("friction.negative.vs"));
   EXPECT_FALSE(grey("friction.negative.b"));
+  EXPECT_FALSE(grey("friction.negative.Fd"));
   EXPECT_FALSE(grey("friction.positive.Fs"));
 }
 
