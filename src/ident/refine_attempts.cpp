@@ -283,9 +283,10 @@ void Attempts::CoordinateStart() {
   }
   char line[160];
   std::snprintf(line, sizeof(line), "; the fit from it: %.3g against %.3g, %s", after, before,
-                kept                        ? "kept"
-                : clear_gain || !has_values ? "not kept"
-                                            : "not kept (explained before, no clear gain)");
+                kept ? "kept"
+                : clear_gain || !has_values || !(after < before)
+                    ? "not kept"
+                    : "not kept (explained before, no clear gain)");
   coordinate_report_ = moved.report + line;
 }
 
