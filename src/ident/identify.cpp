@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <initializer_list>
 #include <sstream>
 
 #include "../io/provenance_map.h"
@@ -111,9 +112,8 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
   // The coefficients a fit that ran did not determine, with why (its value
   // the prior's or a reading off the logs, no `uncertainty` entry).
   YAML::Node held(YAML::NodeType::Map);
-  for (const FitResult* fit : {static_cast<const FitResult*>(&report.valve),
-                               static_cast<const FitResult*>(&report.pipeline),
-                               static_cast<const FitResult*>(&report.friction)}) {
+  for (const FitResult* fit :
+       std::initializer_list<const FitResult*>{&report.valve, &report.pipeline, &report.friction}) {
     if (!fit->has_values()) continue;
     for (const auto& [path, why] : fit->Held()) held[path] = why;
   }

@@ -275,6 +275,7 @@ void Attempts::CoordinateStart() {
   const bool clear_gain =
       !explained_before || (has_values && after <= options_.coordinate_start_keep_ratio * before);
   if (!clear_gain) best_.result.iterations += candidate.result.iterations;
+  const bool small_gain = !clear_gain && has_values && after < before;
   const bool kept = clear_gain && Offer(std::move(candidate), &coordinate_report_);
   if (kept) {
     moved_start_ = std::move(moved.start);
@@ -283,10 +284,9 @@ void Attempts::CoordinateStart() {
   }
   char line[160];
   std::snprintf(line, sizeof(line), "; the fit from it: %.3g against %.3g, %s", after, before,
-                kept ? "kept"
-                : clear_gain || !has_values || !(after < before)
-                    ? "not kept"
-                    : "not kept (explained before, no clear gain)");
+                kept         ? "kept"
+                : small_gain ? "not kept (explained before, no clear gain)"
+                             : "not kept");
   coordinate_report_ = moved.report + line;
 }
 

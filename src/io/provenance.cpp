@@ -46,14 +46,25 @@ bool HasProvenanceEntry(const std::string& provenance, const std::string& key) {
   return ProvenanceMap(provenance)[key].IsDefined();
 }
 
+namespace {
+
+// The node `key`.`field` of the provenance (the top level's `field` when
+// `key` is empty); undefined when there is none. Not const: a const node's
+// missing key is an invalid node, which throws when asked anything; a
+// mutable node's is an undefined one.
+YAML::Node Field(const std::string& provenance, const std::string& key, const std::string& field) {
+  YAML::Node root = ProvenanceMap(provenance);
+  YAML::Node entry = key.empty() ? root : root[key];
+  if (!entry.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+  return entry[field];
+}
+
+}  // namespace
+
 std::vector<std::string> ProvenanceList(const std::string& provenance, const std::string& key,
                                         const std::string& field) {
   std::vector<std::string> items;
-  // Not const: a const node's missing key is an invalid node, which throws
-  // when asked anything; a mutable node's is an undefined one.
-  YAML::Node entry = ProvenanceMap(provenance)[key];
-  if (!entry.IsMap()) return items;
-  YAML::Node list = entry[field];
+  const YAML::Node list = Field(provenance, key, field);
   if (!list.IsSequence()) return items;
   for (const YAML::Node& item : list) {
     if (item.IsScalar()) items.push_back(item.Scalar());
@@ -65,10 +76,7 @@ std::map<std::string, std::string> ProvenanceStrings(const std::string& provenan
                                                      const std::string& key,
                                                      const std::string& field) {
   std::map<std::string, std::string> items;
-  YAML::Node root = ProvenanceMap(provenance);  // not const: see ProvenanceList
-  YAML::Node entry = key.empty() ? root : root[key];
-  if (!entry.IsMap()) return items;
-  YAML::Node mapping = entry[field];
+  const YAML::Node mapping = Field(provenance, key, field);
   if (!mapping.IsMap()) return items;
   for (const auto& item : mapping) {
     if (item.first.IsScalar() && item.second.IsScalar())

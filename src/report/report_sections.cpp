@@ -58,19 +58,19 @@ class ValueSource {
     }
   }
 
-  // The text of the source column; *fitted: whether the row is a fit's.
-  std::string Of(const std::string& path, bool* fitted) const {
-    *fitted = false;
+  struct Source {
+    std::string text;  // the source column
+    bool fitted;       // the row is a fit's
+  };
+  Source Of(const std::string& path) const {
     if (const auto held = refine_held_.find(path); held != refine_held_.end())
-      return "held by the refinement: " + held->second;
-    *fitted = true;
-    if (params_.uncertainty.count(path) > 0) return "fitted";
-    if (at_bound_.count(path) > 0) return "fitted, at a bound (no standard error)";
-    if (refine_free_.count(path) > 0) return "refined (no standard error)";
-    *fitted = false;
+      return {"held by the refinement: " + held->second, false};
+    if (params_.uncertainty.count(path) > 0) return {"fitted", true};
+    if (at_bound_.count(path) > 0) return {"fitted, at a bound (no standard error)", true};
+    if (refine_free_.count(path) > 0) return {"refined (no standard error)", true};
     if (const auto held = identify_held_.find(path); held != identify_held_.end())
-      return "held by its component fit: " + held->second;
-    return "prior / given";
+      return {"held by its component fit: " + held->second, false};
+    return {"prior / given", false};
   }
 
  private:
@@ -87,12 +87,11 @@ std::string ParameterTable(const Parameters& params) {
   const auto row = [&](const std::string& path, double value, const std::string& unit) {
     const auto error = params.uncertainty.find(path);
     const bool with_error = error != params.uncertainty.end();
-    bool fitted = false;
-    const std::string from = source.Of(path, &fitted);
-    out << "<tr" << (fitted ? "" : " class=prior") << "><td class=l>" << Html(path) << "</td><td>"
-        << Printf("%.6g", value) << "</td><td class=l>" << Html(unit) << "</td><td>"
-        << (with_error ? Printf("%.3g", error->second) : "") << "</td><td class=l>" << Html(from)
-        << "</td></tr>\n";
+    const ValueSource::Source from = source.Of(path);
+    out << "<tr" << (from.fitted ? "" : " class=prior") << "><td class=l>" << Html(path)
+        << "</td><td>" << Printf("%.6g", value) << "</td><td class=l>" << Html(unit) << "</td><td>"
+        << (with_error ? Printf("%.3g", error->second) : "") << "</td><td class=l>"
+        << Html(from.text) << "</td></tr>\n";
   };
   for (const ScalarParameterInfo& info : ScalarParameterTable())
     row(info.path, info.get(params), info.unit);
