@@ -70,7 +70,7 @@ class FitSpecReader : internal::YamlReader {
                std::to_string(kMaxSensitivityParameters) + " sensitivities are the start's)");
     }
     spec.multistart = Count(root["multistart"], "multistart", 0, 1000, spec.multistart);
-    spec.seed = static_cast<std::uint64_t>(Count(root["seed"], "seed", 0, 1e15, 1));
+    spec.seed = static_cast<std::uint64_t>(Whole(root["seed"], "seed", 0, 1e15, 1));
     spec.max_iterations = Count(root["max_iterations"], "max_iterations", 1, 10000, 50);
     std::string error;
     if (!spec.IsValid(&error)) Fail(root, error);  // what the reader above does not see

@@ -19,6 +19,7 @@
 #include "friction_starts.h"
 #include "pneumaid/ident/rod_replay.h"
 #include "pneumaid/model/load.h"
+#include "quiet_solver.h"
 
 namespace pneumaid {
 namespace {
@@ -138,7 +139,7 @@ bool SolveOnce(const StrokeData& data, double mass_kg, const FrictionFitOptions&
   const ceres::Solver::Summary summary = Solve(options, &problem->problem);
   if (first_solve) a->initial_cost = summary.initial_cost;
   a->final_cost = summary.final_cost;
-  a->iterations += static_cast<int>(summary.iterations.size());
+  a->iterations += internal::StepsTried(summary);
   a->stopped = summary.termination_type != ceres::NO_CONVERGENCE;
   if (!summary.IsSolutionUsable()) a->failure = summary.message;
   return summary.IsSolutionUsable();

@@ -196,7 +196,7 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   ceres::Solve(solver_options, &problem, &summary);
   fit.initial_cost = summary.initial_cost;
   fit.final_cost = summary.final_cost;
-  fit.iterations = static_cast<int>(summary.iterations.size());
+  fit.iterations = internal::StepsTried(summary);
   if (!summary.IsSolutionUsable()) return not_fitted("Ceres failed: " + summary.message);
   const double delta = theta[log.levels];
   const int m = static_cast<int>(theta.size());

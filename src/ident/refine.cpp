@@ -55,18 +55,28 @@ bool RefinedBefore(const Parameters& start) {
   return HasProvenanceEntry(start.provenance_yaml, "refine");
 }
 
+// A double as YAML text, whatever the process's locale (yaml-cpp's own
+// conversion goes through it): YAML's spellings where it is not finite.
+std::string YamlNumber(double value) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  return FormatDouble(value);
+}
+
 // The start's provenance with this refinement's entry `refine` (replacing
 // any earlier one: a mapping has one key of a name), in flow style.
 std::string WithRefineEntry(const std::string& provenance, const RefineResult& r,
                             const FitSpec& spec) {
   YAML::Node entry(YAML::NodeType::Map);
   entry["spec"] = spec.source;
-  entry["cost_before"] = r.initial_cost;
-  entry["cost_after"] = r.final_cost;
-  entry["iterations"] = r.iterations;
-  entry["stages"] = r.stages;
-  entry["starts"] = r.starts;
-  entry["experiments"] = r.fitted.size();
+  // Numbers as text of their own: yaml-cpp would format them through the
+  // process's locale (a host's "1,234" or "0,5").
+  entry["cost_before"] = YamlNumber(r.initial_cost);
+  entry["cost_after"] = YamlNumber(r.final_cost);
+  entry["iterations"] = std::to_string(r.iterations);
+  entry["stages"] = std::to_string(r.stages);
+  entry["starts"] = std::to_string(r.starts);
+  entry["experiments"] = std::to_string(r.fitted.size());
   entry["initial_pressures"] = spec.fit_initial_pressures ? "fit" : "logged";
   // The estimates the verdict holds from, per run: [p1, p2] in Pa absolute
   // (the logged ones leave a worse fit; docs/refinement.md).
@@ -81,8 +91,8 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
     entry["initial_pressures_Pa"] = starts;
   }
   entry["status"] = ToString(r.status);
-  entry["reduced_chi_square"] = r.reduced_chi_square;
-  entry["acceptable_reduced_chi_square"] = r.acceptable_reduced_chi_square;
+  entry["reduced_chi_square"] = YamlNumber(r.reduced_chi_square);
+  entry["acceptable_reduced_chi_square"] = YamlNumber(r.acceptable_reduced_chi_square);
   entry["converged"] = r.explained();
   // Fitted, but on a bound of its range: no standard error, so no entry in
   // `uncertainty` (a reader would otherwise take it for the prior's).
@@ -187,7 +197,15 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (!(correlation_flag > 0 && correlation_flag < 1)) {
     return fail("correlation_flag must be in (0, 1)");
   }
-  return simulation.IsValid(error);
+  // The two simulations' fields, named by which (as a caller sets them).
+  for (const auto& [name, sim] :
+       {std::make_pair("simulation", &simulation), std::make_pair("validation", &validation)}) {
+    if (!sim->IsValid(error)) {
+      if (error != nullptr) *error = std::string(name) + "." + *error;
+      return false;
+    }
+  }
+  return true;
 }
 
 namespace {
@@ -233,6 +251,7 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   // experiment of its own.
   if (r.has_values() && options.start_disagreement_errors && !RefinedBefore(start))
     WidenByStartDisagreement(start, &r);
+  r.stages = static_cast<int>(stages.size());  // before the entry, which records it
   if (r.has_values()) {
     r.params.provenance_yaml = WithRefineEntry(r.params.provenance_yaml, r, spec);
   }
@@ -242,7 +261,6 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   r.noise_note = NoiseNote(spec, unit);
   if (const PositionZero zero = ReadPositionZero(unit); zero.offset_m != 0)
     r.position_note = zero.note;
-  r.stages = static_cast<int>(stages.size());
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;
 }
@@ -272,7 +290,9 @@ void CheckRefinable(const Parameters& start, const Unit& unit, const FitSpec& sp
                     const RefineOptions& options) {
   CheckInputs(spec, options);
   CheckReplayModel(start, spec);
-  RunsToFit(spec, unit);
+  const Parameters conditioned = WithRigConditions(start, unit);
+  CheckPathsIn(conditioned, spec);
+  FittedRuns(conditioned, unit, spec, false);  // the runs, their channels and sigmas
 }
 
 RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,

@@ -22,7 +22,19 @@ namespace {
 void ReplayFriction(const Unit& unit, Parameters* params, std::string* report) {
   const FrictionFitResult fit = FitFriction(unit, params->friction, FrictionFitOptions{});
   *report += fit.BriefReport();
+  if (!fit.has_values()) return;
+  const Parameters before = *params;
   fit.ApplyTo(params);  // a direction without slides holds the current values
+  // The next stage's prior is centred on these values: with the replay's
+  // errors, not those of the values they replace.
+  for (const FittedCoefficient& c : fit.coefficients) {
+    double was = c.value;
+    GetParameter(before, c.path, &was);
+    if (c.determined() && c.standard_error > 0)
+      params->uncertainty[c.path] = c.standard_error;
+    else if (c.value != was)
+      params->uncertainty.erase(c.path);
+  }
 }
 
 // The spec of one stage: its parameters only, in the order of `parameters`.
@@ -130,6 +142,10 @@ void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
   Judge(options, r);
 }
 
+bool StopRequested(const RefineOptions& options) {
+  return options.simulation.stop != nullptr && options.simulation.stop->load();
+}
+
 bool Better(const RefineResult& a, const RefineResult& b) {
   if (!a.has_values()) return false;
   if (!b.has_values()) return true;
@@ -138,6 +154,12 @@ bool Better(const RefineResult& a, const RefineResult& b) {
     return std::isnan(r.reduced_chi_square) ? HUGE_VAL : r.reduced_chi_square;
   };
   return finite_or_huge(a) < finite_or_huge(b);
+}
+
+std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept) {
+  if (!candidate.has_values()) return "its fit has no values";
+  if (kept.explained() && !candidate.explained()) return "the fit kept before is explained";
+  return "the fit kept before ends lower";
 }
 
 Attempts::Attempts(const Parameters& start, const Unit& unit, const FitSpec& spec,
@@ -174,7 +196,9 @@ void Attempts::ScreenFriction() {
                                         [](const FittedCoefficient& c) {
                                           return c.at_bound && c.path.rfind("friction.", 0) == 0;
                                         });
-  if ((Explained() && !friction_at_bound) || !options_.screen_friction_starts) return;
+  if ((Explained() && !friction_at_bound) || !options_.screen_friction_starts ||
+      StopRequested(options_))
+    return;
   // The fit from the given start stalled (not explained, out of iterations
   // or nothing usable) or left friction at a bound: a start whose friction
   // is read off the logs may lie in the basin that explains the runs.
@@ -182,7 +206,7 @@ void Attempts::ScreenFriction() {
   // Still not explained: the candidates ranked by the windows, where an error
   // of one direction's friction does not carry into the other's slides (with
   // both directions off, the whole runs hide the basin of each).
-  if (!Explained() && options_.screen_friction_windows) {
+  if (!Explained() && options_.screen_friction_windows && !StopRequested(options_)) {
     ScreenWith(ScreenMeasure::kWindows, false, &windows_screen_report_);
   }
 }
@@ -207,20 +231,22 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::st
   const bool shooting_too = measure == ScreenMeasure::kWindows && options_.windowed_refit;
   // Offers the fit from a candidate; true when kept.
   bool by_windows_first = false;
+  std::string why_not;  // the last candidate not kept
   const auto offer = [&](const Parameters& from) {
     StagedFit fit = FitCandidate(from, unit_, spec_, stages_, options_, shooting_too);
     const bool shot = fit.shot_too, first = fit.by_windows_first;
+    why_not = WhyNotKept(fit.result, best_.result);
     if (!Offer(std::move(fit), report)) return false;
     moved_start_shot_ = shot;
     by_windows_first = first;
     return true;
   };
   bool kept = offer(moved_start_);
-  if (!kept) *report += "; not kept: the fit kept before ends lower";
+  if (!kept) *report += "; not kept: " + why_not;
   // Not explained from the best candidate either: the next-best ones.
   int tried = 0, kept_alternative = 0;
   for (Parameters& alternative : screen.alternatives) {
-    if (Explained()) break;
+    if (Explained() || StopRequested(options_)) break;
     ++tried;
     if (offer(alternative)) {
       kept_alternative = tried;
@@ -255,7 +281,7 @@ void Attempts::CoordinateStart() {
   // coefficients before any simulation fit: nothing to search for.
   const bool well_above_noise = best_.result.reduced_chi_square > options_.coordinate_start_above;
   if ((Explained() && !well_above_noise) || options_.coordinate_rounds <= 0 ||
-      stages_.front().friction_replay)
+      stages_.front().friction_replay || StopRequested(options_))
     return;
   // Neither start explains the runs, or the kept fit is well above the
   // noise: the given one with one friction coefficient at a time moved (the
@@ -304,7 +330,7 @@ void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool
 }
 
 void Attempts::RobustRefit() {
-  if (Explained() || !options_.robust_refit) return;
+  if (Explained() || !options_.robust_refit || StopRequested(options_)) return;
   // A run the model cannot follow may be dragging the others: each run
   // through a Cauchy loss.
   Refit("robust refit (each run through a Cauchy loss)", stages_, true, &robust_report_);
@@ -312,7 +338,7 @@ void Attempts::RobustRefit() {
 
 void Attempts::WindowedRefit() {
   const std::optional<std::vector<FitStage>> windowed = ShootingFirst(stages_);
-  if (Explained() || !options_.windowed_refit || !windowed) return;
+  if (Explained() || !options_.windowed_refit || !windowed || StopRequested(options_)) return;
   if (moved_start_shot_) {
     windowed_report_ =
         "windowed refit (the last stage by multiple shooting first): not run, the screened start "
@@ -325,7 +351,8 @@ void Attempts::WindowedRefit() {
 
 void Attempts::Rescue() {
   RefineResult& r = best_.result;
-  if (Explained() || !r.has_values() || options_.rescue_starts <= 0) return;
+  if (Explained() || !r.has_values() || options_.rescue_starts <= 0 || StopRequested(options_))
+    return;
   // Stalled far above what the noise explains: the last stage again (from
   // what it started from in the fit from the given start, earlier stages
   // included; the kept fit's when that one found nothing) from starts in a

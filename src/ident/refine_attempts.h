@@ -56,6 +56,13 @@ void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
 // usable last.
 bool Better(const RefineResult& a, const RefineResult& b);
 
+// Why Better(candidate, kept) is false, as a report's words.
+std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept);
+
+// The caller raised options.simulation.stop (a batch unit's time limit): no
+// further attempt starts.
+bool StopRequested(const RefineOptions& options);
+
 class Attempts {
  public:
   // Fits from `start` through `stages`: the given attempt. Every argument
@@ -64,8 +71,8 @@ class Attempts {
            const std::vector<FitStage>& stages, const RefineOptions& options);
 
   // The later attempts, in order; each does nothing once the kept fit is
-  // explained (but the coordinate start above coordinate_start_above), or
-  // when its option is off.
+  // explained (but the coordinate start above coordinate_start_above), when
+  // its option is off, or once a stop is requested.
   void ScreenFriction();
   void CoordinateStart();
   void RobustRefit();

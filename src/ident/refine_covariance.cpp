@@ -182,7 +182,11 @@ double StencilJitter(const std::function<double(const std::vector<double>&)>& co
 void Summarise(const Eigen::MatrixXd& cov, const ParameterMap& map, const RefineOptions& options,
                RefineResult* r) {
   const int m = map.size();
-  if (cov.rows() != m) return;
+  if (cov.rows() != m) {
+    // No covariance: no standard errors, not the start's left on new values.
+    for (const FreeParameter& p : map.free) r->params.uncertainty.erase(p.path);
+    return;
+  }
   r->covariance = cov;
   r->correlation_flag = options.correlation_flag;
   for (int i = 0; i < m; ++i) {

@@ -17,14 +17,10 @@ namespace {
 constexpr const char* kEffect = "stick_creep";
 constexpr const char* kPath = "effects.stick_creep.v";
 
-bool Stopped(const RefineOptions& options) {
-  return options.simulation.stop != nullptr && options.simulation.stop->load();
-}
-
 // Why the creep fit does not apply to this refinement (empty: it does).
 std::string NotApplicable(const RefineResult& paper, const Parameters& start, const FitSpec& spec,
                           const RefineOptions& options) {
-  if (Stopped(options)) return "stopped";
+  if (StopRequested(options)) return "stopped";
   if (!paper.has_values()) return "the paper model's fit has no values";
   if (Creeps(start)) return "the start has stick_creep already";
   if (spec.FindParameter(kPath) != nullptr) return "the spec frees it itself";
@@ -107,6 +103,31 @@ void InPaperFrame(const RefineResult& paper, RefineResult* creep) {
   creep->stages = paper.stages;
 }
 
+// The profile over the creep speed: each of options.stick_creep_profile held
+// while `held` (the spec's last stage) is fitted with the `inner` options.
+struct Profile {
+  std::optional<RefineResult> best;  // the Better of the fits with values
+  std::string report;                // " v m/s measure," per point
+  int iterations = 0;                // of every fit
+};
+
+Profile FitProfile(const RefineResult& paper, const Unit& unit, const FitSpec& held,
+                   const RefineOptions& inner, const RefineOptions& options) {
+  Profile out;
+  for (const double v : options.stick_creep_profile) {
+    if (StopRequested(options)) break;
+    Parameters from = paper.params;
+    from.effects[kEffect]["v"] = v;
+    RefineResult r = Refine(from, unit, held, inner);
+    out.iterations += r.iterations;
+    char item[64];
+    std::snprintf(item, sizeof(item), " %.2g m/s %s,", v, Measure(r).c_str());
+    out.report += item;
+    if (r.has_values() && (!out.best || Better(r, *out.best))) out.best = std::move(r);
+  }
+  return out;
+}
+
 }  // namespace
 
 RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
@@ -123,21 +144,11 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   if (!inner.start_prior_centre)
     inner.start_prior_centre = std::make_shared<const Parameters>(start);
   const FitSpec held = LastStageOnly(spec);
-  std::string report = name + ", median reduced chi-square: v held at";
-  std::optional<RefineResult> best;
-  int iterations = 0;  // of the inner fits
-  for (const double v : options.stick_creep_profile) {
-    if (Stopped(options)) break;
-    Parameters from = paper.params;
-    from.effects[kEffect]["v"] = v;
-    RefineResult r = Refine(from, unit, held, inner);
-    iterations += r.iterations;
-    char item[64];
-    std::snprintf(item, sizeof(item), " %.2g m/s %s,", v, Measure(r).c_str());
-    report += item;
-    if (r.has_values() && (!best || Better(r, *best))) best = std::move(r);
-  }
-  if (!best || Stopped(options)) {
+  Profile profile = FitProfile(paper, unit, held, inner, options);
+  std::string report = name + ", median reduced chi-square: v held at" + profile.report;
+  std::optional<RefineResult>& best = profile.best;
+  int iterations = profile.iterations;  // of the inner fits
+  if (!best || StopRequested(options)) {
     paper.creep_report =
         report + (best ? " stopped" : " none with values") + "; the paper model's fit kept";
     paper.iterations += iterations;

@@ -421,8 +421,20 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   Screen screen(unit, spec, options, measure, alternatives > 0, &out);
   out.chi_square_before = out.chi_square_after = VerdictMeasure(start, unit, spec, options);
   ++out.candidates;
-  if (out.chi_square_before <= options.acceptable_reduced_chi_square && !even_if_explained)
+  const char* name = measure == ScreenMeasure::kWindows
+                         ? "friction start read off the logs, ranked by windows"
+                         : "friction start read off the logs";
+  char line[240];
+  if (out.chi_square_before <= options.acceptable_reduced_chi_square && !even_if_explained) {
+    // The fit from it failed the verdict, but the start itself passes: the
+    // screen's measure cannot rank a candidate above it.
+    std::snprintf(line, sizeof(line),
+                  "%s: not screened, the given start explains the runs from their logged starts "
+                  "(median reduced chi-square %.3g)",
+                  name, out.chi_square_before);
+    out.report = line;
     return out;
+  }
   const bool windows = measure == ScreenMeasure::kWindows;
   out.ranked_before = out.ranked_after = windows ? screen.Score(start) : out.chi_square_before;
   if (windows) {
@@ -438,8 +450,12 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   for (Parameters& alternative : out.alternatives) ForgetMoved(start, spec, &alternative);
   if (out.profiled) ForgetMoved(start, spec, &*out.profiled);
   out.moved = out.ranked_after < out.ranked_before;
-  if (!out.moved) return out;
-  char line[240];
+  if (!out.moved) {
+    std::snprintf(line, sizeof(line), "%s: no candidate ranks above the given start (%d simulated)",
+                  name, out.candidates);
+    out.report = line;
+    return out;
+  }
   if (windows) {
     out.chi_square_after = VerdictMeasure(out.start, unit, spec, options);
     ++out.candidates;
@@ -447,16 +463,16 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
     const std::size_t ranked =
         SubsetSize(all, static_cast<std::size_t>(options.screen_windows_max));
     std::snprintf(line, sizeof(line),
-                  "friction start read off the logs, ranked by windows (%zu of %zu): mean square "
+                  "%s (%zu of %zu): mean square "
                   "%.3g -> %.3g, median reduced chi-square %.3g -> %.3g (%d candidates simulated)",
-                  ranked, all, out.ranked_before, out.ranked_after, out.chi_square_before,
+                  name, ranked, all, out.ranked_before, out.ranked_after, out.chi_square_before,
                   out.chi_square_after, out.candidates);
   } else {
     out.chi_square_after = out.ranked_after;
     std::snprintf(line, sizeof(line),
-                  "friction start read off the logs: median reduced chi-square %.3g -> %.3g "
+                  "%s: median reduced chi-square %.3g -> %.3g "
                   "(%d candidates simulated)",
-                  out.chi_square_before, out.chi_square_after, out.candidates);
+                  name, out.chi_square_before, out.chi_square_after, out.candidates);
   }
   out.report = line;
   return out;

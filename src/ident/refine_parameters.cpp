@@ -7,22 +7,31 @@
 #include <string>
 
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
 
 namespace pneumaid::refine_internal {
 
-ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec) {
-  ParameterMap map;
-  map.free = spec.parameters;
+void CheckPathsIn(const Parameters& start, const FitSpec& spec) {
   for (const FreeParameter& p : spec.parameters) {
     double value = 0;
     if (!GetParameter(start, p.path, &value)) {
       throw InputError(spec.Name(), 0, 0,
                        "parameter " + p.path + " is not in the starting parameter set");
     }
+  }
+}
+
+ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec) {
+  CheckPathsIn(start, spec);
+  ParameterMap map;
+  map.free = spec.parameters;
+  for (const FreeParameter& p : spec.parameters) {
+    double value = 0;
+    GetParameter(start, p.path, &value);
     if (!(value >= p.lower && value <= p.upper)) {
       throw InputError(spec.Name(), 0, 0,
-                       "the start value of " + p.path + " (" + std::to_string(value) +
+                       "the start value of " + p.path + " (" + FormatDouble(value) +
                            ") lies outside its bounds");
     }
   }

@@ -69,6 +69,10 @@ struct ParameterMap {
 // start outside its bounds.
 ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec);
 
+// InputError naming the first of spec's parameters that `start` does not
+// have (an effect's coefficient whose effect it lacks).
+void CheckPathsIn(const Parameters& start, const FitSpec& spec);
+
 // `base` with the free parameters at coordinates theta.
 Parameters WithValues(const Parameters& base, const ParameterMap& map, const double* theta);
 

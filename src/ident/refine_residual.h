@@ -85,6 +85,16 @@ class ExperimentResidual final : public ceres::CostFunction {
     return true;
   }
 
+  // The residuals alone at z (the plain run); false where it fails.
+  bool ResidualsAt(const std::vector<double>& z, Eigen::VectorXd* residuals) const {
+    residuals->resize(num_residuals());
+    try {
+      return EvaluateOrFail(z, residuals->data(), nullptr);
+    } catch (...) {
+      return false;
+    }
+  }
+
   // 0.5 |r|^2 at the first Jacobian evaluation (NaN before one).
   double FirstCost() const { return first_cost_; }
 

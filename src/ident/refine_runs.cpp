@@ -5,6 +5,7 @@
 
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/params_yaml.h"
 #include "pneumaid/validate/validate.h"
 
 namespace pneumaid::refine_internal {
@@ -163,7 +164,7 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, doub
     const std::size_t begin = starts[w], end = w + 1 < starts.size() ? starts[w + 1] : n;
     FitExperiment window = run;
     window.measured = Slice(run.measured, begin, end);
-    window.id = run.id + "@" + std::to_string(run.measured.t_s[begin]);
+    window.id = run.id + "@" + FormatDouble(run.measured.t_s[begin]);
     window.parent = run.id;
     if (begin > 0) {
       window.initial = InitialState{};

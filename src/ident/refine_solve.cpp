@@ -15,6 +15,15 @@
 
 namespace pneumaid::refine_internal {
 
+void LogQuietly(const std::function<void(const std::string&)>& log, const std::string& line) {
+  try {
+    log(line);
+  } catch (...) {
+    // The caller's sink failed: its line is lost, the fit goes on (never
+    // throw through Ceres).
+  }
+}
+
 ceres::CallbackReturnType ProgressCallback::operator()(const ceres::IterationSummary& summary) {
   char line[200];
   std::snprintf(line, sizeof(line),
@@ -22,7 +31,7 @@ ceres::CallbackReturnType ProgressCallback::operator()(const ceres::IterationSum
                 summary.iteration, summary.cost, summary.cost_change, summary.step_norm,
                 summary.trust_region_radius, summary.step_is_successful ? "accepted" : "rejected",
                 summary.cumulative_time_in_seconds);
-  log_(line);
+  LogQuietly(log_, line);
   return ceres::SOLVER_CONTINUE;
 }
 
@@ -111,15 +120,16 @@ double SolveFromStarts(const std::vector<std::vector<double>>& starts,
     // A stage before the last only prepares the next one's start, which
     // refits its parameters anyway: it stops at the first small gain.
     StallCallback stall(last ? options.stall_iterations : 1,
-                        last ? options.stall_tolerance : options.earlier_stage_stall_tolerance);
+                        last ? options.stall_tolerance : options.earlier_stage_stall_tolerance,
+                        options.simulation.stop);
     ceres::Solver::Options start_options = solver;
     start_options.callbacks.push_back(&stall);
     ProgressCallback progress(options.log);
     if (options.log) start_options.callbacks.push_back(&progress);
     ceres::Solver::Summary summary;
     ceres::Solve(start_options, &p->problem, &summary);
-    if (options.log) options.log(summary.FullReport());
-    r->iterations += static_cast<int>(summary.iterations.size());
+    if (options.log) LogQuietly(options.log, summary.FullReport());
+    r->iterations += internal::StepsTried(summary);
     if (summary.IsSolutionUsable() && summary.final_cost < best_cost) {
       best_cost = summary.final_cost;
       best_theta = p->theta;
@@ -127,15 +137,20 @@ double SolveFromStarts(const std::vector<std::vector<double>>& starts,
       r->best_start = static_cast<int>(s);
       // Provisional: whether the runs are explained is the verdict's
       // (refine_verdict.h) once the last stage is done.
-      const bool stopped = summary.termination_type == ceres::CONVERGENCE ||
-                           summary.termination_type == ceres::USER_SUCCESS;
-      r->status = stopped ? FitStatus::kConverged : FitStatus::kNotConverged;
-      r->reason = stopped ? "" : summary.message;
+      const bool ended = !stall.stopped() && (summary.termination_type == ceres::CONVERGENCE ||
+                                              summary.termination_type == ceres::USER_SUCCESS);
+      r->status = ended ? FitStatus::kConverged : FitStatus::kNotConverged;
+      r->reason = ended ? "" : stall.stopped() ? "stopped" : summary.message;
     } else if (!std::isfinite(best_cost)) {
       r->reason = summary.message;
     }
+    r->starts = static_cast<int>(s + 1);
+    if (stall.stopped()) {  // no further starts; the best so far is not converged
+      if (r->status == FitStatus::kConverged) r->status = FitStatus::kNotConverged;
+      r->reason = "stopped";
+      break;
+    }
   }
-  r->starts = static_cast<int>(starts.size());
   p->theta = best_theta;
   p->offsets = best_offsets;
   return best_cost;
@@ -171,8 +186,23 @@ AtBest EvaluateAtBest(const std::vector<FitExperiment>& experiments, const Param
     const std::vector<double> z =
         Coordinates(experiments[k], p.theta.data(), map.size(), p.offsets[k].data());
     if (!p.blocks[k]->ResidualsAndJacobian(z, &cache)) {
+      // No information matrix without the run's sensitivities, but its
+      // residuals (the plain run, which may still succeed) count in the
+      // cost and the verdict; a run that cannot be simulated counts as not
+      // explained (NaN misfits).
       at.normal.resize(0, 0);
-      r->fitted[k].after = NAN;
+      Eigen::VectorXd residuals;
+      const bool simulated = p.blocks[k]->ResidualsAt(z, &residuals);
+      if (!simulated) residuals.setConstant(NAN);
+      r->fitted[k].after = simulated ? 0.5 * residuals.squaredNorm() : NAN;
+      if (simulated) r->final_cost += r->fitted[k].after;
+      if (!windows) {
+        if (simulated && experiments[k].FitsStart())
+          RecordStartOffset(experiments[k], p.offsets[k], r);
+        for (const ChannelMisfit& m :
+             RunMisfits(experiments[k], residuals, options.misfit_window_s))
+          r->misfits.push_back(m);
+      }
       continue;
     }
     r->fitted[k].after = 0.5 * cache->residuals.squaredNorm();

@@ -6,6 +6,7 @@
 
 #include <ceres/ceres.h>
 
+#include <atomic>
 #include <vector>
 
 #include "pneumaid/ident/refine.h"
@@ -22,7 +23,9 @@ struct Problem {
 
 // Stops a start once its cost has improved by less than stall_tolerance
 // (relative) over its last stall_iterations accepted steps, or after two
-// rejected steps in a row once it has moved. The
+// rejected steps in a row once it has moved, or when `stop` (a batch unit's
+// time limit, not owned, may be null) is raised: stopped() then, and the
+// fit is not converged however it ended. The
 // cost of an event-driven model is rough at about 1e-3 relative: each
 // stick/slip switch is located to the integrator's tolerance, so the
 // trajectories (and the cost) jitter at that level, far inside the
@@ -30,9 +33,18 @@ struct Problem {
 // steps against that jitter until its radius collapses.
 class StallCallback final : public ceres::IterationCallback {
  public:
-  StallCallback(int iterations, double tolerance) : window_(iterations), tolerance_(tolerance) {}
+  StallCallback(int iterations, double tolerance, const std::atomic<bool>* stop)
+      : window_(iterations), tolerance_(tolerance), stop_(stop) {}
+
+  bool stopped() const { return stopped_; }
 
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (stop_ != nullptr && stop_->load()) {
+      // The point reached stays usable (the caller's best so far), but the
+      // trial steps fail from here on: stop now, not by the rejection rule.
+      stopped_ = true;
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    }
     if (summary.iteration == 0) {
       accepted_.push_back(summary.cost);
       return ceres::SOLVER_CONTINUE;
@@ -60,9 +72,15 @@ class StallCallback final : public ceres::IterationCallback {
   static constexpr int kMaxRejectedInARow = 2;
   int window_;
   double tolerance_;
+  const std::atomic<bool>* stop_;
+  bool stopped_ = false;
   int rejected_in_a_row_ = 0;
   std::vector<double> accepted_;  // cost after each accepted step (and at the start)
 };
+
+// `line` into the caller's log sink; a sink that throws loses the line (the
+// fit goes on: nothing throws through Ceres).
+void LogQuietly(const std::function<void(const std::string&)>& log, const std::string& line);
 
 // One line per iteration into RefineOptions::log.
 class ProgressCallback final : public ceres::IterationCallback {

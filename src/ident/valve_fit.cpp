@@ -148,7 +148,7 @@ BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpB
   ceres::Solve(solver_options, &problem, &summary);
   fit.initial_cost = summary.initial_cost;
   fit.final_cost = summary.final_cost;
-  fit.iterations = static_cast<int>(summary.iterations.size());
+  fit.iterations = internal::StepsTried(summary);
   if (!summary.IsSolutionUsable()) return not_fitted("Ceres failed (" + summary.message + ")");
   ceres::Covariance::Options covariance_options;
   ceres::Covariance covariance(covariance_options);

@@ -6,6 +6,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
 #include <cstdlib>
 #include <set>
@@ -70,9 +72,10 @@ class YamlReader {
     return value;
   }
 
-  // A whole number in [lowest, highest]; `fallback` when the key is absent.
-  int Count(const YAML::Node& node, const std::string& path, double lowest, double highest,
-            int fallback) const {
+  // A whole number in [lowest, highest] (|highest| at most 2^53, exact in a
+  // double); `fallback` when the key is absent.
+  long long Whole(const YAML::Node& node, const std::string& path, double lowest, double highest,
+                  long long fallback) const {
     if (!node) return fallback;
     const double value = Number(node, path);
     if (value != std::floor(value) || value < lowest || value > highest) {
@@ -80,7 +83,14 @@ class YamlReader {
                      std::to_string(static_cast<long long>(lowest)) + " to " +
                      std::to_string(static_cast<long long>(highest)));
     }
-    return static_cast<int>(value);
+    return static_cast<long long>(value);
+  }
+
+  // Whole() for an int: highest at most INT_MAX.
+  int Count(const YAML::Node& node, const std::string& path, double lowest, double highest,
+            int fallback) const {
+    return static_cast<int>(
+        Whole(node, path, lowest, std::min<double>(highest, INT_MAX), fallback));
   }
 
   bool Flag(const YAML::Node& node) const {

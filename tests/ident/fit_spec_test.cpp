@@ -49,6 +49,16 @@ seed: 9
   EXPECT_TRUE(spec.fit_initial_pressures);  // the default
 }
 
+// A seed past an int's range is read whole (it once passed the reader's
+// check and was then cast to int); one past the stated range is refused.
+TEST(FitSpecTest, ASeedIsReadWholeUpToItsStatedRange) {
+  const char* head = "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n";
+  EXPECT_EQ(ParseFitSpec(std::string(head) + "seed: 4000000000\n", "s.yaml").seed, 4000000000u);
+  EXPECT_EQ(ParseFitSpec(std::string(head) + "seed: 1000000000000000\n", "s.yaml").seed,
+            1000000000000000u);
+  EXPECT_THROW(ParseFitSpec(std::string(head) + "seed: 1000000000000001\n", "s.yaml"), InputError);
+}
+
 TEST(FitSpecTest, InitialPressuresAreFittedOrTakenAsLogged) {
   for (const auto& [how, fitted] : {std::make_pair("logged", false), std::make_pair("fit", true)}) {
     const FitSpec spec = ParseFitSpec(std::string("format: pneumaid-fit/1\n"

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <atomic>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <string>
 
 #include "../../src/ident/refine_residual.h"
@@ -371,6 +373,53 @@ TEST_F(RefineSpecTest, ACoefficientOnItsBoundIsNamedInTheProvenance) {
   ASSERT_NE(bounded, nullptr);
   EXPECT_TRUE(bounded->at_bound);
   EXPECT_FALSE(result.Find("friction.negative.Fd")->at_bound);
+  // The entry records this refinement's counts (stages was once written 0).
+  const YAML::Node entry = YAML::Load(result.params.provenance_yaml)["refine"];
+  EXPECT_EQ(entry["stages"].as<int>(), result.stages);
+  EXPECT_EQ(result.stages, 1);
+  EXPECT_EQ(entry["starts"].as<int>(), result.starts);
+  EXPECT_EQ(entry["iterations"].as<int>(), result.iterations);
+}
+
+// A stop raised during the fit (a batch unit's time limit) ends it at the
+// point reached: values, but never "converged" (the stall rule once took the
+// failing trial steps after a stop for a stall), and no later attempt runs.
+TEST_F(RefineSpecTest, AStopRaisedDuringTheFitEndsItNotConverged) {
+  std::atomic<bool> stop{false};
+  RefineOptions options;
+  options.simulation.stop = &stop;
+  int lines = 0;
+  options.log = [&](const std::string&) {
+    if (++lines == 2) stop = true;  // after the first step
+  };
+  Parameters start;
+  start.friction.positive.dynamic_force_N = 1.5;
+  const RefineResult result = Refine(start, *unit_, TwoParameters(), options);
+  std::cout << result.BriefReport();
+  EXPECT_EQ(result.status, FitStatus::kNotConverged);
+  EXPECT_EQ(result.reason, "stopped");
+  EXPECT_TRUE(result.has_values());
+  EXPECT_GE(result.iterations, 1);
+  EXPECT_LE(result.iterations, 3);  // the step logged, and the one whose trial the stop failed
+  EXPECT_EQ(result.coordinate_report, "");
+  EXPECT_EQ(result.robust_report, "");
+}
+
+// A log sink that throws loses its lines, not the fit (nothing may throw
+// through Ceres' callbacks).
+TEST_F(RefineSpecTest, ALogSinkThatThrowsLosesItsLinesNotTheFit) {
+  RefineOptions options;
+  int lines = 0;
+  options.log = [&](const std::string&) {
+    ++lines;
+    throw std::runtime_error("sink full");
+  };
+  Parameters start;
+  start.friction.positive.dynamic_force_N = 1.5;
+  const RefineResult result = Refine(start, *unit_, TwoParameters(), options);
+  EXPECT_GT(lines, 2);
+  ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;
+  EXPECT_NEAR(result.params.friction.positive.dynamic_force_N, 0.5, 0.1);
 }
 
 // A coefficient whose prior (here its start's error, 1e-9 N, and a fraction
@@ -537,6 +586,36 @@ TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   EXPECT_NO_THROW(CheckRefinable(lagging, *unit_, spec, RefineOptions{}));
 }
 
+// CheckRefinable refuses what only the unit, the spec, the prior and the
+// options decide before any component fit: a coefficient of an effect the
+// prior lacks, options whose validation simulation is not valid, a channel
+// with no sigma anywhere.
+TEST_F(RefineSpecTest, CheckRefinableRefusesBeforeAnyFitWhatNoFitCanChange) {
+  const auto refused = [](const Unit& unit, const FitSpec& spec, const RefineOptions& options,
+                          const std::string& name) {
+    try {
+      CheckRefinable(Parameters{}, unit, spec, options);
+      ADD_FAILURE() << "accepted; expected a refusal naming " << name;
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what()).find(name), std::string::npos) << error.what();
+    }
+  };
+  FitSpec creep = TwoParameters();
+  creep.parameters.push_back({"effects.stick_creep.v", 1e-5, 1e-3, ParameterScale::kLog});
+  refused(*unit_, creep, RefineOptions{}, "effects.stick_creep.v");
+  RefineOptions options;
+  options.validation.relative_tolerance = 2;
+  refused(*unit_, TwoParameters(), options, "validation.relative_tolerance");
+  FitSpec flat = TwoParameters();
+  flat.channels["p1"] = ChannelWeight{};  // sigma 0: the manifest's, and here none is declared
+  Unit quiet = *unit_;
+  quiet.manifest.sensors.clear();
+  for (Experiment& e : quiet.experiments) {
+    for (double& p : e.columns["p1"]) p = 5e5;  // a log that never changes
+  }
+  refused(quiet, flat, RefineOptions{}, "channel p1");
+}
+
 // On data with model mismatch (smooth stick, the rig integrated tighter) the
 // event model's cost is rougher than its stall tolerance at the scale of the
 // errors (on this unit 2.2e-3 of the cost; of six friction sets tried, the
@@ -581,6 +660,10 @@ TEST(RefineOptionsTest, IsValidNamesTheBadField) {
       {"clustered_error_block_s", [](RefineOptions* o) { o->clustered_error_block_s = -0.1; }},
       {"cost_resolution_directions", [](RefineOptions* o) { o->cost_resolution_directions = -1; }},
       {"screen_windows_max", [](RefineOptions* o) { o->screen_windows_max = -1; }},
+      {"simulation.relative_tolerance",
+       [](RefineOptions* o) { o->simulation.relative_tolerance = 0; }},
+      {"validation.relative_tolerance",
+       [](RefineOptions* o) { o->validation.relative_tolerance = 2; }},
   };
   for (const auto& [field, spoil] : bad) {
     RefineOptions options;

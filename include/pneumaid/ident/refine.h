@@ -63,13 +63,15 @@ struct RefineOptions {
   // parameters, the stalls of issue 12 fail).
   double acceptable_reduced_chi_square = 10.0;
   // When neither the fit from the given start nor the ones from the screened
-  // starts explain the runs: one more fit, from the screened start kept (the
-  // best candidate's, or a next-best one whose fit was kept; the given start
-  // when the screen moved nothing), with each run through a Cauchy
+  // and coordinate starts explain the runs: one more fit, from the moved start
+  // kept last (the coordinate start's when its fit was kept, else the
+  // screen's best candidate or a next-best one whose fit was kept; the given
+  // start when nothing moved), with each run through a Cauchy
   // loss on its whole squared residual, quadratic up to
   // acceptable_reduced_chi_square times its residuals: a run the model
   // cannot follow (a chaotic stick-slip) then no longer drags the runs it can
-  // follow into another basin. The lower median of the fits is kept.
+  // follow into another basin. The Better fit is kept (explained first, then
+  // the lower median), as for every attempt below.
   bool robust_refit = true;
   // When the robust refit does not explain the runs either: one more fit
   // from the same start, with the last stage run first by multiple shooting
@@ -78,7 +80,7 @@ struct RefineOptions {
   // stick-slip sequence changes with small moves of friction, so whole runs
   // are a rugged cost even next to the optimum; windows are not. Not first:
   // where whole runs already find the basin, the windowed stage can lead
-  // elsewhere (docs/refinement.md). The lower median is kept. The same
+  // elsewhere (docs/refinement.md). The Better fit is kept. The same
   // switch has the windows' screen (screen_friction_windows) fit each of its
   // candidates so too when the fit from it is not explained, the Better of
   // the two kept; the windowed refit then does not repeat that fit from the
@@ -123,7 +125,7 @@ struct RefineOptions {
   // bound, the start's free friction (per direction with Fs and vs free) is
   // screened against friction read off the logs: a grid in Fs and vs, Fd and b from the
   // slides' force balance, each candidate simulated once; the fit is run
-  // again from the best, and the lower median of the two fits is kept
+  // again from the best, and the Better of the two fits is kept
   // (docs/refinement.md). A start that the fit takes to an explained end
   // costs nothing more.
   bool screen_friction_starts = true;
