@@ -12,6 +12,21 @@
 namespace pneumaid {
 namespace {
 
+// The last stage's fit is the result (values, covariance): a parameter an
+// earlier stage alone fits would move without a standard error. Why the
+// spec's last stage breaks that (empty: it does not).
+std::string LastStageGap(const FitSpec& spec) {
+  if (spec.stages.empty() || spec.stages.back().parameters.empty()) return "";
+  const std::vector<std::string>& last = spec.stages.back().parameters;
+  for (const FreeParameter& p : spec.parameters) {
+    if (std::find(last.begin(), last.end(), p.path) == last.end()) {
+      return "stages: the last stage must fit every free parameter ('" + p.path +
+             "' is not in it; list it there, or use all)";
+    }
+  }
+  return "";
+}
+
 const char* const kChannels[] = {"x", "p1", "p2", "q1", "q2"};
 
 // What the model accepts at a freeable path: a scalar's range or an effect
@@ -56,6 +71,8 @@ class FitSpecReader : internal::YamlReader {
     if (!spec.stages.empty() && spec.stages.back().friction_replay) {
       Fail(root["stages"], "stages: the last stage must fit through the simulator");
     }
+    if (const std::string gap = LastStageGap(spec); !gap.empty())
+      Fail(root["stages"][root["stages"].size() - 1], gap);
     if (const YAML::Node start = root["initial_pressures"]) {
       const std::string how = Text(start);
       if (how != "fit" && how != "logged") Fail(start, "initial_pressures: expected fit or logged");
@@ -246,6 +263,7 @@ bool FitSpec::IsValid(std::string* error) const {
   if (!stages.empty() && stages.back().friction_replay) {
     return fail("stages: the last stage must fit through the simulator");
   }
+  if (const std::string gap = LastStageGap(*this); !gap.empty()) return fail(gap);
   if (multistart < 0 || multistart > 1000) return fail("multistart: expected 0 to 1000");
   if (max_iterations < 1) return fail("max_iterations: expected >= 1");
   return true;

@@ -425,7 +425,7 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
                          ? "friction start read off the logs, ranked by windows"
                          : "friction start read off the logs";
   char line[240];
-  if (out.chi_square_before <= options.acceptable_reduced_chi_square && !even_if_explained) {
+  if (Explains(out.chi_square_before, options) && !even_if_explained) {
     // The fit from it failed the verdict, but the start itself passes: the
     // screen's measure cannot rank a candidate above it.
     std::snprintf(line, sizeof(line),

@@ -101,7 +101,7 @@ void Judge(const RefineOptions& options, RefineResult* r) {
               return !a_nan && a.reduced_chi_square > b.reduced_chi_square;
             });
   if (r->status == FitStatus::kNotFitted || r->status == FitStatus::kNotConverged) return;
-  if (r->reduced_chi_square <= options.acceptable_reduced_chi_square) {  // NaN: not
+  if (Explains(r->reduced_chi_square, options)) {
     r->status = FitStatus::kConverged;
     return;
   }

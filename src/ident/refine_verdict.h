@@ -29,6 +29,13 @@ std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit&
 // The median over runs of each run's reduced chi-square over its channels.
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits);
 
+// The verdict's rule, in one place: a median run reduced chi-square (of a
+// fit, or of a start simulated with no fit) that explains the runs (NaN:
+// not).
+inline bool Explains(double median_run_chi_square, const RefineOptions& options) {
+  return median_run_chi_square <= options.acceptable_reduced_chi_square;
+}
+
 // The verdict's measure of `params` with no fit: MedianRunChiSquare of the
 // WholeRunMisfits, HUGE_VAL where a run cannot be simulated. What the starts'
 // searches (the friction screen, the coordinate start) rank candidates by.

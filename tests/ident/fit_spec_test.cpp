@@ -133,6 +133,11 @@ INSTANTIATE_TEST_SUITE_P(
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "stages:\n  - [valve.increasing.q_max]\n",
                 4, "not under parameters"},
+        BadSpec{"a last stage that leaves a free parameter out",
+                "format: pneumaid-fit/1\nparameters:\n  pipeline.delta: {min: 1, max: 9}\n"
+                "  valve.increasing.q_max: {min: 1e-4, max: 1e-2}\n"
+                "stages:\n  - all\n  - [pipeline.delta]\n",
+                7, "the last stage must fit every free parameter ('valve.increasing.q_max'"},
         BadSpec{"friction replay as the last stage",
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "stages:\n  - {friction_replay: true}\n",
@@ -201,6 +206,9 @@ TEST(FitSpecTest, IsValidNamesTheBadFieldOfASpecBuiltInCode) {
       {"nothing to fit", [](FitSpec* s) { s->fit.clear(); }, "experiments.fit"},
       {"stage names a fixed parameter", [](FitSpec* s) { s->stages[0].parameters = {"gas.T"}; },
        "stages: 'gas.T' is not under parameters"},
+      {"last stage leaves one out",
+       [](FitSpec* s) { s->stages.back().parameters = {"pipeline.delta"}; },
+       "the last stage must fit every free parameter ("},
       {"replay last",
        [](FitSpec* s) {
          s->stages.back() = FitStage{{}, false, true};
