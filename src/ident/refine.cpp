@@ -290,7 +290,10 @@ void CheckRefinable(const Parameters& start, const Unit& unit, const FitSpec& sp
                     const RefineOptions& options) {
   CheckInputs(spec, options);
   CheckReplayModel(start, spec);
-  const Parameters conditioned = WithRigConditions(start, unit);
+  // `start` is the prior: identify puts the unit's own constants (geometry
+  // included) over it before the refinement, so the prior's geometry is no
+  // reason to refuse.
+  const Parameters conditioned = WithRigConditions(WithUnitConstants(start, unit), unit);
   CheckPathsIn(conditioned, spec);
   FittedRuns(conditioned, unit, spec, false);  // the runs, their channels and sigmas
 }

@@ -82,6 +82,12 @@ StagedFit FitStages(const Parameters& from, const Unit& unit, const FitSpec& spe
       break;
     }
     current = r.params;
+    if (StopRequested(options) && k + 1 < stages.size()) {
+      // The later stages could not simulate: this stage's values, not converged.
+      r.status = FitStatus::kNotConverged;
+      r.reason = "stopped after stage " + std::to_string(k + 1);
+      break;
+    }
   }
   r.iterations = iterations;
   JudgeLastStage(stages.back(), unit, spec, options, &r);
@@ -140,10 +146,6 @@ void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
     for (const ExperimentCost& e : r->fitted) r->final_cost += e.after;
   }
   Judge(options, r);
-}
-
-bool StopRequested(const RefineOptions& options) {
-  return options.simulation.stop != nullptr && options.simulation.stop->load();
 }
 
 bool Better(const RefineResult& a, const RefineResult& b) {

@@ -59,10 +59,6 @@ bool Better(const RefineResult& a, const RefineResult& b);
 // Why Better(candidate, kept) is false, as a report's words.
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept);
 
-// The caller raised options.simulation.stop (a batch unit's time limit): no
-// further attempt starts.
-bool StopRequested(const RefineOptions& options);
-
 class Attempts {
  public:
   // Fits from `start` through `stages`: the given attempt. Every argument

@@ -10,6 +10,7 @@
 #include "pneumaid/model/actuator.h"
 #include "pneumaid/model/effects.h"
 #include "refine_attempts.h"
+#include "refine_solve.h"
 
 namespace pneumaid::refine_internal {
 namespace {

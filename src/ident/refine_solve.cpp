@@ -15,6 +15,10 @@
 
 namespace pneumaid::refine_internal {
 
+bool StopRequested(const RefineOptions& options) {
+  return options.simulation.stop != nullptr && options.simulation.stop->load();
+}
+
 void LogQuietly(const std::function<void(const std::string&)>& log, const std::string& line) {
   try {
     log(line);
@@ -128,6 +132,9 @@ double SolveFromStarts(const std::vector<std::vector<double>>& starts,
     if (options.log) start_options.callbacks.push_back(&progress);
     ceres::Solver::Summary summary;
     ceres::Solve(start_options, &p->problem, &summary);
+    // A stop raised before the first callback (the start's own evaluation
+    // failed) never reaches the stall rule.
+    const bool stopped = stall.stopped() || StopRequested(options);
     if (options.log) LogQuietly(options.log, summary.FullReport());
     r->iterations += internal::StepsTried(summary);
     if (summary.IsSolutionUsable() && summary.final_cost < best_cost) {
@@ -137,15 +144,15 @@ double SolveFromStarts(const std::vector<std::vector<double>>& starts,
       r->best_start = static_cast<int>(s);
       // Provisional: whether the runs are explained is the verdict's
       // (refine_verdict.h) once the last stage is done.
-      const bool ended = !stall.stopped() && (summary.termination_type == ceres::CONVERGENCE ||
-                                              summary.termination_type == ceres::USER_SUCCESS);
+      const bool ended = !stopped && (summary.termination_type == ceres::CONVERGENCE ||
+                                      summary.termination_type == ceres::USER_SUCCESS);
       r->status = ended ? FitStatus::kConverged : FitStatus::kNotConverged;
-      r->reason = ended ? "" : stall.stopped() ? "stopped" : summary.message;
+      r->reason = ended ? "" : stopped ? "stopped" : summary.message;
     } else if (!std::isfinite(best_cost)) {
       r->reason = summary.message;
     }
     r->starts = static_cast<int>(s + 1);
-    if (stall.stopped()) {  // no further starts; the best so far is not converged
+    if (stopped) {  // no further starts; the best so far is not converged
       if (r->status == FitStatus::kConverged) r->status = FitStatus::kNotConverged;
       r->reason = "stopped";
       break;

@@ -78,6 +78,10 @@ class StallCallback final : public ceres::IterationCallback {
   std::vector<double> accepted_;  // cost after each accepted step (and at the start)
 };
 
+// The caller raised options.simulation.stop (a batch unit's time limit): no
+// further start, stage or attempt runs.
+bool StopRequested(const RefineOptions& options);
+
 // `line` into the caller's log sink; a sink that throws loses the line (the
 // fit goes on: nothing throws through Ceres).
 void LogQuietly(const std::function<void(const std::string&)>& log, const std::string& line);

@@ -384,25 +384,33 @@ TEST_F(RefineSpecTest, ACoefficientOnItsBoundIsNamedInTheProvenance) {
 // A stop raised during the fit (a batch unit's time limit) ends it at the
 // point reached: values, but never "converged" (the stall rule once took the
 // failing trial steps after a stop for a stall), and no later attempt runs.
+// With two stages, a stop in the first keeps its values (the second could
+// not simulate). The stop is raised from the log sink after the first
+// step's line: this start (Fd three times the truth's) takes more steps.
 TEST_F(RefineSpecTest, AStopRaisedDuringTheFitEndsItNotConverged) {
-  std::atomic<bool> stop{false};
-  RefineOptions options;
-  options.simulation.stop = &stop;
-  int lines = 0;
-  options.log = [&](const std::string&) {
-    if (++lines == 2) stop = true;  // after the first step
-  };
-  Parameters start;
-  start.friction.positive.dynamic_force_N = 1.5;
-  const RefineResult result = Refine(start, *unit_, TwoParameters(), options);
-  std::cout << result.BriefReport();
-  EXPECT_EQ(result.status, FitStatus::kNotConverged);
-  EXPECT_EQ(result.reason, "stopped");
-  EXPECT_TRUE(result.has_values());
-  EXPECT_GE(result.iterations, 1);
-  EXPECT_LE(result.iterations, 3);  // the step logged, and the one whose trial the stop failed
-  EXPECT_EQ(result.coordinate_report, "");
-  EXPECT_EQ(result.robust_report, "");
+  FitSpec staged = TwoParameters();
+  staged.stages = {FitStage{{"friction.positive.Fd"}}, FitStage{}};
+  for (const FitSpec& spec : {TwoParameters(), staged}) {
+    std::atomic<bool> stop{false};
+    RefineOptions options;
+    options.simulation.stop = &stop;
+    int lines = 0;
+    options.log = [&](const std::string&) {
+      if (++lines == 2) stop = true;  // after the first step
+    };
+    Parameters start;
+    start.friction.positive.dynamic_force_N = 1.5;
+    const RefineResult result = Refine(start, *unit_, spec, options);
+    std::cout << result.BriefReport();
+    const std::string stages = std::to_string(spec.stages.size()) + " stage(s)";
+    EXPECT_EQ(result.status, FitStatus::kNotConverged) << stages;
+    EXPECT_EQ(result.reason, spec.stages.empty() ? "stopped" : "stopped after stage 1") << stages;
+    EXPECT_TRUE(result.has_values()) << stages;
+    EXPECT_GE(result.iterations, 1);
+    EXPECT_LE(result.iterations, 3);  // the step logged, and the one whose trial the stop failed
+    EXPECT_EQ(result.coordinate_report, "");
+    EXPECT_EQ(result.robust_report, "");
+  }
 }
 
 // A log sink that throws loses its lines, not the fit (nothing may throw
@@ -614,6 +622,13 @@ TEST_F(RefineSpecTest, CheckRefinableRefusesBeforeAnyFitWhatNoFitCanChange) {
     for (double& p : e.columns["p1"]) p = 5e5;  // a log that never changes
   }
   refused(quiet, flat, RefineOptions{}, "channel p1");
+  // A prior of another bore is no reason: identify puts the unit's own
+  // constants over it before the refinement.
+  Parameters other_bore;
+  other_bore.cylinder.area_1_m2 *= 1.5;
+  other_bore.cylinder.area_2_m2 *= 1.5;
+  ASSERT_THROW(WithRigConditions(other_bore, *unit_), InputError);  // the rig's check
+  EXPECT_NO_THROW(CheckRefinable(other_bore, *unit_, TwoParameters(), RefineOptions{}));
 }
 
 // On data with model mismatch (smooth stick, the rig integrated tighter) the

@@ -342,11 +342,14 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
 
 // Throws InputError, as Refine(start, unit, spec, options) would, before any
 // fit: options or a spec that are not valid, a friction replay of a start
-// whose rod creeps, or nothing to fit on `unit` (a run or a kind of run the
-// unit does not log, a log that cannot be simulated, a run both fitted and
-// held out). For callers that fit the components first (identify --refine,
-// batch; `start` the prior, whose effects the identified set keeps): the unit
-// is refused before that work, not after it.
+// whose rod creeps, a spec parameter the start lacks (an effect's), or
+// nothing to fit on `unit` (a run or a kind of run the unit does not log, a
+// log that cannot be simulated, a run both fitted and held out, a channel
+// with no sigma). For callers that fit the components first (identify
+// --refine, batch; `start` the prior, whose effects the identified set keeps,
+// under the unit's own constants as identify puts them: the prior's geometry
+// is no reason to refuse): the unit is refused before that work, not after
+// it.
 void CheckRefinable(const Parameters& start, const Unit& unit, const FitSpec& spec,
                     const RefineOptions& options);
 
