@@ -21,6 +21,7 @@
 #include "refine_covariance.h"
 #include "refine_creep.h"
 #include "refine_residual.h"
+#include "refine_solve.h"
 #include "refine_verdict.h"
 
 // Refinement (refine.h): the checks of its inputs, its attempts in order
@@ -219,11 +220,12 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   Attempts attempts(start, unit, spec, stages, options);
-  attempts.ScreenFriction();
-  attempts.CoordinateStart();
-  attempts.RobustRefit();
-  attempts.WindowedRefit();
-  attempts.Rescue();
+  for (void (Attempts::*attempt)() :
+       {&Attempts::ScreenFriction, &Attempts::CoordinateStart, &Attempts::RobustRefit,
+        &Attempts::WindowedRefit, &Attempts::Rescue}) {
+    if (StopRequested(options)) break;  // none after a stop
+    (attempts.*attempt)();
+  }
   StagedFit& fit = attempts.best();
   RefineResult& r = fit.result;
   std::vector<ExperimentCost> before = std::move(fit.before);

@@ -198,9 +198,7 @@ void Attempts::ScreenFriction() {
                                         [](const FittedCoefficient& c) {
                                           return c.at_bound && c.path.rfind("friction.", 0) == 0;
                                         });
-  if ((Explained() && !friction_at_bound) || !options_.screen_friction_starts ||
-      StopRequested(options_))
-    return;
+  if ((Explained() && !friction_at_bound) || !options_.screen_friction_starts) return;
   // The fit from the given start stalled (not explained, out of iterations
   // or nothing usable) or left friction at a bound: a start whose friction
   // is read off the logs may lie in the basin that explains the runs.
@@ -283,7 +281,7 @@ void Attempts::CoordinateStart() {
   // coefficients before any simulation fit: nothing to search for.
   const bool well_above_noise = best_.result.reduced_chi_square > options_.coordinate_start_above;
   if ((Explained() && !well_above_noise) || options_.coordinate_rounds <= 0 ||
-      stages_.front().friction_replay || StopRequested(options_))
+      stages_.front().friction_replay)
     return;
   // Neither start explains the runs, or the kept fit is well above the
   // noise: the given one with one friction coefficient at a time moved (the
@@ -332,7 +330,7 @@ void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool
 }
 
 void Attempts::RobustRefit() {
-  if (Explained() || !options_.robust_refit || StopRequested(options_)) return;
+  if (Explained() || !options_.robust_refit) return;
   // A run the model cannot follow may be dragging the others: each run
   // through a Cauchy loss.
   Refit("robust refit (each run through a Cauchy loss)", stages_, true, &robust_report_);
@@ -340,7 +338,7 @@ void Attempts::RobustRefit() {
 
 void Attempts::WindowedRefit() {
   const std::optional<std::vector<FitStage>> windowed = ShootingFirst(stages_);
-  if (Explained() || !options_.windowed_refit || !windowed || StopRequested(options_)) return;
+  if (Explained() || !options_.windowed_refit || !windowed) return;
   if (moved_start_shot_) {
     windowed_report_ =
         "windowed refit (the last stage by multiple shooting first): not run, the screened start "
@@ -353,8 +351,7 @@ void Attempts::WindowedRefit() {
 
 void Attempts::Rescue() {
   RefineResult& r = best_.result;
-  if (Explained() || !r.has_values() || options_.rescue_starts <= 0 || StopRequested(options_))
-    return;
+  if (Explained() || !r.has_values() || options_.rescue_starts <= 0) return;
   // Stalled far above what the noise explains: the last stage again (from
   // what it started from in the fit from the given start, earlier stages
   // included; the kept fit's when that one found nothing) from starts in a

@@ -67,8 +67,9 @@ class Attempts {
            const std::vector<FitStage>& stages, const RefineOptions& options);
 
   // The later attempts, in order; each does nothing once the kept fit is
-  // explained (but the coordinate start above coordinate_start_above), when
-  // its option is off, or once a stop is requested.
+  // explained (but the coordinate start above coordinate_start_above), or
+  // when its option is off. The caller runs none after a stop
+  // (StopRequested); within one, the screens stop between candidates.
   void ScreenFriction();
   void CoordinateStart();
   void RobustRefit();

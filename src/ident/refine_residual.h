@@ -87,10 +87,6 @@ class ExperimentResidual final : public ceres::CostFunction {
 
   // The residuals alone at z (the plain run); false where it fails.
   bool ResidualsAt(const std::vector<double>& z, Eigen::VectorXd* residuals) const {
-    if (z == last_z_ && last_residuals_.size() == num_residuals()) {
-      *residuals = last_residuals_;  // the plain run at z is known
-      return true;
-    }
     residuals->resize(num_residuals());
     try {
       return EvaluateOrFail(z, residuals->data(), nullptr);
@@ -130,10 +126,9 @@ class ExperimentResidual final : public ceres::CostFunction {
 
   bool EvaluateOrFail(const std::vector<double>& z, double* residuals, double* jacobian) const {
     // Ceres evaluates the residuals at a trial point, then, if it accepts
-    // the step, residuals and Jacobian at the same point: the plain run is
-    // not repeated.
-    const bool known =
-        jacobian != nullptr && last_residuals_.size() == num_residuals() && z == last_z_;
+    // the step, residuals and Jacobian at the same point (and the verdict may
+    // ask for the residuals again): the plain run is not repeated.
+    const bool known = last_residuals_.size() == num_residuals() && z == last_z_;
     if (known) {
       std::copy(last_residuals_.data(), last_residuals_.data() + num_residuals(), residuals);
     } else {

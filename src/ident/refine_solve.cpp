@@ -132,9 +132,9 @@ double SolveFromStarts(const std::vector<std::vector<double>>& starts,
     if (options.log) start_options.callbacks.push_back(&progress);
     ceres::Solver::Summary summary;
     ceres::Solve(start_options, &p->problem, &summary);
-    // A stop raised before the first callback (the start's own evaluation
-    // failed) never reaches the stall rule.
-    const bool stopped = stall.stopped() || StopRequested(options);
+    // Also a stop raised before the first callback (the start's own
+    // evaluation failed), which the stall rule never saw.
+    const bool stopped = StopRequested(options);
     if (options.log) LogQuietly(options.log, summary.FullReport());
     r->iterations += internal::StepsTried(summary);
     if (summary.IsSolutionUsable() && summary.final_cost < best_cost) {

@@ -24,8 +24,8 @@ struct Problem {
 // Stops a start once its cost has improved by less than stall_tolerance
 // (relative) over its last stall_iterations accepted steps, or after two
 // rejected steps in a row once it has moved, or when `stop` (a batch unit's
-// time limit, not owned, may be null) is raised: stopped() then, and the
-// fit is not converged however it ended. The
+// time limit, not owned, may be null) is raised: the caller then reports
+// the fit not converged however it ended (StopRequested). The
 // cost of an event-driven model is rough at about 1e-3 relative: each
 // stick/slip switch is located to the integrator's tolerance, so the
 // trajectories (and the cost) jitter at that level, far inside the
@@ -36,13 +36,10 @@ class StallCallback final : public ceres::IterationCallback {
   StallCallback(int iterations, double tolerance, const std::atomic<bool>* stop)
       : window_(iterations), tolerance_(tolerance), stop_(stop) {}
 
-  bool stopped() const { return stopped_; }
-
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     if (stop_ != nullptr && stop_->load()) {
       // The point reached stays usable (the caller's best so far), but the
       // trial steps fail from here on: stop now, not by the rejection rule.
-      stopped_ = true;
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     }
     if (summary.iteration == 0) {
@@ -73,13 +70,12 @@ class StallCallback final : public ceres::IterationCallback {
   int window_;
   double tolerance_;
   const std::atomic<bool>* stop_;
-  bool stopped_ = false;
   int rejected_in_a_row_ = 0;
   std::vector<double> accepted_;  // cost after each accepted step (and at the start)
 };
 
-// The caller raised options.simulation.stop (a batch unit's time limit): no
-// further start, stage or attempt runs.
+// The caller raised options.simulation.stop (a batch unit's time limit; it
+// stays raised): no further start, stage or attempt runs.
 bool StopRequested(const RefineOptions& options);
 
 // `line` into the caller's log sink; a sink that throws loses the line (the
