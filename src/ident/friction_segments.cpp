@@ -30,78 +30,6 @@ RodReplayInput ReplayOf(const Segment& s, double mass_kg, const FrictionFitOptio
 
 namespace {
 
-// Slope [per sample] and curvature (second derivative, per sample^2) of
-// x[from, to) by a least-squares quadratic.
-std::pair<double, double> SlopeAndCurvature(const std::vector<double>& x, std::size_t from,
-                                            std::size_t to) {
-  const double n = static_cast<double>(to - from), mid = 0.5 * (n - 1);
-  double sxy = 0, sxx = 0, m2 = 0;
-  for (std::size_t i = from; i < to; ++i) m2 += std::pow(static_cast<double>(i - from) - mid, 2);
-  m2 /= n;
-  double sqy = 0, sqq = 0;
-  for (std::size_t i = from; i < to; ++i) {
-    const double j = static_cast<double>(i - from) - mid, q = j * j - m2;
-    sxy += j * x[i];
-    sxx += j * j;
-    sqy += q * x[i];
-    sqq += q * q;
-  }
-  return {sxx > 0 ? sxy / sxx : 0.0, sqq > 0 ? 2 * sqy / sqq : 0.0};
-}
-
-// The noise of SlopeAndCurvature over n samples of position noise sigma.
-std::pair<double, double> SlopeAndCurvatureNoise(double sigma, double n) {
-  const double mid = 0.5 * (n - 1);
-  double sxx = 0, m2 = 0, sqq = 0;
-  for (int i = 0; i < n; ++i) sxx += (i - mid) * (i - mid);
-  m2 = sxx / n;
-  for (int i = 0; i < n; ++i) sqq += std::pow((i - mid) * (i - mid) - m2, 2);
-  return {sigma / std::sqrt(sxx), 2 * sigma / std::sqrt(sqq)};
-}
-
-}  // namespace
-
-// Runs [begin, end) of at least `min_samples` samples whose values stay
-// within `band` of each other, and whose motion over the run's first four
-// fifths (the last samples may already be the slide) is that of a rod at
-// rest: slope below `max_speed` [per sample] and curvature below `max_accel`
-// [per sample^2], or within 4 x what the position noise gives. At a high
-// sample rate a slow slide stays inside the band for many samples, and the
-// apex of a reversal without stick looks still for a while: neither is stuck.
-Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, double max_speed,
-               double max_accel, double sigma) {
-  Runs runs;
-  std::size_t begin = 0;
-  while (begin < x.size()) {
-    double low = x[begin], high = x[begin];
-    std::size_t end = begin + 1;
-    while (end < x.size() && std::max(high, x[end]) - std::min(low, x[end]) <= band) {
-      low = std::min(low, x[end]);
-      high = std::max(high, x[end]);
-      ++end;
-    }
-    const std::size_t length = end - begin;
-    bool still = static_cast<int>(length) >= min_samples;
-    if (still) {
-      const std::size_t fitted = std::max<std::size_t>(3, length * 4 / 5);
-      const auto [slope, curvature] = SlopeAndCurvature(x, begin, begin + fitted);
-      const auto [slope_noise, curvature_noise] =
-          SlopeAndCurvatureNoise(sigma, static_cast<double>(fitted));
-      still = std::fabs(slope) <= std::max(max_speed, 4 * slope_noise) &&
-              std::fabs(curvature) <= std::max(max_accel, 4 * curvature_noise);
-    }
-    if (still) {
-      runs.push_back({begin, end});
-      begin = end;
-    } else {
-      ++begin;
-    }
-  }
-  return runs;
-}
-
-namespace {
-
 // While the rod sticks the chamber volumes are constant and the force varies
 // smoothly (the valve filling a closed chamber), so its noise is averaged out
 // by a quadratic fit over the last `window` samples of each stuck run. That
@@ -179,11 +107,6 @@ void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
 
 }  // namespace
 
-double Median(std::vector<double> values) {
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 namespace {
 
 // Where the rod may touch an end stop: within `contact_m` of either end.
@@ -192,18 +115,6 @@ int EndContact(double x, double half_stroke_m, double contact_m) {
   if (x > half_stroke_m - contact_m) return +1;
   if (x < -half_stroke_m + contact_m) return -1;
   return 0;
-}
-
-// The breakaway of the stuck run [stuck_begin, stuck_end): its last sample
-// still within 3 sigma of where the rod rested (the stuck band's edge is
-// crossed later, at a higher force; a long slide is far past it after a
-// quarter of its travel).
-std::size_t BreakawaySample(const std::vector<double>& x, std::size_t stuck_begin,
-                            std::size_t stuck_end, double sigma_x_m) {
-  const double rested = Median(std::vector<double>(x.begin() + stuck_begin, x.begin() + stuck_end));
-  std::size_t at = stuck_end - 1;
-  while (at > stuck_begin && std::fabs(x[at] - rested) > 3 * sigma_x_m) --at;
-  return at;
 }
 
 // The velocity error a forward replay carries from its breakaway on
@@ -226,7 +137,7 @@ struct StrokeLog {
   const std::vector<double>& force_N;  // smoothed where stuck (SmoothStuckForce)
   const std::vector<double>& x;
   double period_s;
-  double band_m;         // the stuck band (StuckBand)
+  double band_m;         // the stuck band (StuckRule::band_m)
   double half_stroke_m;  // the stroke ends at +-half_stroke_m
   double contact_m;      // within this of an end the rod may touch the stop
   double sigma_x_m;      // position noise (PositionNoise, times the lag inverse's gain)
@@ -252,7 +163,7 @@ bool StartAtStop(const StrokeLog& log, const Runs& runs, std::size_t k, int cont
   }
   if (leaving != 0) {
     data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
-        leaving * log.force_N[BreakawaySample(log.x, stuck_begin, stuck_end, log.sigma_x_m)]);
+        leaving * log.force_N[internal::BreakawaySample(log.x, runs[k], log.sigma_x_m)]);
   }
   if (leaving == -contact) ++data->stop_departures[leaving > 0 ? 0 : 1];
   std::size_t free_from = s->begin;  // after the last sample pushing into the stop
@@ -338,7 +249,7 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
     s.slide_begin = stuck_end - 1;
     double escape_error_m_per_s = 0;
     if (s.direction != 0) {
-      const std::size_t at = BreakawaySample(x, stuck_begin, stuck_end, log.sigma_x_m);
+      const std::size_t at = internal::BreakawaySample(x, runs[k], log.sigma_x_m);
       s.breakaway_force_N = s.direction * log.force_N[at];
       escape_error_m_per_s =
           EscapeVelocityError(x, at, s.end, log.period_s, options.breakaway_timing_per_s);
@@ -408,7 +319,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     }
     const Experiment& e = *log;
     const double sigma_x_m = reading_sigma_x_m * gain("x", period);
-    const double band = StuckBand(options, sigma_x_m);
+    const internal::StuckRule stuck = internal::StuckRuleOf(options, sigma_x_m, period);
     const auto &p1 = e.column("p1"), &p2 = e.column("p2");
     std::vector<double> force(p1.size());
     for (std::size_t i = 0; i < force.size(); ++i) {
@@ -417,11 +328,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     }
     std::vector<double> x = e.column("x");
     for (double& value : x) value -= zero_m;
-    const int min_samples = std::max(options.min_stuck_samples,
-                                     static_cast<int>(std::ceil(options.min_stuck_s / period)));
-    const Runs runs =
-        StuckRuns(x, band, min_samples, options.max_stuck_speed_m_per_s * period,
-                  options.max_stuck_acceleration_m_per_s2 * period * period, sigma_x_m);
+    const Runs runs = internal::StuckRuns(x, stuck);
     SmoothStuckForce(runs, options.stuck_force_samples, &force);
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
@@ -431,7 +338,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     const StrokeLog stroke_log{data.force_N.back(),
                                data.position_m.back(),
                                period,
-                               band,
+                               stuck.band_m,
                                0.5 * rig.stroke_m,
                                options.end_margin_m + 4 * sigma_x_m,
                                sigma_x_m,

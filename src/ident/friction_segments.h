@@ -15,6 +15,7 @@
 #include "pneumaid/ident/friction_fit.h"
 #include "pneumaid/ident/rod_replay.h"
 #include "pneumaid/io/rig_data.h"
+#include "stuck_phases.h"
 
 namespace pneumaid::friction_internal {
 
@@ -71,7 +72,7 @@ struct Segment {
   std::vector<double> weight;
 };
 
-using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
+using Runs = internal::Runs;
 
 // Everything the Ceres problem reads: per stroke log its driving force and
 // position, and the segments cut from them.
@@ -98,17 +99,7 @@ struct StrokeData {
 // rounding). PrepareStrokes grows it by the inverse of a declared x lag.
 double PositionNoise(const Unit& unit);
 
-// The stuck band of FrictionFitOptions widened by the position noise.
-inline double StuckBand(const FrictionFitOptions& options, double sigma_x_m) {
-  return options.stuck_band_m + 6.0 * sigma_x_m;
-}
-
-// The rod counts as stuck over these runs [begin, end) of a log.
-Runs StuckRuns(const std::vector<double>& x, double band, int min_samples, double max_speed,
-               double max_accel, double sigma);
-
-// The median of `values`.
-double Median(std::vector<double> values);
+using internal::Median;
 
 // Which logs PrepareStrokes reads, and what its force balance leaves out.
 struct StrokeSelection {

@@ -7,6 +7,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/validate/validate.h"
+#include "stuck_phases.h"
 
 namespace pneumaid::refine_internal {
 
@@ -115,9 +116,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
   return out;
 }
 
-// A stuck phase: the logged position stays within the band for at least this
-// many samples; a window is at least this long.
-constexpr std::size_t kMinStuckSamples = 5;
+// A window is at least this long.
 constexpr std::size_t kMinWindowSamples = 20;
 
 // Samples [begin, end) of a run as a trajectory.
@@ -137,27 +136,24 @@ Trajectory Slice(const Trajectory& run, std::size_t begin, std::size_t end) {
   return out;
 }
 
-// Multiple shooting (FitStage::windows): the run cut where the rod is stuck,
-// each window simulated from its logged state, v = 0, with the command-driven
-// lags replayed from the start of the log. `band_m`: how far a stuck rod's
-// logged position may wander (noise and ADC step).
-std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m,
+// Multiple shooting's windows (refine_runs.h).
+std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, double half_stroke_m,
                                    const std::array<double, kStartOffsets>& sample_sigma_Pa) {
   const std::vector<double>& x = run.measured.x_m;
+  const std::vector<double>& t = run.measured.t_s;
   const std::size_t n = x.size();
   std::vector<std::size_t> starts = {0};
   std::vector<double> rest_positions = {run.initial.position_m};
-  for (std::size_t i = 1; i < n;) {
-    std::size_t j = i;
-    while (j + 1 < n && std::fabs(x[j + 1] - x[i]) <= band_m) ++j;
-    if (j - i + 1 >= kMinStuckSamples && i - starts.back() >= kMinWindowSamples &&
-        n - i >= kMinWindowSamples) {
-      starts.push_back(i);
-      double sum = 0;
-      for (std::size_t k = i; k < i + kMinStuckSamples; ++k) sum += x[k];
-      rest_positions.push_back(sum / kMinStuckSamples);
+  if (n >= 2 * kMinWindowSamples) {
+    const double period_s = (t.back() - t.front()) / static_cast<double>(n - 1);
+    const internal::StuckRule rule =
+        internal::StuckRuleOf(FrictionFitOptions{}, sigma_x_m, period_s);
+    for (const auto& phase : internal::StuckRuns(x, rule)) {
+      const std::size_t begin = internal::ArrivalSample(x, phase, sigma_x_m);
+      if (begin - starts.back() < kMinWindowSamples || n - begin < kMinWindowSamples) continue;
+      starts.push_back(begin);
+      rest_positions.push_back(internal::RestPosition(x, phase));
     }
-    i = j + 1;
   }
   std::vector<FitExperiment> windows;
   for (std::size_t w = 0; w < starts.size(); ++w) {
@@ -199,7 +195,7 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
   const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);
   const PositionZero zero = ReadPositionZero(unit);
-  const double band = windows ? 4.0 * NoiseSigma(unit, "x") + 10e-6 : 0.0;
+  const double sigma_x_m = windows ? NoiseSigma(unit, "x") : 0.0;
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
     FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma, zero);
@@ -207,7 +203,7 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
       runs.push_back(std::move(run));
       continue;
     }
-    for (FitExperiment& window : Windows(run, band, half_stroke, sample_sigma)) {
+    for (FitExperiment& window : Windows(run, sigma_x_m, half_stroke, sample_sigma)) {
       runs.push_back(std::move(window));
     }
   }

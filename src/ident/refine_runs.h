@@ -88,11 +88,13 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
                       const std::array<double, kStartOffsets>& sample_sigma_Pa,
                       const PositionZero& zero);
 
-// Multiple shooting (FitStage::windows): the run cut where the rod is stuck,
-// each window simulated from its logged state, v = 0, with the command-driven
-// lags replayed from the start of the log. `band_m`: how far a stuck rod's
-// logged position may wander (noise and ADC step).
-std::vector<FitExperiment> Windows(const FitExperiment& run, double band_m, double half_stroke_m,
+// Multiple shooting (FitStage::windows): the run cut where the rod has come
+// to rest in a stuck phase (its arrival, stuck_phases.h), each window
+// simulated from its logged state (the phase's rest position, v = 0), with
+// the command-driven lags replayed from the start of the log. Stuck as the friction fit reads it
+// (stuck_phases.h, FrictionFitOptions' defaults) for position noise
+// `sigma_x_m`.
+std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, double half_stroke_m,
                                    const std::array<double, kStartOffsets>& sample_sigma_Pa);
 
 // The experiments `spec` fits on `unit` (CheckRefinable's rules).

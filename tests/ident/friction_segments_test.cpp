@@ -22,7 +22,6 @@ using friction_internal::PrepareStrokes;
 using friction_internal::ReadOffLogs;
 using friction_internal::Segment;
 using friction_internal::StrokeData;
-using friction_internal::StuckBand;
 
 // A horizontal rod at 2 kHz whose positive slides overshoot and turn back
 // before they stop (a strong drop, Fs 15 N to Fd 3 N, little viscous
@@ -72,7 +71,8 @@ TEST(FrictionSegmentsTest, ASlideThatTurnsBackBeforeItStopsIsReplayedForwardOnly
   const Unit unit = TurningStrokes(2000, 0.44);
   const FrictionFitOptions options;
   const StrokeData data = PrepareStrokes(unit, options);
-  const double band = StuckBand(options, friction_internal::PositionNoise(unit));
+  const double band =
+      internal::StuckRuleOf(options, friction_internal::PositionNoise(unit), 1 / 2000.0).band_m;
   int turning = 0, two_sided = 0;
   for (const Segment& s : data.segments) {
     if (s.direction == 0) continue;

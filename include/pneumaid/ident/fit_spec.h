@@ -34,7 +34,8 @@ struct ChannelWeight {
 struct FitStage {
   // Parameters freed in this stage (paths under `parameters`); empty: all.
   std::vector<std::string> parameters;
-  // Multiple shooting: cut every fitted run at the rod's stuck phases and
+  // Multiple shooting: cut every fitted run at the rod's stuck phases (as
+  // FrictionFitOptions' defaults read them) and
   // simulate each window from its logged state (x, p1, p2, v = 0, the tube's
   // lag replayed from the command). Errors cannot accumulate from window to
   // window, which widens the basin around the optimum; a later full-horizon

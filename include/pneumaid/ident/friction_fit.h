@@ -37,7 +37,9 @@ namespace pneumaid {
 struct FrictionFitOptions {
   // The rod counts as stuck over a run of samples whose logged positions stay
   // within this band [m] (plus 6 x the declared position noise); runs shorter
-  // than min_stuck_samples are not stuck phases.
+  // than min_stuck_samples are not stuck phases. (The one rule of "stuck":
+  // multiple shooting, FitStage::windows, cuts its windows by it too, with
+  // these defaults.)
   double stuck_band_m = 2.5e-5;
   int min_stuck_samples = 5;
   // ... and last at least min_stuck_s, and move like a rod at rest (least

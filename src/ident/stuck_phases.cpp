@@ -1,0 +1,108 @@
+#include "stuck_phases.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pneumaid::internal {
+
+namespace {
+
+// Slope [per sample] and curvature (second derivative, per sample^2) of
+// x[from, to) by a least-squares quadratic.
+std::pair<double, double> SlopeAndCurvature(const std::vector<double>& x, std::size_t from,
+                                            std::size_t to) {
+  const double n = static_cast<double>(to - from), mid = 0.5 * (n - 1);
+  double sxy = 0, sxx = 0, m2 = 0;
+  for (std::size_t i = from; i < to; ++i) m2 += std::pow(static_cast<double>(i - from) - mid, 2);
+  m2 /= n;
+  double sqy = 0, sqq = 0;
+  for (std::size_t i = from; i < to; ++i) {
+    const double j = static_cast<double>(i - from) - mid, q = j * j - m2;
+    sxy += j * x[i];
+    sxx += j * j;
+    sqy += q * x[i];
+    sqq += q * q;
+  }
+  return {sxx > 0 ? sxy / sxx : 0.0, sqq > 0 ? 2 * sqy / sqq : 0.0};
+}
+
+// The noise of SlopeAndCurvature over n samples of position noise sigma.
+std::pair<double, double> SlopeAndCurvatureNoise(double sigma, double n) {
+  const double mid = 0.5 * (n - 1);
+  double sxx = 0, m2 = 0, sqq = 0;
+  for (int i = 0; i < n; ++i) sxx += (i - mid) * (i - mid);
+  m2 = sxx / n;
+  for (int i = 0; i < n; ++i) sqq += std::pow((i - mid) * (i - mid) - m2, 2);
+  return {sigma / std::sqrt(sxx), 2 * sigma / std::sqrt(sqq)};
+}
+
+}  // namespace
+
+StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double period_s) {
+  StuckRule rule;
+  rule.band_m = options.stuck_band_m + 6.0 * sigma_x_m;
+  rule.min_samples = std::max(options.min_stuck_samples,
+                              static_cast<int>(std::ceil(options.min_stuck_s / period_s)));
+  rule.max_speed = options.max_stuck_speed_m_per_s * period_s;
+  rule.max_acceleration = options.max_stuck_acceleration_m_per_s2 * period_s * period_s;
+  rule.sigma_x_m = sigma_x_m;
+  return rule;
+}
+
+Runs StuckRuns(const std::vector<double>& x, const StuckRule& rule) {
+  Runs runs;
+  std::size_t begin = 0;
+  while (begin < x.size()) {
+    double low = x[begin], high = x[begin];
+    std::size_t end = begin + 1;
+    while (end < x.size() && std::max(high, x[end]) - std::min(low, x[end]) <= rule.band_m) {
+      low = std::min(low, x[end]);
+      high = std::max(high, x[end]);
+      ++end;
+    }
+    const std::size_t length = end - begin;
+    bool still = static_cast<int>(length) >= rule.min_samples;
+    if (still) {
+      const std::size_t fitted = std::max<std::size_t>(3, length * 4 / 5);
+      const auto [slope, curvature] = SlopeAndCurvature(x, begin, begin + fitted);
+      const auto [slope_noise, curvature_noise] =
+          SlopeAndCurvatureNoise(rule.sigma_x_m, static_cast<double>(fitted));
+      still = std::fabs(slope) <= std::max(rule.max_speed, 4 * slope_noise) &&
+              std::fabs(curvature) <= std::max(rule.max_acceleration, 4 * curvature_noise);
+    }
+    if (still) {
+      runs.push_back({begin, end});
+      begin = end;
+    } else {
+      ++begin;
+    }
+  }
+  return runs;
+}
+
+double Median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
+
+double RestPosition(const std::vector<double>& x, const std::pair<std::size_t, std::size_t>& run) {
+  return Median(std::vector<double>(x.begin() + run.first, x.begin() + run.second));
+}
+
+std::size_t ArrivalSample(const std::vector<double>& x,
+                          const std::pair<std::size_t, std::size_t>& run, double sigma_x_m) {
+  const double rested = RestPosition(x, run);
+  std::size_t at = run.first;
+  while (at + 1 < run.second && std::fabs(x[at] - rested) > 3 * sigma_x_m) ++at;
+  return at;
+}
+
+std::size_t BreakawaySample(const std::vector<double>& x,
+                            const std::pair<std::size_t, std::size_t>& run, double sigma_x_m) {
+  const double rested = RestPosition(x, run);
+  std::size_t at = run.second - 1;
+  while (at > run.first && std::fabs(x[at] - rested) > 3 * sigma_x_m) --at;
+  return at;
+}
+
+}  // namespace pneumaid::internal

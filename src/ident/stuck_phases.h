@@ -1,0 +1,60 @@
+// One home of the rule "the rod is stuck here", read off a logged position:
+// the friction fit cuts its replay segments at these phases
+// (friction_segments.h) and multiple shooting restarts its windows there
+// (refine_runs.h).
+#pragma once
+
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "pneumaid/ident/friction_fit.h"
+
+namespace pneumaid::internal {
+
+// Runs [begin, end) of samples.
+using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
+
+// What counts as stuck in a log sampled every `period_s` (FrictionFitOptions
+// holds the tunable part, with its documentation).
+struct StuckRule {
+  double band_m = 0;            // the spread of a stuck rod's logged positions
+  int min_samples = 0;          // the shortest stuck phase
+  double max_speed = 0;         // slope [m per sample]
+  double max_acceleration = 0;  // curvature [m per sample^2]
+  double sigma_x_m = 0;         // the position noise
+};
+
+// The rule of `options` for a log with position noise `sigma_x_m` sampled
+// every `period_s`: the band is stuck_band_m widened by 6 sigma, the shortest
+// phase min_stuck_samples or min_stuck_s, whichever is longer.
+StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double period_s);
+
+// Runs of at least `rule.min_samples` samples whose values stay within
+// `rule.band_m` of each other, and whose motion over the run's first four
+// fifths (the last samples may already be the slide) is that of a rod at
+// rest: slope below max_speed and curvature below max_acceleration, or within
+// 4 x what the position noise gives. At a high sample rate a slow slide stays
+// inside the band for many samples, and the apex of a reversal without stick
+// looks still for a while: neither is stuck.
+Runs StuckRuns(const std::vector<double>& x, const StuckRule& rule);
+
+// The median of `values`.
+double Median(std::vector<double> values);
+
+// Where the rod rested over the stuck run `run` of `x`: its median.
+double RestPosition(const std::vector<double>& x, const std::pair<std::size_t, std::size_t>& run);
+
+// The rod's arrival at rest in the stuck run `run`: its first sample within
+// 3 sigma of where the rod rested (the band's edge is crossed earlier, while
+// the rod still slows down).
+std::size_t ArrivalSample(const std::vector<double>& x,
+                          const std::pair<std::size_t, std::size_t>& run, double sigma_x_m);
+
+// The breakaway from the stuck run `run`: its last sample still within 3
+// sigma of where the rod rested (the band's edge is crossed later, at a
+// higher force; a long slide is far past it after a quarter of its travel).
+std::size_t BreakawaySample(const std::vector<double>& x,
+                            const std::pair<std::size_t, std::size_t>& run, double sigma_x_m);
+
+}  // namespace pneumaid::internal

@@ -1,0 +1,99 @@
+// The one rule of "stuck" (stuck_phases.h), on positions made here: a rod at
+// rest in noise, a slow slide, the apex of a reversal without stick.
+#include "../../src/ident/stuck_phases.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace pneumaid {
+namespace {
+
+constexpr double kSigmaM = 2e-6;  // position noise
+
+internal::StuckRule Rule(double period_s) {
+  return internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, period_s);
+}
+
+// x(t) sampled every period_s, with seeded Gaussian noise of kSigmaM.
+template <typename F>
+std::vector<double> Logged(double period_s, int samples, F x) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, kSigmaM);
+  std::vector<double> out(samples);
+  for (int i = 0; i < samples; ++i) out[i] = x(i * period_s) + noise(rng);
+  return out;
+}
+
+TEST(StuckPhasesTest, TheRuleScalesWithTheSampleRateAndTheNoise) {
+  const FrictionFitOptions options;
+  const internal::StuckRule fast = internal::StuckRuleOf(options, kSigmaM, 2e-4);
+  const internal::StuckRule slow = internal::StuckRuleOf(options, kSigmaM, 4e-3);
+  EXPECT_DOUBLE_EQ(fast.band_m, options.stuck_band_m + 6 * kSigmaM);
+  // min_stuck_s (4 ms) wins at 5 kHz, min_stuck_samples at 250 Hz.
+  EXPECT_EQ(fast.min_samples, 20);
+  EXPECT_EQ(slow.min_samples, options.min_stuck_samples);
+  EXPECT_DOUBLE_EQ(fast.max_speed, options.max_stuck_speed_m_per_s * 2e-4);
+  EXPECT_DOUBLE_EQ(slow.max_acceleration, options.max_stuck_acceleration_m_per_s2 * 16e-6);
+}
+
+// At 1 kHz: stuck 0.1 s, a slide of 20 mm/s for 0.1 s, stuck again: two
+// phases, the slide in neither, each ending where the rod leaves the band.
+TEST(StuckPhasesTest, ARodAtRestBetweenSlidesIsStuckTwice) {
+  const std::vector<double> x = Logged(
+      1e-3, 300, [](double t) { return t < 0.1 ? 0.0 : (t < 0.2 ? 0.02 * (t - 0.1) : 0.002); });
+  const internal::Runs runs = internal::StuckRuns(x, Rule(1e-3));
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_EQ(runs[0].first, 0u);
+  EXPECT_NEAR(static_cast<double>(runs[0].second), 102, 3);  // 37 um band at 20 um per sample
+  EXPECT_NEAR(static_cast<double>(runs[1].first), 198, 3);
+  EXPECT_EQ(runs[1].second, x.size());
+}
+
+// At 1 kHz a slide of 4 mm/s stays within the 37 um band for 9 samples, more
+// than the shortest phase (5): the band alone would call it stuck, its slope
+// (above max_stuck_speed_m_per_s, 2 mm/s) does not. At 1 mm/s it is stuck.
+TEST(StuckPhasesTest, ASlideFasterThanTheStuckSpeedIsNotStuckInsideTheBand) {
+  const internal::StuckRule rule = Rule(1e-3);
+  ASSERT_LT(4e-3 * 1e-3 * rule.min_samples, rule.band_m);
+  const std::vector<double> slide = Logged(1e-3, 400, [](double t) { return 4e-3 * t; });
+  EXPECT_TRUE(internal::StuckRuns(slide, rule).empty());
+  const std::vector<double> creep = Logged(1e-3, 400, [](double t) { return 1e-3 * t; });
+  EXPECT_FALSE(internal::StuckRuns(creep, rule).empty());
+}
+
+// At 5 kHz the apex of a reversal without stick (10 m/s^2) stays within the
+// band for about 5 ms, longer than the shortest phase (4 ms): its curvature
+// says it is not stuck. The same apex a hundred times gentler is stuck.
+TEST(StuckPhasesTest, TheApexOfAReversalIsNotStuck) {
+  const auto apex = [](double acceleration) {
+    return Logged(2e-4, 2000,
+                  [acceleration](double t) { return -0.5 * acceleration * (t - 0.2) * (t - 0.2); });
+  };
+  EXPECT_TRUE(internal::StuckRuns(apex(10.0), Rule(2e-4)).empty());
+  EXPECT_FALSE(internal::StuckRuns(apex(0.1), Rule(2e-4)).empty());
+}
+
+// At 1 kHz a rod that comes to rest from 100 um away (20 mm/s, slowing with
+// a 5 ms time constant) and at 0.2 s accelerates away at 20 m/s^2: one stuck
+// phase, which begins while the rod still slows down (inside the band,
+// slower than 2 mm/s). The rod arrives within 3 sigma (6 um) of its rest
+// after 5 ms ln(100 / 6) = 14 ms, and leaves it after 0.2 s + 0.8 ms.
+TEST(StuckPhasesTest, TheRodArrivesAfterThePhaseBeginsAndBreaksAwayWhereItLeavesItsRest) {
+  const auto truth = [](double t) {
+    return t < 0.2 ? -1e-4 * std::exp(-t / 0.005) : 10.0 * (t - 0.2) * (t - 0.2);
+  };
+  const std::vector<double> x = Logged(1e-3, 300, truth);
+  const internal::Runs runs = internal::StuckRuns(x, Rule(1e-3));
+  ASSERT_EQ(runs.size(), 1u);
+  const std::size_t arrival = internal::ArrivalSample(x, runs[0], kSigmaM);
+  EXPECT_GT(arrival, runs[0].first);
+  EXPECT_NEAR(static_cast<double>(arrival), 14, 4);  // noise moves the crossing
+  EXPECT_NEAR(static_cast<double>(internal::BreakawaySample(x, runs[0], kSigmaM)), 200, 1);
+  EXPECT_NEAR(internal::RestPosition(x, runs[0]), 0.0, kSigmaM);
+}
+
+}  // namespace
+}  // namespace pneumaid
