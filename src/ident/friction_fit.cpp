@@ -17,6 +17,7 @@
 #include "friction_segments.h"
 #include "friction_slides.h"
 #include "friction_starts.h"
+#include "median.h"
 #include "pneumaid/ident/rod_replay.h"
 #include "pneumaid/model/load.h"
 #include "quiet_solver.h"
@@ -154,7 +155,7 @@ bool HuberScales(const FrictionFitOptions& options, SegmentProblem* problem,
                  std::vector<double>* scale, int* outliers) {
   std::vector<double> mean_squares;
   if (!SegmentMeanSquares(problem, &mean_squares)) return false;
-  const double typical = Median(mean_squares);
+  const double typical = internal::Median(mean_squares);
   *outliers =
       static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
         return m > options.outlier_ratio * typical;

@@ -140,7 +140,7 @@ struct StrokeLog {
   double band_m;         // the stuck band (StuckRule::band_m)
   double half_stroke_m;  // the stroke ends at +-half_stroke_m
   double contact_m;      // within this of an end the rod may touch the stop
-  double sigma_x_m;      // position noise (PositionNoise, times the lag inverse's gain)
+  double sigma_x_m;      // position noise (internal::PositionNoise, times the lag inverse's gain)
   double drift_m;        // the force noise's drift per sample^2 (SetWeights)
 };
 
@@ -152,7 +152,7 @@ struct StrokeLog {
 // departure from the stop either way; false when no segment starts here.
 bool StartAtStop(const StrokeLog& log, const Runs& runs, std::size_t k, int contact,
                  const std::array<bool, 2>& from_stops, Segment* s, StrokeData* data) {
-  const auto [stuck_begin, stuck_end] = runs[k];
+  const std::size_t stuck_end = runs[k].second;
   // Which way the rod first moves beyond the band (a heavy rod moves off
   // slowly), before it sticks again.
   const std::size_t next_stuck = k + 1 < runs.size() ? runs[k + 1].first : log.x.size();
@@ -263,8 +263,6 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
 
 }  // namespace
 
-double PositionNoise(const Unit& unit) { return std::max(NoiseSigma(unit, "x"), 1e-7); }
-
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
                           const StrokeSelection& selection, const std::array<bool, 2>& from_stops) {
   const RigConstants& rig = unit.manifest.rig;
@@ -275,7 +273,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
   const auto gain = [&](const char* column, double period_s) {
     return internal::PlanLagInverse(period_s, unit.manifest.DeclaredTau(column, 0.0)).noise_gain;
   };
-  const double reading_sigma_x_m = PositionNoise(unit);
+  const double reading_sigma_x_m = internal::PositionNoise(unit);
   // A transducer's zero that the rests at the stops show: x is read less it,
   // as the refinement and validation read it, so that the stops, the end
   // zones and the replays from a stop are where the rod was.

@@ -94,13 +94,6 @@ struct StrokeData {
   std::string skipped;  // logs that could not be used, why
 };
 
-// The position noise of the logged x: NoiseOf x (declared, or estimated from
-// the logs), at least 0.1 um (a noise-free log still has its numbers'
-// rounding). PrepareStrokes grows it by the inverse of a declared x lag.
-double PositionNoise(const Unit& unit);
-
-using internal::Median;
-
 // Which logs PrepareStrokes reads, and what its force balance leaves out.
 struct StrokeSelection {
   // Experiment ids (any kind that logs x, p1 and p2); empty: the stroke logs.
@@ -113,8 +106,8 @@ struct StrokeSelection {
 // Per log its driving force and position, the replay segments cut from them
 // and the force-balance slides no segment covers (`SlideCluster::log` indexes
 // `experiments`). Declared lags of x, p1 and p2 are undone (meter_lag.h); the
-// position noise (PositionNoise, grown by the lag inverse's gain at the log's
-// interval) sets each log's StuckBand, end zones and replay weights.
+// position noise (internal::PositionNoise, grown by the lag inverse's gain at
+// the log's interval) sets each log's StuckRule, end zones and replay weights.
 // Slides that leave an end stop are replayed in the directions `from_stops`
 // names (positive first; FrictionFitOptions::end_slide_m > 0).
 StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "median.h"
+
 namespace pneumaid::friction_internal {
 
 namespace {
@@ -26,7 +28,8 @@ double MedianError(const std::vector<double>& forces, double median) {
   std::vector<double> deviations;
   for (double f : forces) deviations.push_back(std::fabs(f - median));
   // A median's error is sqrt(pi / 2) of a mean's; MAD -> sigma by 1.4826.
-  return 1.2533 * 1.4826 * Median(deviations) / std::sqrt(static_cast<double>(forces.size()));
+  return 1.2533 * 1.4826 * internal::Median(deviations) /
+         std::sqrt(static_cast<double>(forces.size()));
 }
 
 }  // namespace
@@ -89,7 +92,7 @@ LogsReading ReadOffLogs(const StrokeData& data, int direction, const Block& fall
   r.value = fallback;
   const std::vector<double> forces = Breakaways(data, direction);
   if (!forces.empty()) {
-    r.value[0] = Median(forces);
+    r.value[0] = internal::Median(forces);
     r.error[0] = MedianError(forces, r.value[0]);
     r.read[0] = true;
   }

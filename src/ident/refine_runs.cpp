@@ -195,7 +195,7 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
   const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);
   const PositionZero zero = ReadPositionZero(unit);
-  const double sigma_x_m = windows ? NoiseSigma(unit, "x") : 0.0;
+  const double sigma_x_m = windows ? internal::PositionNoise(unit) : 0.0;
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
     FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma, zero);

@@ -89,11 +89,10 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
                       const PositionZero& zero);
 
 // Multiple shooting (FitStage::windows): the run cut where the rod has come
-// to rest in a stuck phase (its arrival, stuck_phases.h), each window
-// simulated from its logged state (the phase's rest position, v = 0), with
-// the command-driven lags replayed from the start of the log. Stuck as the friction fit reads it
-// (stuck_phases.h, FrictionFitOptions' defaults) for position noise
-// `sigma_x_m`.
+// to rest in a stuck phase (ArrivalSample; stuck as the friction fit reads it
+// with FrictionFitOptions' defaults, for position noise `sigma_x_m`), each
+// window simulated from its logged state (the phase's rest position, v = 0),
+// with the command-driven lags replayed from the start of the log.
 std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, double half_stroke_m,
                                    const std::array<double, kStartOffsets>& sample_sigma_Pa);
 

@@ -1,7 +1,11 @@
 #include "stuck_phases.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
+
+#include "median.h"
+#include "pneumaid/io/channel_noise.h"
 
 namespace pneumaid::internal {
 
@@ -38,13 +42,16 @@ std::pair<double, double> SlopeAndCurvatureNoise(double sigma, double n) {
 
 }  // namespace
 
+double PositionNoise(const Unit& unit) { return std::max(NoiseSigma(unit, "x"), 1e-7); }
+
 StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double period_s) {
+  assert(period_s > 0 && std::isfinite(period_s));
   StuckRule rule;
   rule.band_m = options.stuck_band_m + 6.0 * sigma_x_m;
   rule.min_samples = std::max(options.min_stuck_samples,
                               static_cast<int>(std::ceil(options.min_stuck_s / period_s)));
-  rule.max_speed = options.max_stuck_speed_m_per_s * period_s;
-  rule.max_acceleration = options.max_stuck_acceleration_m_per_s2 * period_s * period_s;
+  rule.max_slope_m_per_sample = options.max_stuck_speed_m_per_s * period_s;
+  rule.max_curvature_m_per_sample2 = options.max_stuck_acceleration_m_per_s2 * period_s * period_s;
   rule.sigma_x_m = sigma_x_m;
   return rule;
 }
@@ -63,12 +70,13 @@ Runs StuckRuns(const std::vector<double>& x, const StuckRule& rule) {
     const std::size_t length = end - begin;
     bool still = static_cast<int>(length) >= rule.min_samples;
     if (still) {
-      const std::size_t fitted = std::max<std::size_t>(3, length * 4 / 5);
+      const std::size_t fitted = std::min(length, std::max<std::size_t>(3, length * 4 / 5));
       const auto [slope, curvature] = SlopeAndCurvature(x, begin, begin + fitted);
       const auto [slope_noise, curvature_noise] =
           SlopeAndCurvatureNoise(rule.sigma_x_m, static_cast<double>(fitted));
-      still = std::fabs(slope) <= std::max(rule.max_speed, 4 * slope_noise) &&
-              std::fabs(curvature) <= std::max(rule.max_acceleration, 4 * curvature_noise);
+      still =
+          std::fabs(slope) <= std::max(rule.max_slope_m_per_sample, 4 * slope_noise) &&
+          std::fabs(curvature) <= std::max(rule.max_curvature_m_per_sample2, 4 * curvature_noise);
     }
     if (still) {
       runs.push_back({begin, end});
@@ -80,12 +88,8 @@ Runs StuckRuns(const std::vector<double>& x, const StuckRule& rule) {
   return runs;
 }
 
-double Median(std::vector<double> values) {
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  return values[values.size() / 2];
-}
-
 double RestPosition(const std::vector<double>& x, const std::pair<std::size_t, std::size_t>& run) {
+  assert(run.first < run.second && run.second <= x.size());
   return Median(std::vector<double>(x.begin() + run.first, x.begin() + run.second));
 }
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "pneumaid/ident/friction_fit.h"
+#include "pneumaid/io/rig_data.h"
 
 namespace pneumaid::internal {
 
@@ -18,31 +19,33 @@ using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
 // What counts as stuck in a log sampled every `period_s` (FrictionFitOptions
 // holds the tunable part, with its documentation).
 struct StuckRule {
-  double band_m = 0;            // the spread of a stuck rod's logged positions
-  int min_samples = 0;          // the shortest stuck phase
-  double max_speed = 0;         // slope [m per sample]
-  double max_acceleration = 0;  // curvature [m per sample^2]
-  double sigma_x_m = 0;         // the position noise
+  double band_m = 0;                       // the spread of a stuck rod's logged positions
+  int min_samples = 0;                     // the shortest stuck phase
+  double max_slope_m_per_sample = 0;       // the fastest a stuck rod moves
+  double max_curvature_m_per_sample2 = 0;  // its largest acceleration
+  double sigma_x_m = 0;                    // the position noise
 };
 
+// The position noise the rule reads on `unit`'s logs: NoiseOf x (declared, or
+// estimated from the logs), at least 0.1 um (a noise-free log still has its
+// numbers' rounding).
+double PositionNoise(const Unit& unit);
+
 // The rule of `options` for a log with position noise `sigma_x_m` sampled
-// every `period_s`: the band is stuck_band_m widened by 6 sigma, the shortest
-// phase min_stuck_samples or min_stuck_s, whichever is longer.
+// every `period_s` (> 0): the band is stuck_band_m widened by 6 sigma, the
+// shortest phase min_stuck_samples or min_stuck_s, whichever is longer.
 StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double period_s);
 
 // Runs of at least `rule.min_samples` samples whose values stay within
 // `rule.band_m` of each other, and whose motion over the run's first four
 // fifths (the last samples may already be the slide) is that of a rod at
-// rest: slope below max_speed and curvature below max_acceleration, or within
+// rest: slope and curvature below the rule's, or within
 // 4 x what the position noise gives. At a high sample rate a slow slide stays
 // inside the band for many samples, and the apex of a reversal without stick
 // looks still for a while: neither is stuck.
 Runs StuckRuns(const std::vector<double>& x, const StuckRule& rule);
 
-// The median of `values`.
-double Median(std::vector<double> values);
-
-// Where the rod rested over the stuck run `run` of `x`: its median.
+// Where the rod rested over the stuck run `run` (not empty) of `x`: its median.
 double RestPosition(const std::vector<double>& x, const std::pair<std::size_t, std::size_t>& run);
 
 // The rod's arrival at rest in the stuck run `run`: its first sample within

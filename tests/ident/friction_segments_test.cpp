@@ -72,7 +72,7 @@ TEST(FrictionSegmentsTest, ASlideThatTurnsBackBeforeItStopsIsReplayedForwardOnly
   const FrictionFitOptions options;
   const StrokeData data = PrepareStrokes(unit, options);
   const double band =
-      internal::StuckRuleOf(options, friction_internal::PositionNoise(unit), 1 / 2000.0).band_m;
+      internal::StuckRuleOf(options, internal::PositionNoise(unit), 1 / 2000.0).band_m;
   int turning = 0, two_sided = 0;
   for (const Segment& s : data.segments) {
     if (s.direction == 0) continue;
@@ -148,7 +148,7 @@ TEST(FrictionSegmentsTest, ASlideFromAStopIsReplayedFromWhereTheForceLeavesTheSt
   const Protocol protocol = Strokes(1, 2000, {0.45, 0.95}, 0.0);
   const Unit unit =
       testing::WriteAndReadUnit(Synthesize(truth, protocol, 3, "E"), "friction_segments_stops");
-  const double sigma_m = friction_internal::PositionNoise(unit);
+  const double sigma_m = internal::PositionNoise(unit);
   const FrictionFitOptions options;
   const double zone = options.end_margin_m + 4 * sigma_m, half = 0.5 * truth.cylinder.stroke_m;
   const StrokeData data = PrepareStrokes(unit, options, {}, {true, true});

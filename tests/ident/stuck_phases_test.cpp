@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -17,26 +18,46 @@ internal::StuckRule Rule(double period_s) {
   return internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, period_s);
 }
 
-// x(t) sampled every period_s, with seeded Gaussian noise of kSigmaM.
+// x(t) sampled every period_s, with seeded Gaussian noise of sigma_m.
 template <typename F>
-std::vector<double> Logged(double period_s, int samples, F x) {
+std::vector<double> Logged(double period_s, int samples, F x, double sigma_m = kSigmaM) {
   std::mt19937 rng(7);
-  std::normal_distribution<double> noise(0.0, kSigmaM);
+  std::normal_distribution<double> noise(0.0, sigma_m);
   std::vector<double> out(samples);
   for (int i = 0; i < samples; ++i) out[i] = x(i * period_s) + noise(rng);
   return out;
 }
 
-TEST(StuckPhasesTest, TheRuleScalesWithTheSampleRateAndTheNoise) {
+// The options in SI, per sample at the log's rate: min_stuck_s (4 ms) sets
+// the shortest phase at 5 kHz, min_stuck_samples at 250 Hz.
+TEST(StuckPhasesTest, TheRuleTakesTheOptionsPerSample) {
   const FrictionFitOptions options;
   const internal::StuckRule fast = internal::StuckRuleOf(options, kSigmaM, 2e-4);
   const internal::StuckRule slow = internal::StuckRuleOf(options, kSigmaM, 4e-3);
-  EXPECT_DOUBLE_EQ(fast.band_m, options.stuck_band_m + 6 * kSigmaM);
-  // min_stuck_s (4 ms) wins at 5 kHz, min_stuck_samples at 250 Hz.
   EXPECT_EQ(fast.min_samples, 20);
   EXPECT_EQ(slow.min_samples, options.min_stuck_samples);
-  EXPECT_DOUBLE_EQ(fast.max_speed, options.max_stuck_speed_m_per_s * 2e-4);
-  EXPECT_DOUBLE_EQ(slow.max_acceleration, options.max_stuck_acceleration_m_per_s2 * 16e-6);
+  EXPECT_DOUBLE_EQ(fast.max_slope_m_per_sample, options.max_stuck_speed_m_per_s * 2e-4);
+  EXPECT_DOUBLE_EQ(slow.max_curvature_m_per_sample2,
+                   options.max_stuck_acceleration_m_per_s2 * 16e-6);
+}
+
+// A rod at rest logged at 1 kHz for 0.3 s with 8 um of noise: stuck all
+// along under the rule of its own noise (a band of 25 + 48 um), in pieces
+// under the rule of 2 um noise (25 + 12 um: the noise spreads further
+// within tens of samples).
+TEST(StuckPhasesTest, TheBandWidensWithTheNoise) {
+  const std::vector<double> x = Logged(
+      1e-3, 300, [](double) { return 0.0; }, 8e-6);
+  const auto longest = [&x](double sigma_m) {
+    std::size_t most = 0;
+    for (const auto& [begin, end] :
+         internal::StuckRuns(x, internal::StuckRuleOf(FrictionFitOptions{}, sigma_m, 1e-3))) {
+      most = std::max(most, end - begin);
+    }
+    return most;
+  };
+  EXPECT_EQ(longest(8e-6), x.size());
+  EXPECT_LT(longest(2e-6), x.size() / 2);
 }
 
 // At 1 kHz: stuck 0.1 s, a slide of 20 mm/s for 0.1 s, stuck again: two
@@ -52,7 +73,7 @@ TEST(StuckPhasesTest, ARodAtRestBetweenSlidesIsStuckTwice) {
   EXPECT_EQ(runs[1].second, x.size());
 }
 
-// At 1 kHz a slide of 4 mm/s stays within the 37 um band for 9 samples, more
+// At 1 kHz a slide of 4 mm/s stays within the 37 um band for 10 samples, more
 // than the shortest phase (5): the band alone would call it stuck, its slope
 // (above max_stuck_speed_m_per_s, 2 mm/s) does not. At 1 mm/s it is stuck.
 TEST(StuckPhasesTest, ASlideFasterThanTheStuckSpeedIsNotStuckInsideTheBand) {
@@ -78,9 +99,9 @@ TEST(StuckPhasesTest, TheApexOfAReversalIsNotStuck) {
 
 // At 1 kHz a rod that comes to rest from 100 um away (20 mm/s, slowing with
 // a 5 ms time constant) and at 0.2 s accelerates away at 20 m/s^2: one stuck
-// phase, which begins while the rod still slows down (inside the band,
-// slower than 2 mm/s). The rod arrives within 3 sigma (6 um) of its rest
-// after 5 ms ln(100 / 6) = 14 ms, and leaves it after 0.2 s + 0.8 ms.
+// phase, which begins while the rod still slows down (inside the band, the
+// fitted slope over the phase's first four fifths below 2 mm/s). The rod arrives within 3 sigma (6
+// um) of its rest after 5 ms ln(100 / 6) = 14 ms, and leaves it after 0.2 s + 0.8 ms.
 TEST(StuckPhasesTest, TheRodArrivesAfterThePhaseBeginsAndBreaksAwayWhereItLeavesItsRest) {
   const auto truth = [](double t) {
     return t < 0.2 ? -1e-4 * std::exp(-t / 0.005) : 10.0 * (t - 0.2) * (t - 0.2);

@@ -34,10 +34,10 @@ struct ChannelWeight {
 struct FitStage {
   // Parameters freed in this stage (paths under `parameters`); empty: all.
   std::vector<std::string> parameters;
-  // Multiple shooting: cut every fitted run at the rod's stuck phases (as
-  // FrictionFitOptions' defaults read them) and
-  // simulate each window from its logged state (x, p1, p2, v = 0, the tube's
-  // lag replayed from the command). Errors cannot accumulate from window to
+  // Multiple shooting: cut every fitted run where the rod arrived at rest in
+  // a stuck phase (as FrictionFitOptions' defaults read them) and simulate
+  // each window from its logged state there (the phase's median x, p1, p2,
+  // v = 0, the tube's lag replayed from the command). Errors cannot accumulate from window to
   // window, which widens the basin around the optimum; a later full-horizon
   // stage then fits the runs as the simulator replays them.
   bool windows = false;

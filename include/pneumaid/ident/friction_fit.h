@@ -36,7 +36,8 @@ namespace pneumaid {
 
 struct FrictionFitOptions {
   // The rod counts as stuck over a run of samples whose logged positions stay
-  // within this band [m] (plus 6 x the declared position noise); runs shorter
+  // within this band [m] (plus 6 x the position noise, declared or estimated,
+  // grown by the inverse of a declared x lag); runs shorter
   // than min_stuck_samples are not stuck phases. (The one rule of "stuck":
   // multiple shooting, FitStage::windows, cuts its windows by it too, with
   // these defaults.)

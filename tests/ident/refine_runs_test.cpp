@@ -1,0 +1,108 @@
+// The fitted runs of a refinement (src/ident/refine_runs.h): multiple
+// shooting's windows, on a run made here (1 kHz, 2 um of seeded noise).
+#include "../../src/ident/refine_runs.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "../../src/ident/stuck_phases.h"
+
+namespace pneumaid {
+namespace {
+
+constexpr double kSigmaM = 2e-6;
+constexpr double kPeriodS = 1e-3;
+constexpr int kSamples = 700;
+
+// The rod's true position: at rest at 0 for 0.1 s, a slide at 20 mm/s that
+// slows into a rest at 2 mm (its last 100 um with a 5 ms time constant), a
+// slide back at 20 mm/s from 0.4 s that slows into a rest at 0.2 mm. It
+// arrives within 3 sigma (6 um) of each rest 5 ms ln(100 / 6) = 14 ms after
+// it starts to slow down: at 0.209 s and 0.499 s.
+double TruePosition(double t) {
+  if (t < 0.1) return 0.0;
+  if (t < 0.195) return 0.02 * (t - 0.1);
+  if (t < 0.4) return 2e-3 - 1e-4 * std::exp(-(t - 0.195) / 0.005);
+  if (t < 0.485) return TruePosition(0.4 - 1e-12) - 0.02 * (t - 0.4);
+  return 2e-4 + 1e-4 * std::exp(-(t - 0.485) / 0.005);
+}
+
+// The run as logged; p1 and p2 rise by 1 kPa per sample, so that a window's
+// start can be told from its pressures.
+refine_internal::FitExperiment Logged() {
+  refine_internal::FitExperiment run;
+  run.id = "stroke";
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, kSigmaM);
+  for (int i = 0; i < kSamples; ++i) {
+    const double t = i * kPeriodS;
+    run.measured.t_s.push_back(t);
+    run.measured.u_V.push_back(0.5);
+    run.measured.x_m.push_back(TruePosition(t) + noise(rng));
+    run.measured.p1_Pa.push_back(3e5 + 1e3 * i);
+    run.measured.p2_Pa.push_back(2e5 + 1e3 * i);
+  }
+  run.initial.position_m = 0.0;
+  run.initial.p1_Pa = 3e5;
+  run.initial.p2_Pa = 2e5;
+  return run;
+}
+
+// The windows start at the log's start and where the rod arrived at each
+// rest, at least 20 samples apart. A slow arrival may split a rest in two
+// stuck phases (its first one holds the approach: here 490-518 and 518-700
+// ms); each window still starts at its phase's arrival, from its median.
+TEST(RefineRunsTest, AWindowStartsWhereTheRodArrivedAtEachRestFromThatRest) {
+  const refine_internal::FitExperiment run = Logged();
+  const std::vector<double>& x = run.measured.x_m;
+  const std::vector<refine_internal::FitExperiment> windows =
+      refine_internal::Windows(run, kSigmaM, 0.025, {0, 0});
+  ASSERT_GE(windows.size(), 3u);  // the first rest holds the log's start
+  // The first window is the run's start, as logged.
+  EXPECT_EQ(windows[0].measured.t_s.front(), 0.0);
+  EXPECT_EQ(windows[0].initial.position_m, run.initial.position_m);
+  EXPECT_EQ(windows[0].initial.p1_Pa, run.initial.p1_Pa);
+  const internal::Runs phases =
+      internal::StuckRuns(x, internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, kPeriodS));
+  std::size_t samples = windows[0].measured.size();
+  for (std::size_t w = 1; w < windows.size(); ++w) {
+    const refine_internal::FitExperiment& window = windows[w];
+    const std::size_t begin = std::lround(window.measured.t_s.front() / kPeriodS);
+    const auto phase = std::find_if(phases.begin(), phases.end(), [&](const auto& p) {
+      return internal::ArrivalSample(x, p, kSigmaM) == begin;
+    });
+    ASSERT_NE(phase, phases.end()) << "window " << w << " starts at no arrival";
+    EXPECT_EQ(window.initial.position_m, internal::RestPosition(x, *phase));
+    EXPECT_EQ(window.initial.p1_Pa, run.measured.p1_Pa[begin]);
+    EXPECT_EQ(window.initial.p2_Pa, run.measured.p2_Pa[begin]);
+    EXPECT_EQ(window.initial.lag_history_from_s, 0.0);
+    EXPECT_EQ(window.parent, "stroke");
+    EXPECT_GE(window.measured.size(), 20u);
+    // Contiguous: each window starts where the one before ended.
+    EXPECT_EQ(begin, samples);
+    samples += window.measured.size();
+  }
+  EXPECT_EQ(samples, x.size());
+  // The arrivals in closed form, and the rests.
+  EXPECT_NEAR(windows[1].measured.t_s.front(), 0.209, 0.004);
+  EXPECT_NEAR(windows[1].initial.position_m, 2e-3, 3 * kSigmaM);
+  EXPECT_NEAR(windows[2].measured.t_s.front(), 0.499, 0.004);
+  EXPECT_NEAR(windows[2].initial.position_m, 2e-4, 3 * kSigmaM);
+}
+
+// A rest beyond the model's stroke (a rod on its stop reads a few sigma past
+// it) starts its window at the stop.
+TEST(RefineRunsTest, AWindowStartsWithinTheStroke) {
+  const std::vector<refine_internal::FitExperiment> windows =
+      refine_internal::Windows(Logged(), kSigmaM, 1.5e-3, {0, 0});
+  ASSERT_EQ(windows.size(), 3u);
+  EXPECT_EQ(windows[1].initial.position_m, 1.5e-3);
+}
+
+}  // namespace
+}  // namespace pneumaid
