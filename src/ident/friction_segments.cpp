@@ -80,9 +80,8 @@ void SetWeights(double sigma_x_m, double drift_m, double escape_error_m_per_s, S
 // A slide that turned back before it stopped (beyond `band`) arrives in the
 // other direction, which a backward replay in the slide's direction cannot
 // follow: it stays one-sided, replayed forward through its reversal.
-void MarkArrest(const std::vector<double>& x, std::size_t slide_begin,
-                std::pair<std::size_t, std::size_t> next, double period_s, double band,
-                Segment* s) {
+void MarkArrest(const std::vector<double>& x, std::size_t slide_begin, internal::Run next,
+                double period_s, double band, Segment* s) {
   const auto [arrest, next_end] = next;
   double farthest = s->direction * x[arrest];
   for (std::size_t j = slide_begin; j < arrest; ++j)
@@ -137,11 +136,10 @@ struct StrokeLog {
   const std::vector<double>& force_N;  // smoothed where stuck (SmoothStuckForce)
   const std::vector<double>& x;
   double period_s;
-  double band_m;         // the stuck band (StuckRule::band_m)
-  double half_stroke_m;  // the stroke ends at +-half_stroke_m
-  double contact_m;      // within this of an end the rod may touch the stop
-  double sigma_x_m;      // position noise (internal::PositionNoise, times the lag inverse's gain)
-  double drift_m;        // the force noise's drift per sample^2 (SetWeights)
+  internal::StuckRule stuck;  // its noise: internal::PositionNoise, times the lag inverse's gain
+  double half_stroke_m;       // the stroke ends at +-half_stroke_m
+  double contact_m;           // within this of an end the rod may touch the stop
+  double drift_m;             // the force noise's drift per sample^2 (SetWeights)
 };
 
 // A rod stuck at an end may rest on the stop, whose force is not friction:
@@ -159,11 +157,11 @@ bool StartAtStop(const StrokeLog& log, const Runs& runs, std::size_t k, int cont
   int leaving = 0;
   for (std::size_t i = stuck_end; i < next_stuck && leaving == 0; ++i) {
     const double travel = log.x[i] - log.x[stuck_end - 1];
-    if (std::fabs(travel) > log.band_m) leaving = travel > 0 ? +1 : -1;
+    if (std::fabs(travel) > log.stuck.band_m) leaving = travel > 0 ? +1 : -1;
   }
   if (leaving != 0) {
     data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
-        leaving * log.force_N[internal::BreakawaySample(log.x, runs[k], log.sigma_x_m)]);
+        leaving * log.force_N[internal::BreakawaySample(log.x, runs[k], log.stuck)]);
   }
   if (leaving == -contact) ++data->stop_departures[leaving > 0 ? 0 : 1];
   std::size_t free_from = s->begin;  // after the last sample pushing into the stop
@@ -243,20 +241,20 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
     // A slide from a stop goes the way the rod was seen leaving it, also when
     // its first end_slide_m stay inside the band.
     const double travel = x[s.end - 1] - s.initial_position_m;
-    s.direction = contact != 0          ? -contact
-                  : travel > log.band_m ? +1
-                                        : (travel < -log.band_m ? -1 : 0);
+    s.direction = contact != 0                ? -contact
+                  : travel > log.stuck.band_m ? +1
+                                              : (travel < -log.stuck.band_m ? -1 : 0);
     s.slide_begin = stuck_end - 1;
     double escape_error_m_per_s = 0;
     if (s.direction != 0) {
-      const std::size_t at = internal::BreakawaySample(x, runs[k], log.sigma_x_m);
+      const std::size_t at = internal::BreakawaySample(x, runs[k], log.stuck);
       s.breakaway_force_N = s.direction * log.force_N[at];
       escape_error_m_per_s =
           EscapeVelocityError(x, at, s.end, log.period_s, options.breakaway_timing_per_s);
     }
     if (s.direction != 0 && k + 1 < runs.size() && !cut)
-      MarkArrest(x, stuck_end, runs[k + 1], log.period_s, log.band_m, &s);
-    SetWeights(log.sigma_x_m, log.drift_m, escape_error_m_per_s, &s);
+      MarkArrest(x, stuck_end, runs[k + 1], log.period_s, log.stuck.band_m, &s);
+    SetWeights(log.stuck.sigma_x_m, log.drift_m, escape_error_m_per_s, &s);
     data->segments.push_back(s);
   }
 }
@@ -336,10 +334,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     const StrokeLog stroke_log{data.force_N.back(),
                                data.position_m.back(),
                                period,
-                               stuck.band_m,
+                               stuck,
                                0.5 * rig.stroke_m,
                                options.end_margin_m + 4 * sigma_x_m,
-                               sigma_x_m,
                                drift_m};
     CutSegments(stroke_log, runs, options, replay_stops, &data);
     if (!options.force_balance) continue;

@@ -149,7 +149,7 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, d
     const internal::StuckRule rule =
         internal::StuckRuleOf(FrictionFitOptions{}, sigma_x_m, period_s);
     for (const auto& phase : internal::StuckRuns(x, rule)) {
-      const std::size_t begin = internal::ArrivalSample(x, phase, sigma_x_m);
+      const std::size_t begin = internal::ArrivalSample(x, phase, rule);
       if (begin - starts.back() < kMinWindowSamples || n - begin < kMinWindowSamples) continue;
       starts.push_back(begin);
       rest_positions.push_back(internal::RestPosition(x, phase));

@@ -53,6 +53,7 @@ StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, doubl
   rule.max_slope_m_per_sample = options.max_stuck_speed_m_per_s * period_s;
   rule.max_curvature_m_per_sample2 = options.max_stuck_acceleration_m_per_s2 * period_s * period_s;
   rule.sigma_x_m = sigma_x_m;
+  rule.rest_tolerance_m = kRestSigmas * sigma_x_m;
   return rule;
 }
 
@@ -88,24 +89,22 @@ Runs StuckRuns(const std::vector<double>& x, const StuckRule& rule) {
   return runs;
 }
 
-double RestPosition(const std::vector<double>& x, const std::pair<std::size_t, std::size_t>& run) {
+double RestPosition(const std::vector<double>& x, const Run& run) {
   assert(run.first < run.second && run.second <= x.size());
   return Median(std::vector<double>(x.begin() + run.first, x.begin() + run.second));
 }
 
-std::size_t ArrivalSample(const std::vector<double>& x,
-                          const std::pair<std::size_t, std::size_t>& run, double sigma_x_m) {
+std::size_t ArrivalSample(const std::vector<double>& x, const Run& run, const StuckRule& rule) {
   const double rested = RestPosition(x, run);
   std::size_t at = run.first;
-  while (at + 1 < run.second && std::fabs(x[at] - rested) > 3 * sigma_x_m) ++at;
+  while (at + 1 < run.second && std::fabs(x[at] - rested) > rule.rest_tolerance_m) ++at;
   return at;
 }
 
-std::size_t BreakawaySample(const std::vector<double>& x,
-                            const std::pair<std::size_t, std::size_t>& run, double sigma_x_m) {
+std::size_t BreakawaySample(const std::vector<double>& x, const Run& run, const StuckRule& rule) {
   const double rested = RestPosition(x, run);
   std::size_t at = run.second - 1;
-  while (at > run.first && std::fabs(x[at] - rested) > 3 * sigma_x_m) --at;
+  while (at > run.first && std::fabs(x[at] - rested) > rule.rest_tolerance_m) --at;
   return at;
 }
 

@@ -13,8 +13,9 @@
 
 namespace pneumaid::internal {
 
-// Runs [begin, end) of samples.
-using Runs = std::vector<std::pair<std::size_t, std::size_t>>;
+// A run [begin, end) of samples, and runs.
+using Run = std::pair<std::size_t, std::size_t>;
+using Runs = std::vector<Run>;
 
 // What counts as stuck in a log sampled every `period_s` (FrictionFitOptions
 // holds the tunable part, with its documentation).
@@ -24,6 +25,7 @@ struct StuckRule {
   double max_slope_m_per_sample = 0;       // the fastest a stuck rod moves
   double max_curvature_m_per_sample2 = 0;  // its largest acceleration
   double sigma_x_m = 0;                    // the position noise
+  double rest_tolerance_m = 0;             // a reading this close to the rest is at rest
 };
 
 // The position noise the rule reads on `unit`'s logs: NoiseOf x (declared, or
@@ -31,9 +33,13 @@ struct StuckRule {
 // numbers' rounding).
 double PositionNoise(const Unit& unit);
 
+// A reading within this many sigma of where the rod rests is at rest.
+constexpr double kRestSigmas = 3.0;
+
 // The rule of `options` for a log with position noise `sigma_x_m` sampled
 // every `period_s` (> 0): the band is stuck_band_m widened by 6 sigma, the
-// shortest phase min_stuck_samples or min_stuck_s, whichever is longer.
+// shortest phase min_stuck_samples or min_stuck_s, whichever is longer; a
+// reading is at rest within kRestSigmas sigma of the rest.
 StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double period_s);
 
 // Runs of at least `rule.min_samples` samples whose values stay within
@@ -46,18 +52,17 @@ StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, doubl
 Runs StuckRuns(const std::vector<double>& x, const StuckRule& rule);
 
 // Where the rod rested over the stuck run `run` (not empty) of `x`: its median.
-double RestPosition(const std::vector<double>& x, const std::pair<std::size_t, std::size_t>& run);
+double RestPosition(const std::vector<double>& x, const Run& run);
 
 // The rod's arrival at rest in the stuck run `run`: its first sample within
-// 3 sigma of where the rod rested (the band's edge is crossed earlier, while
-// the rod still slows down).
-std::size_t ArrivalSample(const std::vector<double>& x,
-                          const std::pair<std::size_t, std::size_t>& run, double sigma_x_m);
+// `rule.rest_tolerance_m` of where the rod rested (the band's edge is crossed
+// earlier, while the rod still slows down).
+std::size_t ArrivalSample(const std::vector<double>& x, const Run& run, const StuckRule& rule);
 
-// The breakaway from the stuck run `run`: its last sample still within 3
-// sigma of where the rod rested (the band's edge is crossed later, at a
-// higher force; a long slide is far past it after a quarter of its travel).
-std::size_t BreakawaySample(const std::vector<double>& x,
-                            const std::pair<std::size_t, std::size_t>& run, double sigma_x_m);
+// The breakaway from the stuck run `run`: its last sample still within
+// `rule.rest_tolerance_m` of where the rod rested (the band's edge is crossed
+// later, at a higher force; a long slide is far past it after a quarter of
+// its travel).
+std::size_t BreakawaySample(const std::vector<double>& x, const Run& run, const StuckRule& rule);
 
 }  // namespace pneumaid::internal

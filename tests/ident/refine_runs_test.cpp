@@ -67,14 +67,14 @@ TEST(RefineRunsTest, AWindowStartsWhereTheRodArrivedAtEachRestFromThatRest) {
   EXPECT_EQ(windows[0].measured.t_s.front(), 0.0);
   EXPECT_EQ(windows[0].initial.position_m, run.initial.position_m);
   EXPECT_EQ(windows[0].initial.p1_Pa, run.initial.p1_Pa);
-  const internal::Runs phases =
-      internal::StuckRuns(x, internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, kPeriodS));
+  const internal::StuckRule rule = internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, kPeriodS);
+  const internal::Runs phases = internal::StuckRuns(x, rule);
   std::size_t samples = windows[0].measured.size();
   for (std::size_t w = 1; w < windows.size(); ++w) {
     const refine_internal::FitExperiment& window = windows[w];
     const std::size_t begin = std::lround(window.measured.t_s.front() / kPeriodS);
     const auto phase = std::find_if(phases.begin(), phases.end(), [&](const auto& p) {
-      return internal::ArrivalSample(x, p, kSigmaM) == begin;
+      return internal::ArrivalSample(x, p, rule) == begin;
     });
     ASSERT_NE(phase, phases.end()) << "window " << w << " starts at no arrival";
     EXPECT_EQ(window.initial.position_m, internal::RestPosition(x, *phase));

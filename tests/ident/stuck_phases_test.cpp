@@ -109,10 +109,10 @@ TEST(StuckPhasesTest, TheRodArrivesAfterThePhaseBeginsAndBreaksAwayWhereItLeaves
   const std::vector<double> x = Logged(1e-3, 300, truth);
   const internal::Runs runs = internal::StuckRuns(x, Rule(1e-3));
   ASSERT_EQ(runs.size(), 1u);
-  const std::size_t arrival = internal::ArrivalSample(x, runs[0], kSigmaM);
+  const std::size_t arrival = internal::ArrivalSample(x, runs[0], Rule(1e-3));
   EXPECT_GT(arrival, runs[0].first);
   EXPECT_NEAR(static_cast<double>(arrival), 14, 4);  // noise moves the crossing
-  EXPECT_NEAR(static_cast<double>(internal::BreakawaySample(x, runs[0], kSigmaM)), 200, 1);
+  EXPECT_NEAR(static_cast<double>(internal::BreakawaySample(x, runs[0], Rule(1e-3))), 200, 1);
   EXPECT_NEAR(internal::RestPosition(x, runs[0]), 0.0, kSigmaM);
 }
 
