@@ -5,6 +5,14 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# Each phase's wall time, so that a slow CI run shows where its minutes went
+# (the brief: keep .ci/run under 40 minutes).
+phase_start=$SECONDS
+phase() {
+  echo "test.sh: $1 took $((SECONDS - phase_start)) s (at $((SECONDS / 60)) min $((SECONDS % 60)) s)"
+  phase_start=$SECONDS
+}
+
 # Issue 12's redesign: no file in src/ident/ over 500 lines.
 long=$(find src/ident -name '*.cpp' -o -name '*.h' | xargs wc -l | awk '$2 != "total" && $1 > 500')
 if [ -n "$long" ]; then
@@ -15,7 +23,9 @@ fi
 # openmpi-bin: the batch test launches `mpirun -n 2 pneumaid batch --shard auto`;
 # chromium: the report's own check in a headless browser (Release pass only).
 EXTRA_PACKAGES="openmpi-bin chromium" scripts/setup.sh
+phase "setup (packages, CVODES, Release build)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
+phase "Release tests"
 # Issue 12's robustness sweep, 6 seeded units with model mismatch and drawn
 # protocols (Release only, about 1 min on 2 cores): gates on K_vp and delta
 # within tolerance on at least 5 of 6 units; the friction shares are printed
@@ -24,11 +34,14 @@ ctest --test-dir build --output-on-failure -j"$(nproc)"
 # consumer program built against the installed package.
 tests/install/run.sh build
 scripts/report-check.sh build
+phase "install test and report check"
 build/tests/bench/robustness_sweep 6 --seed 2026 --jobs "$(nproc)" --min-units-valve-tube 5
+phase "6-unit robustness gate"
 
 if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   BUILD_DIR=build-asan CMAKE_ARGS="-DPNEUMAID_SANITIZE=ON -DPNEUMAID_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo" \
     scripts/setup.sh
+  phase "sanitizer build"
   # The multi-second statistical recovery tests (many seeds, multistart, whole
   # refinements) run in the Release pass only: under the sanitizers they take
   # minutes each and exercise no code path that the other tests leave out.
@@ -61,6 +74,7 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   SLOW+='|AUnitWithoutDeclaredNoiseIsIdentifiedAndRefined'
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
+  phase "sanitizer tests"
 fi
 
 # ThreadSanitizer: the library and the batch test alone (units identified on
@@ -72,5 +86,6 @@ if [ "${PNEUMAID_SKIP_TSAN:-0}" != 1 ]; then
   cmake --build build-tsan -j"$(nproc)" --target batch_test >/dev/null
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \
     build-tsan/tests/batch_test --gtest_filter='BatchTest.ThreadsGiveWhatOneThreadGives:BatchTest.ATimeLimitStopsAUnitsWorkAndRecordsWhy'
+  phase "ThreadSanitizer build and batch test"
 fi
 
