@@ -12,6 +12,8 @@ phase() {
   echo "test.sh: $1 took $((SECONDS - phase_start)) s (at $((SECONDS / 60)) min $((SECONDS % 60)) s)"
   phase_start=$SECONDS
 }
+# Also when a phase fails or the run is stopped: how long it had run.
+trap 'echo "test.sh: exit status $? at $((SECONDS / 60)) min $((SECONDS % 60)) s, $((SECONDS - phase_start)) s into the last phase"' EXIT
 
 # Issue 12's redesign: no file in src/ident/ over 500 lines.
 long=$(find src/ident -name '*.cpp' -o -name '*.h' | xargs wc -l | awk '$2 != "total" && $1 > 500')
