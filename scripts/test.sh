@@ -8,12 +8,13 @@ cd "$(dirname "$0")/.."
 # Each phase's wall time, so that a slow CI run shows where its minutes went
 # (the brief: keep .ci/run under 40 minutes).
 phase_start=$SECONDS
+elapsed() { echo "$((SECONDS / 60)) min $((SECONDS % 60)) s"; }
 phase() {
-  echo "test.sh: $1 took $((SECONDS - phase_start)) s (at $((SECONDS / 60)) min $((SECONDS % 60)) s)"
+  echo "test.sh: $1 took $((SECONDS - phase_start)) s (at $(elapsed))"
   phase_start=$SECONDS
 }
 # Also when a phase fails or the run is stopped: how long it had run.
-trap 'echo "test.sh: exit status $? at $((SECONDS / 60)) min $((SECONDS % 60)) s, $((SECONDS - phase_start)) s into the last phase"' EXIT
+trap 'echo "test.sh: exit status $? at $(elapsed), $((SECONDS - phase_start)) s into the last phase"' EXIT
 
 # Issue 12's redesign: no file in src/ident/ over 500 lines.
 long=$(find src/ident -name '*.cpp' -o -name '*.h' | xargs wc -l | awk '$2 != "total" && $1 > 500')
@@ -28,15 +29,15 @@ EXTRA_PACKAGES="openmpi-bin chromium" scripts/setup.sh
 phase "setup (packages, CVODES, Release build)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 phase "Release tests"
-# Issue 12's robustness sweep, 6 seeded units with model mismatch and drawn
-# protocols (Release only, about 1 min on 2 cores): gates on K_vp and delta
-# within tolerance on at least 5 of 6 units; the friction shares are printed
-# (not yet at issue 12's target: docs/identification.md).
 # Installation: cmake --install, the installed binary with its own defaults, a
 # consumer program built against the installed package.
 tests/install/run.sh build
 scripts/report-check.sh build
 phase "install test and report check"
+# Issue 12's robustness sweep, 6 seeded units with model mismatch and drawn
+# protocols (Release only, 2 to 3.5 min on 2 cores): gates on K_vp and delta
+# within tolerance on at least 5 of 6 units; the friction shares are printed
+# (not yet at issue 12's target: docs/identification.md).
 build/tests/bench/robustness_sweep 6 --seed 2026 --jobs "$(nproc)" --min-units-valve-tube 5
 phase "6-unit robustness gate"
 
