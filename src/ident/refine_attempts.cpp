@@ -158,6 +158,13 @@ bool Better(const RefineResult& a, const RefineResult& b) {
   return finite_or_huge(a) < finite_or_huge(b);
 }
 
+std::string Took(std::chrono::steady_clock::time_point since) {
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+  char line[32];
+  std::snprintf(line, sizeof(line), "; %.3g s", s);
+  return line;
+}
+
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept) {
   if (!candidate.has_values()) return "its fit has no values";
   if (kept.explained() && !candidate.explained()) return "the fit kept before is explained";
@@ -218,11 +225,15 @@ std::string Attempts::screen_report() const {
 }
 
 void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::string* report) {
+  const auto clock = std::chrono::steady_clock::now();
   FrictionScreen screen = ScreenFrictionStarts(start_, unit_, spec_, options_, even_if_explained,
                                                options_.screened_alternatives, measure);
   screened_candidates_ += screen.candidates;
   *report = screen.report;
-  if (!screen.moved) return;
+  if (!screen.moved) {
+    *report += Took(clock);
+    return;
+  }
   const Parameters previous_start = moved_start_;
   const bool previous_shot = moved_start_shot_;
   moved_start_ = std::move(screen.start);
@@ -265,6 +276,7 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::st
                (kept_alternative > 0 ? which : ", none ended lower");
   }
   if (kept && by_windows_first) *report += ", its fit by windows first";
+  *report += Took(clock);
   // The later attempts start from the screened start: the whole runs'
   // screen's even when its fit was not kept (its best candidate by the
   // verdict's own measure), the windows' only when its fit was.
@@ -283,12 +295,13 @@ void Attempts::CoordinateStart() {
   if ((Explained() && !well_above_noise) || options_.coordinate_rounds <= 0 ||
       stages_.front().friction_replay)
     return;
+  const auto clock = std::chrono::steady_clock::now();
   // Neither start explains the runs, or the kept fit is well above the
   // noise: the given one with one friction coefficient at a time moved (the
   // others the component fits').
   CoordinateSearch moved = SearchFrictionCoordinates(start_, unit_, spec_, options_);
   if (!moved.moved) {
-    coordinate_report_ = moved.report;
+    coordinate_report_ = moved.report + Took(clock);
     return;
   }
   const bool explained_before = Explained();
@@ -313,11 +326,12 @@ void Attempts::CoordinateStart() {
                 kept         ? "kept"
                 : small_gain ? "not kept (explained before, no clear gain)"
                              : "not kept");
-  coordinate_report_ = moved.report + line;
+  coordinate_report_ = moved.report + line + Took(clock);
 }
 
 void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,
                      std::string* report) {
+  const auto clock = std::chrono::steady_clock::now();
   const double before = best_.result.reduced_chi_square;
   StagedFit candidate = FitStages(moved_start_, unit_, spec_, stages, options_, robust_runs);
   candidate.from_moved_start = moved_;
@@ -326,7 +340,7 @@ void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool
   char line[200];
   std::snprintf(line, sizeof(line), "%s: median reduced chi-square %.3g against %.3g, %s", what,
                 after, before, kept ? "kept" : "not kept");
-  *report = line;
+  *report = line + Took(clock);
 }
 
 void Attempts::RobustRefit() {

@@ -19,6 +19,7 @@
 // caller's to put into the result (refine.cpp).
 #pragma once
 
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,10 @@ bool Better(const RefineResult& a, const RefineResult& b);
 
 // Why Better(candidate, kept) is false, as a report's words.
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept);
+
+// "; 12.3 s": the wall time since `since`, closing an attempt's report line
+// (where a refinement's time goes: docs/refinement.md).
+std::string Took(std::chrono::steady_clock::time_point since);
 
 class Attempts {
  public:

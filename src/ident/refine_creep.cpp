@@ -138,6 +138,7 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
     paper.creep_report = name + ": not run, " + why;
     return paper;
   }
+  const auto clock = std::chrono::steady_clock::now();
   RefineOptions inner = InnerOptions(options);
   // The prior of the paper fit's refinement (toward the component fits), not
   // one toward the paper fit: that fit is of the same runs, and its errors
@@ -150,8 +151,8 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   std::optional<RefineResult>& best = profile.best;
   int iterations = profile.iterations;  // of the inner fits
   if (!best || StopRequested(options)) {
-    paper.creep_report =
-        report + (best ? " stopped" : " none with values") + "; the paper model's fit kept";
+    paper.creep_report = report + (best ? " stopped" : " none with values") +
+                         "; the paper model's fit kept" + Took(clock);
     paper.iterations += iterations;
     return paper;
   }
@@ -185,7 +186,7 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
                 keep     ? "kept"
                 : better ? "not kept (above the keep ratio)"
                          : "not kept (not better)");
-  report += tail;
+  report += tail + Took(clock);
   if (!keep) {
     paper.creep_report = report;
     paper.iterations += iterations;

@@ -12,6 +12,7 @@
 #include "friction_starts.h"
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/logged_run.h"
+#include "ranked_candidates.h"
 #include "refine_verdict.h"
 
 namespace pneumaid::refine_internal {
@@ -46,10 +47,15 @@ class Screen {
   }
 
   // The measure that ranks `p` (HUGE_VAL when a run cannot be simulated).
-  double Score(const Parameters& p) {
+  // Ranked by windows with `above` finite, the windows stop once `p` ranks
+  // above it (WindowedMeasure): then a lower bound, above `above`, and
+  // *exact false.
+  double Score(const Parameters& p, double above = HUGE_VAL, bool* exact = nullptr) {
     ++out_->candidates;
-    return measure_ == ScreenMeasure::kWholeRuns ? VerdictMeasure(p, unit_, spec_, options_)
-                                                 : WindowedMeasure(p, unit_, spec_, options_);
+    if (exact != nullptr) *exact = true;
+    return measure_ == ScreenMeasure::kWholeRuns
+               ? VerdictMeasure(p, unit_, spec_, options_)
+               : WindowedMeasure(p, unit_, spec_, options_, above, exact);
   }
 
   // The force balance of the fitted runs' smooth slides, read once.
@@ -179,16 +185,17 @@ class Screen {
       for (const double vs : {2e-3, 4e-3, 8e-3, 16e-3}) {
         for (const double share : {0.1, 0.3, 0.6}) {
           for (const double b : {2.5, 6.0, 15.0}) {
+            int best_k = 0;
+            double best = HUGE_VAL;
+            // Ranked against the line's best so far (at least the search's).
             const auto at = [&](int k) {
               Parameters p = Candidate(d, centre * (1 + 0.015 * k), vs, &base);
               double fs = 0;  // within the spec's bounds
               GetParameter(p, d.prefix + "Fs", &fs);
               SetParameter(&p, d.prefix + "Fd", std::min(Bounded(d.prefix + "Fd", share * fs), fs));
               SetParameter(&p, d.prefix + "b", Bounded(d.prefix + "b", b));
-              return Consider(std::move(p));
+              return Consider(std::move(p), std::max(best, out_->ranked_after));
             };
-            int best_k = 0;
-            double best = HUGE_VAL;
             for (int k = -10; k <= 10; k += 2) {
               const double measure = at(k);
               if (measure < best) best = measure, best_k = k;
@@ -293,12 +300,16 @@ class Screen {
   // from those already taken, up to `count` (one more after a profiled
   // search): the other searches' bests first (SearchByWindows), then by rank.
   void PickAlternatives(const Parameters& start, int count) {
-    // Takes `p` when there is room and it differs from those fitted before it.
+    // Whether `p` differs from those fitted before it.
+    const auto fresh = [&](const Parameters& p) {
+      bool distinct = Distinct(p, out_->start) && Distinct(p, start);
+      for (const Parameters& taken : out_->alternatives) distinct = distinct && Distinct(p, taken);
+      return distinct;
+    };
+    // Takes `p` when there is room and it is fresh.
     const auto take = [&](Parameters& p) {
-      if (static_cast<int>(out_->alternatives.size()) >= count) return;
-      bool fresh = Distinct(p, out_->start) && Distinct(p, start);
-      for (const Parameters& taken : out_->alternatives) fresh = fresh && Distinct(p, taken);
-      if (fresh) out_->alternatives.push_back(std::move(p));
+      if (static_cast<int>(out_->alternatives.size()) < count && fresh(p))
+        out_->alternatives.push_back(std::move(p));
     };
     if (runner_up_) take(*runner_up_);
     if (profiled_) {
@@ -309,9 +320,9 @@ class Screen {
       if (out_->alternatives.size() > before) out_->profiled_alternative = static_cast<int>(before);
     }
     out_->runner_ups = static_cast<int>(out_->alternatives.size());
-    std::stable_sort(simulated_.begin(), simulated_.end(),
-                     [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (auto& [chi, p] : simulated_) take(p);
+    // By rank (as if every candidate had been simulated whole).
+    simulated_.TakeInOrder([&] { return static_cast<int>(out_->alternatives.size()) < count; },
+                           fresh, [this](const Parameters& p) { return Score(p); }, take);
   }
 
  private:
@@ -357,11 +368,13 @@ class Screen {
   }
 
   // Simulates `p`; takes it as the best when it ranks first yet. Returns its
-  // measure.
-  double Consider(Parameters p) {
-    const double measure = Score(p);
-    if (keep_simulated_ && !profiling_ && std::isfinite(measure))
-      simulated_.emplace_back(measure, p);
+  // measure, or, ranked by windows, a lower bound above `above` (by default
+  // the best so far) where it ranks above that: what the searches compare
+  // is the same either way.
+  double Consider(Parameters p, double above = NAN) {
+    bool exact = true;
+    const double measure = Score(p, std::isnan(above) ? out_->ranked_after : above, &exact);
+    if (keep_simulated_ && !profiling_ && std::isfinite(measure)) simulated_.Add(measure, exact, p);
     if (measure < out_->ranked_after) out_->ranked_after = measure, out_->start = std::move(p);
     return measure;
   }
@@ -395,7 +408,7 @@ class Screen {
   FrictionScreen* out_;
   friction_internal::StrokeData data_;
   std::vector<Direction> directions_;
-  std::vector<std::pair<double, Parameters>> simulated_;  // for the alternatives
+  RankedCandidates simulated_;           // all but the profiled search's, for the alternatives
   std::optional<Parameters> runner_up_;  // the other search's best (SearchByWindows)
   std::optional<Parameters> profiled_;   // the profiled search's best (SearchByWindows)
   bool profiling_ = false;               // within the profiled search

@@ -9,25 +9,37 @@
 
 namespace pneumaid::refine_internal {
 
+FittedRunSet::FittedRunSet(const Parameters& params, const Unit& unit, const FitSpec& spec,
+                           const RefineOptions& options, bool windows, std::size_t max_runs)
+    : conditioned_(WithRigConditions(params, unit)),
+      map_(MakeParameterMap(conditioned_, spec)),
+      theta_(map_.ThetaOf(conditioned_)),
+      simulation_(options.simulation),
+      jacobian_(options.jacobian) {
+  std::vector<FitExperiment> all = FittedRuns(conditioned_, unit, spec, windows);
+  const std::vector<bool> kept = SubsetByHash(all.size(), max_runs);
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    if (kept[k]) runs_.push_back(std::move(all[k]));
+  }
+}
+
+Eigen::VectorXd FittedRunSet::Residuals(std::size_t k) const {
+  const ExperimentResidual residual(&conditioned_, &map_, &runs_[k], &simulation_, jacobian_);
+  Eigen::VectorXd r(residual.num_residuals());
+  const StartOffsets as_logged = {0, 0};
+  const double* blocks[] = {theta_.data(), as_logged.data()};
+  if (!residual.Evaluate(blocks, r.data(), nullptr)) r.setConstant(NAN);
+  return r;
+}
+
 std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Unit& unit,
                                              const FitSpec& spec, const RefineOptions& options,
                                              bool windows, std::size_t max_runs) {
-  const Parameters conditioned = WithRigConditions(params, unit);
-  const ParameterMap map = MakeParameterMap(conditioned, spec);
-  const std::vector<double> theta = map.ThetaOf(conditioned);
-  std::vector<FitExperiment> runs = FittedRuns(conditioned, unit, spec, windows);
-  const std::vector<bool> kept = SubsetByHash(runs.size(), max_runs);
+  FittedRunSet set(params, unit, spec, options, windows, max_runs);
   std::vector<RunResiduals> out;
-  for (std::size_t k = 0; k < runs.size(); ++k) {
-    if (!kept[k]) continue;
-    FitExperiment& run = runs[k];
-    const ExperimentResidual residual(&conditioned, &map, &run, &options.simulation,
-                                      options.jacobian);
-    Eigen::VectorXd r(residual.num_residuals());
-    const StartOffsets as_logged = {0, 0};
-    const double* blocks[] = {theta.data(), as_logged.data()};
-    if (!residual.Evaluate(blocks, r.data(), nullptr)) r.setConstant(NAN);
-    out.push_back({std::move(run), std::move(r)});
+  for (std::size_t k = 0; k < set.runs().size(); ++k) {
+    Eigen::VectorXd r = set.Residuals(k);
+    out.push_back({std::move(set.runs()[k]), std::move(r)});
   }
   return out;
 }

@@ -262,6 +262,28 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
                                              const FitSpec& spec, const RefineOptions& options,
                                              bool windows, std::size_t max_runs = 0);
 
+// FittedRunResiduals' runs at `params`, prepared once and simulated one at a
+// time on request, so a caller can stop early (WindowedMeasure).
+class FittedRunSet {
+ public:
+  FittedRunSet(const Parameters& params, const Unit& unit, const FitSpec& spec,
+               const RefineOptions& options, bool windows, std::size_t max_runs = 0);
+  FittedRunSet(const FittedRunSet&) = delete;  // the residual blocks point into it
+  FittedRunSet& operator=(const FittedRunSet&) = delete;
+
+  std::vector<FitExperiment>& runs() { return runs_; }
+  // Run k's weighted residuals (NaN where it cannot be simulated).
+  Eigen::VectorXd Residuals(std::size_t k) const;
+
+ private:
+  const Parameters conditioned_;
+  const ParameterMap map_;
+  const std::vector<double> theta_;
+  const SimulationOptions& simulation_;
+  const JacobianMethod jacobian_;
+  std::vector<FitExperiment> runs_;
+};
+
 // How many of `n` indices SubsetByHash keeps: all when count is 0 or >= n,
 // else `count`.
 inline std::size_t SubsetSize(std::size_t n, std::size_t count) {

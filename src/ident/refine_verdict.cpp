@@ -60,17 +60,26 @@ double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec&
 }
 
 double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
-                       const RefineOptions& options) {
-  double squares = 0;
-  long rows = 0;
+                       const RefineOptions& options, double above, bool* exact) {
+  if (exact != nullptr) *exact = true;
   const auto max_windows = static_cast<std::size_t>(options.screen_windows_max);
-  for (const RunResiduals& w : FittedRunResiduals(params, unit, spec, options, true, max_windows)) {
-    const auto data = w.residuals.head(w.run.data_rows());
+  FittedRunSet windows(params, unit, spec, options, true, max_windows);
+  long rows = 0;
+  for (const FitExperiment& w : windows.runs()) rows += w.data_rows();
+  if (rows == 0) return HUGE_VAL;
+  double squares = 0;
+  for (std::size_t k = 0; k < windows.runs().size(); ++k) {
+    const Eigen::VectorXd r = windows.Residuals(k);
+    const auto data = r.head(windows.runs()[k].data_rows());
     if (!data.allFinite()) return HUGE_VAL;
     squares += data.squaredNorm();
-    rows += w.run.data_rows();
+    const double mean_square = squares / static_cast<double>(rows);
+    if (mean_square > above && k + 1 < windows.runs().size()) {
+      if (exact != nullptr) *exact = false;
+      return mean_square;
+    }
   }
-  return rows > 0 ? squares / static_cast<double>(rows) : HUGE_VAL;
+  return squares / static_cast<double>(rows);
 }
 
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -50,8 +51,15 @@ double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec&
 // the windowed friction screen ranks candidates by. It measures at most
 // RefineOptions::screen_windows_max windows (SubsetByHash; 0: all), so a
 // window outside them that cannot be simulated does not count.
+//
+// With `above` finite, the windows stop once those simulated put the mean
+// square above it: the squares only add up, so the value returned is then a
+// lower bound of the measure, above `above`, and *exact (if given) false.
+// A search that only asks whether a candidate ranks below `above` gets the
+// same answer for a fraction of the simulations.
 double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
-                       const RefineOptions& options);
+                       const RefineOptions& options, double above = HUGE_VAL,
+                       bool* exact = nullptr);
 
 // The verdict on `r` (its misfits): status, threshold, and when it fails a
 // message naming the worst runs, channels and windows.

@@ -320,6 +320,39 @@ TEST(RefineFrictionScreenTest, HalfTheWindowsRankAsAllOfThemDo) {
   }
 }
 
+// A search that asks only whether a candidate ranks below a bound stops its
+// windows once the squares so far put it above: a lower bound of the
+// measure, above the bound; at or under the measure, the measure itself.
+TEST(RefineFrictionScreenTest, TheWindowsStopOnceACandidateRanksAboveTheBound) {
+  const ScreenCase& c = LightUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineOptions options;
+  for (const Parameters& p : {c.truth, c.start}) {
+    bool exact = false;
+    const double measure = refine_internal::WindowedMeasure(p, c.unit, spec, options);
+    ASSERT_TRUE(std::isfinite(measure));
+    EXPECT_EQ(refine_internal::WindowedMeasure(p, c.unit, spec, options, measure, &exact), measure);
+    EXPECT_TRUE(exact);
+    EXPECT_EQ(refine_internal::WindowedMeasure(p, c.unit, spec, options, 2 * measure, &exact),
+              measure);
+    EXPECT_TRUE(exact);
+    for (const double share : {0.1, 0.5, 0.9}) {
+      const double bound =
+          refine_internal::WindowedMeasure(p, c.unit, spec, options, share * measure, &exact);
+      // Only the last window can take it over 0.9 of the measure: then whole.
+      if (share < 0.9) {
+        EXPECT_FALSE(exact) << share;
+      }
+      EXPECT_GT(bound, share * measure);
+      if (exact) {
+        EXPECT_EQ(bound, measure);
+      } else {
+        EXPECT_LE(bound, measure);
+      }
+    }
+  }
+}
+
 // The screen ranked by windows from `start` on the heavy unit, with what
 // holds for every start: it moves the start, the windows' measure drops
 // tenfold, the other search's best is the first next-best candidate (ranked
