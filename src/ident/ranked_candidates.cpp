@@ -7,6 +7,7 @@
 namespace pneumaid::refine_internal {
 
 void RankedCandidates::Add(double measure, bool exact, Parameters p) {
+  if (!std::isfinite(measure)) return;
   candidates_.push_back({measure, exact, std::move(p)});
 }
 

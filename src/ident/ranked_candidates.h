@@ -1,7 +1,7 @@
-// The candidates a search of starts simulated, kept for its next-best ones:
-// each with its measure, or with a lower bound of it where the simulation
-// stopped once the candidate ranked above the best so far
-// (WindowedMeasure's `above`, refine_verdict.h).
+// The candidates that a search for starts simulated, kept to pick its
+// next-best ones from: each with its measure, or with a lower bound of it
+// where the simulation stopped once the candidate measured above the best so
+// far (WindowedMeasure's `above`, refine_verdict.h).
 #pragma once
 
 #include <cstddef>
@@ -15,6 +15,7 @@ namespace pneumaid::refine_internal {
 class RankedCandidates {
  public:
   // `measure` is the candidate's measure when `exact`, else a lower bound.
+  // One whose measure is not finite (it cannot be simulated) is not kept.
   void Add(double measure, bool exact, Parameters p);
 
   // Hands the candidates to `take` in the order of their measures (the
@@ -23,6 +24,7 @@ class RankedCandidates {
   // (dropped when that is not finite), unless `fresh` says that `take`
   // would refuse it anyway (and keeps refusing it). So the order is that of
   // every candidate measured whole, for a fraction of the simulations.
+  // `take` may move the candidate out: call this once.
   void TakeInOrder(const std::function<bool()>& more,
                    const std::function<bool(const Parameters&)>& fresh,
                    const std::function<double(const Parameters&)>& measure,

@@ -337,7 +337,10 @@ std::string RefineResult::BriefReport() const {
   if (!coordinate_report.empty()) out << "  " << coordinate_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
-  if (!creep_report.empty()) out << "  " << creep_report << "\n";
+  if (!creep_report.empty()) {
+    std::snprintf(line, sizeof(line), "; %.1f s", creep_wall_time_s);
+    out << "  " << creep_report << line << "\n";
+  }
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (!estimated_starts.empty()) {
     double largest_sigma = 0, largest_Pa = 0;  // the largest move of either pressure

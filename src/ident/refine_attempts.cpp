@@ -158,10 +158,13 @@ bool Better(const RefineResult& a, const RefineResult& b) {
   return finite_or_huge(a) < finite_or_huge(b);
 }
 
+double SecondsSince(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
 std::string Took(std::chrono::steady_clock::time_point since) {
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-  char line[32];
-  std::snprintf(line, sizeof(line), "; %.3g s", s);
+  char line[40];
+  std::snprintf(line, sizeof(line), "; %.1f s", SecondsSince(since));
   return line;
 }
 

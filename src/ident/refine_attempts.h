@@ -60,8 +60,9 @@ bool Better(const RefineResult& a, const RefineResult& b);
 // Why Better(candidate, kept) is false, as a report's words.
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept);
 
-// "; 12.3 s": the wall time since `since`, closing an attempt's report line
-// (where a refinement's time goes: docs/refinement.md).
+// The wall time since `since` [s], and as "; 12.3 s", closing an attempt's
+// report line (where a refinement's time goes: docs/refinement.md).
+double SecondsSince(std::chrono::steady_clock::time_point since);
 std::string Took(std::chrono::steady_clock::time_point since);
 
 class Attempts {

@@ -151,9 +151,10 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   std::optional<RefineResult>& best = profile.best;
   int iterations = profile.iterations;  // of the inner fits
   if (!best || StopRequested(options)) {
-    paper.creep_report = report + (best ? " stopped" : " none with values") +
-                         "; the paper model's fit kept" + Took(clock);
+    paper.creep_report =
+        report + (best ? " stopped" : " none with values") + "; the paper model's fit kept";
     paper.iterations += iterations;
+    paper.creep_wall_time_s = SecondsSince(clock);
     return paper;
   }
   RefineResult free = Refine(best->params, unit, WithCreepFreed(held), inner);
@@ -186,10 +187,11 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
                 keep     ? "kept"
                 : better ? "not kept (above the keep ratio)"
                          : "not kept (not better)");
-  report += tail + Took(clock);
+  report += tail;
   if (!keep) {
     paper.creep_report = report;
     paper.iterations += iterations;
+    paper.creep_wall_time_s = SecondsSince(clock);
     return paper;
   }
   if (&creep != &free) {
@@ -202,6 +204,7 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   InPaperFrame(paper, &creep);
   creep.iterations = paper.iterations + iterations;
   creep.creep_report = report;
+  creep.creep_wall_time_s = SecondsSince(clock);
   return std::move(creep);
 }
 

@@ -47,9 +47,10 @@ class Screen {
   }
 
   // The measure that ranks `p` (HUGE_VAL when a run cannot be simulated).
-  // Ranked by windows with `above` finite, the windows stop once `p` ranks
-  // above it (WindowedMeasure): then a lower bound, above `above`, and
-  // *exact false.
+  // Ranked by windows with `above` finite, the windows stop once `p`
+  // measures above it (WindowedMeasure): then a lower bound, above `above`
+  // (finite even where a later window could not be simulated), and *exact
+  // false.
   double Score(const Parameters& p, double above = HUGE_VAL, bool* exact = nullptr) {
     ++out_->candidates;
     if (exact != nullptr) *exact = true;
@@ -369,12 +370,12 @@ class Screen {
 
   // Simulates `p`; takes it as the best when it ranks first yet. Returns its
   // measure, or, ranked by windows, a lower bound above `above` (by default
-  // the best so far) where it ranks above that: what the searches compare
-  // is the same either way.
-  double Consider(Parameters p, double above = NAN) {
+  // the best so far) where it measures above that: what the searches
+  // compare is the same either way.
+  double Consider(Parameters p, std::optional<double> above = std::nullopt) {
     bool exact = true;
-    const double measure = Score(p, std::isnan(above) ? out_->ranked_after : above, &exact);
-    if (keep_simulated_ && !profiling_ && std::isfinite(measure)) simulated_.Add(measure, exact, p);
+    const double measure = Score(p, above.value_or(out_->ranked_after), &exact);
+    if (keep_simulated_ && !profiling_) simulated_.Add(measure, exact, p);
     if (measure < out_->ranked_after) out_->ranked_after = measure, out_->start = std::move(p);
     return measure;
   }

@@ -16,8 +16,10 @@
 // per direction); the better ranked is the start, the other's best the first
 // alternative. With alternatives asked for, a third search, profiled (a grid
 // in vs, Fd and b with each point at its best Fs within 15 % of the start's),
-// gives one more alternative. About 2 800 simulations of the windows, 3 800
-// with the third search. No Jacobian, no fit.
+// gives one more alternative. About 2 800 candidates, 3 800 with the third
+// search; a candidate's windows stop once it measures above the best so far
+// (WindowedMeasure's `above`), so most are simulated in part. No Jacobian,
+// no fit.
 #pragma once
 
 #include <optional>
@@ -38,9 +40,9 @@ struct FrictionScreen {
   Parameters start;  // the best candidate (`start` itself when none is better)
   double chi_square_before = 0, chi_square_after = 0;  // the verdict's measure
   double ranked_before = 0, ranked_after = 0;          // the measure it ranks by (0: not screened)
-  int candidates = 0;                                  // simulated
-  bool moved = false;                                  // a candidate ranks before the start
-  std::string report;                                  // one line, empty when nothing moved
+  int candidates = 0;  // simulated, in part or whole (one simulated twice counts twice)
+  bool moved = false;  // a candidate ranks before the start
+  std::string report;  // one line, empty when nothing moved
   // Up to `alternatives` next-best candidates, each differing from `start`
   // and from one another in some direction's Fs by a factor kDistinctStatic
   // or its vs by kDistinctStribeck, lowest ranked first; ranked by windows,

@@ -36,11 +36,12 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
                                              const FitSpec& spec, const RefineOptions& options,
                                              bool windows, std::size_t max_runs) {
   FittedRunSet set(params, unit, spec, options, windows, max_runs);
+  std::vector<Eigen::VectorXd> residuals;
+  for (std::size_t k = 0; k < set.runs().size(); ++k) residuals.push_back(set.Residuals(k));
+  std::vector<FitExperiment> runs = set.ReleaseRuns();
   std::vector<RunResiduals> out;
-  for (std::size_t k = 0; k < set.runs().size(); ++k) {
-    Eigen::VectorXd r = set.Residuals(k);
-    out.push_back({std::move(set.runs()[k]), std::move(r)});
-  }
+  for (std::size_t k = 0; k < runs.size(); ++k)
+    out.push_back({std::move(runs[k]), std::move(residuals[k])});
   return out;
 }
 

@@ -263,17 +263,18 @@ std::vector<RunResiduals> FittedRunResiduals(const Parameters& params, const Uni
                                              bool windows, std::size_t max_runs = 0);
 
 // FittedRunResiduals' runs at `params`, prepared once and simulated one at a
-// time on request, so a caller can stop early (WindowedMeasure).
+// time on request, so a caller can stop early (WindowedMeasure). `options`
+// must outlive it (its simulation options are used, not copied).
 class FittedRunSet {
  public:
   FittedRunSet(const Parameters& params, const Unit& unit, const FitSpec& spec,
                const RefineOptions& options, bool windows, std::size_t max_runs = 0);
-  FittedRunSet(const FittedRunSet&) = delete;  // the residual blocks point into it
-  FittedRunSet& operator=(const FittedRunSet&) = delete;
 
-  std::vector<FitExperiment>& runs() { return runs_; }
+  const std::vector<FitExperiment>& runs() const { return runs_; }
   // Run k's weighted residuals (NaN where it cannot be simulated).
   Eigen::VectorXd Residuals(std::size_t k) const;
+  // The runs, handed over: the set has none left to simulate.
+  std::vector<FitExperiment> ReleaseRuns() { return std::move(runs_); }
 
  private:
   const Parameters conditioned_;

@@ -54,9 +54,10 @@ double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec&
 //
 // With `above` finite, the windows stop once those simulated put the mean
 // square above it: the squares only add up, so the value returned is then a
-// lower bound of the measure, above `above`, and *exact (if given) false.
-// A search that only asks whether a candidate ranks below `above` gets the
-// same answer for a fraction of the simulations.
+// lower bound of the measure, above `above` (finite even where a later
+// window could not be simulated), and *exact (if given) false. A search that
+// only asks whether a candidate measures below `above` gets the same answer
+// for a fraction of the simulations.
 double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
                        const RefineOptions& options, double above = HUGE_VAL,
                        bool* exact = nullptr);

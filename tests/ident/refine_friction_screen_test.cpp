@@ -323,7 +323,7 @@ TEST(RefineFrictionScreenTest, HalfTheWindowsRankAsAllOfThemDo) {
 // A search that asks only whether a candidate ranks below a bound stops its
 // windows once the squares so far put it above: a lower bound of the
 // measure, above the bound; at or under the measure, the measure itself.
-TEST(RefineFrictionScreenTest, TheWindowsStopOnceACandidateRanksAboveTheBound) {
+TEST(RefineFrictionScreenTest, TheWindowsStopOnceACandidateMeasuresAboveTheBound) {
   const ScreenCase& c = LightUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   const RefineOptions options;
@@ -339,7 +339,8 @@ TEST(RefineFrictionScreenTest, TheWindowsStopOnceACandidateRanksAboveTheBound) {
     for (const double share : {0.1, 0.5, 0.9}) {
       const double bound =
           refine_internal::WindowedMeasure(p, c.unit, spec, options, share * measure, &exact);
-      // Only the last window can take it over 0.9 of the measure: then whole.
+      // Where only the last window takes it over the bound, it is measured
+      // whole; on this unit the windows stop early below half the measure.
       if (share < 0.9) {
         EXPECT_FALSE(exact) << share;
       }

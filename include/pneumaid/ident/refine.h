@@ -315,7 +315,9 @@ struct RefineResult : FitResult {
   // What the friction screens (RefineOptions::screen_friction_starts and
   // screen_friction_windows) found, one line each (empty when they kept the
   // start), and how many candidates they simulated together (the start
-  // counted by each; 0: not screened).
+  // counted by each, and a candidate whose windows stopped early and was
+  // simulated whole later, to be ranked among the next-best, twice; 0: not
+  // screened). The attempts' lines end with their wall time ("; 70.1 s").
   std::string screen_report;
   int screened_candidates = 0;
   // What the coordinate start (RefineOptions::coordinate_rounds) moved, what
@@ -329,8 +331,11 @@ struct RefineResult : FitResult {
   // whether it was kept (empty when it did not run).
   std::string windowed_report;
   // What the creep fit (RefineOptions::fit_stick_creep) ended at over its
-  // profile and freed, and whether it was kept (empty when it did not run).
+  // profile and freed, and whether it was kept (empty when it did not run),
+  // and its wall time [s] (0: not run). The report goes into the provenance,
+  // the time only into BriefReport, so a set written twice is the same.
   std::string creep_report;
+  double creep_wall_time_s = 0;
   // Held-out experiments, validated with the start and the refined set.
   ValidationReport held_out_before, held_out_after;
 
