@@ -311,6 +311,10 @@ RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSp
   return r;
 }
 
+std::string RefineResult::CreepLine() const {
+  return creep_report.empty() ? "" : creep_report + refine_internal::SecondsText(creep_wall_time_s);
+}
+
 std::string RefineResult::BriefReport() const {
   std::ostringstream out;
   char line[256];
@@ -337,10 +341,7 @@ std::string RefineResult::BriefReport() const {
   if (!coordinate_report.empty()) out << "  " << coordinate_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
-  if (!creep_report.empty()) {
-    std::snprintf(line, sizeof(line), "; %.1f s", creep_wall_time_s);
-    out << "  " << creep_report << line << "\n";
-  }
+  if (!creep_report.empty()) out << "  " << CreepLine() << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (!estimated_starts.empty()) {
     double largest_sigma = 0, largest_Pa = 0;  // the largest move of either pressure

@@ -162,10 +162,14 @@ double SecondsSince(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-std::string Took(std::chrono::steady_clock::time_point since) {
+std::string SecondsText(double seconds) {
   char line[40];
-  std::snprintf(line, sizeof(line), "; %.1f s", SecondsSince(since));
+  std::snprintf(line, sizeof(line), "; %.1f s", seconds);
   return line;
+}
+
+std::string Took(std::chrono::steady_clock::time_point since) {
+  return SecondsText(SecondsSince(since));
 }
 
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept) {

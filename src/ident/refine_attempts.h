@@ -60,9 +60,11 @@ bool Better(const RefineResult& a, const RefineResult& b);
 // Why Better(candidate, kept) is false, as a report's words.
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept);
 
-// The wall time since `since` [s], and as "; 12.3 s", closing an attempt's
-// report line (where a refinement's time goes: docs/refinement.md).
+// The wall time since `since` [s]; a time as "; 12.3 s", closing an
+// attempt's report line (where a refinement's time goes:
+// docs/refinement.md); and Took(since), the two together.
 double SecondsSince(std::chrono::steady_clock::time_point since);
+std::string SecondsText(double seconds);
 std::string Took(std::chrono::steady_clock::time_point since);
 
 class Attempts {

@@ -72,13 +72,6 @@
 namespace pneumaid {
 namespace {
 
-// "12.3 s", as a refinement's report lines end (RefineResult::BriefReport).
-std::string Seconds(double s) {
-  char text[40];
-  std::snprintf(text, sizeof(text), "%.1f s", s);
-  return text;
-}
-
 const std::string kSource = PNEUMAID_SOURCE_DIR;
 
 // The names of the checked coefficients, in the table's order.
@@ -392,15 +385,13 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     const Parameters& fit = refined.has_values() ? refined.params : identified;
     out.ok = Check(fit, d.truth, d.staircase_step_V);
     out.identify_ok = Check(identified, d.truth, d.staircase_step_V);
-    out.friction =
-        "identify " + FrictionLine(identified.friction) + ", refine " + FrictionLine(fit.friction) +
-        (refined.screen_report.empty() ? "" : "\n  " + refined.screen_report) +
-        (refined.coordinate_report.empty() ? "" : "\n  " + refined.coordinate_report) +
-        (refined.robust_report.empty() ? "" : "\n  " + refined.robust_report) +
-        (refined.windowed_report.empty() ? "" : "\n  " + refined.windowed_report) +
-        (refined.creep_report.empty()
-             ? ""
-             : "\n  " + refined.creep_report + "; " + Seconds(refined.creep_wall_time_s));
+    out.friction = "identify " + FrictionLine(identified.friction) + ", refine " +
+                   FrictionLine(fit.friction) +
+                   (refined.screen_report.empty() ? "" : "\n  " + refined.screen_report) +
+                   (refined.coordinate_report.empty() ? "" : "\n  " + refined.coordinate_report) +
+                   (refined.robust_report.empty() ? "" : "\n  " + refined.robust_report) +
+                   (refined.windowed_report.empty() ? "" : "\n  " + refined.windowed_report) +
+                   (refined.creep_report.empty() ? "" : "\n  " + refined.CreepLine());
     for (const FittedCoefficient& rp : refined.coefficients) {
       double truth = 0, value = 0;
       if (!GetParameter(t, rp.path, &truth)) continue;

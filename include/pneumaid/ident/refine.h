@@ -336,6 +336,9 @@ struct RefineResult : FitResult {
   // the time only into BriefReport, so a set written twice is the same.
   std::string creep_report;
   double creep_wall_time_s = 0;
+  // creep_report ending with its wall time, as BriefReport prints it (empty
+  // when the creep fit did not run).
+  std::string CreepLine() const;
   // Held-out experiments, validated with the start and the refined set.
   ValidationReport held_out_before, held_out_after;
 
