@@ -241,6 +241,7 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::st
     *report += Took(clock);
     return;
   }
+  *report += "; screened in" + Took(clock).substr(1);  // the fits from its candidates follow
   const Parameters previous_start = moved_start_;
   const bool previous_shot = moved_start_shot_;
   moved_start_ = std::move(screen.start);

@@ -8,6 +8,7 @@
 
 #include "pneumaid/model/parameter_table.h"
 #include "refine_friction_screen.h"
+#include "refine_parameters.h"
 #include "refine_verdict.h"
 
 namespace pneumaid::refine_internal {

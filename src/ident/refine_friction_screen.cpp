@@ -13,7 +13,9 @@
 #include "pneumaid/model/parameter_table.h"
 #include "pneumaid/validate/logged_run.h"
 #include "ranked_candidates.h"
+#include "refine_parameters.h"
 #include "refine_verdict.h"
+#include "windowed_measures.h"
 
 namespace pneumaid::refine_internal {
 using friction_internal::FitSliding;
@@ -38,7 +40,8 @@ class Screen {
         options_(options),
         measure_(measure),
         keep_simulated_(keep_simulated),
-        out_(out) {
+        out_(out),
+        windows_(unit, spec, options) {
     for (const int sign : {+1, -1}) {
       const std::string prefix = std::string("friction.") + (sign > 0 ? "positive." : "negative.");
       if (IsFree(spec, prefix + "Fs") && IsFree(spec, prefix + "vs"))
@@ -47,17 +50,20 @@ class Screen {
   }
 
   // The measure that ranks `p` (HUGE_VAL when a run cannot be simulated).
-  // Ranked by windows with `above` finite, the windows stop once `p`
-  // measures above it (WindowedMeasure): then a lower bound, above `above`
-  // (finite even where a later window could not be simulated), and *exact
-  // false.
+  // Ranked by windows with `above` finite, a lower bound above `above` where
+  // `p` measures above it (WindowedMeasure), and *exact false.
   double Score(const Parameters& p, double above = HUGE_VAL, bool* exact = nullptr) {
     ++out_->candidates;
     if (exact != nullptr) *exact = true;
-    return measure_ == ScreenMeasure::kWholeRuns
-               ? VerdictMeasure(p, unit_, spec_, options_)
-               : WindowedMeasure(p, unit_, spec_, options_, above, exact);
+    return measure_ == ScreenMeasure::kWholeRuns ? VerdictMeasure(p, unit_, spec_, options_)
+                                                 : windows_.Measure(p, above, exact);
   }
+
+  // Ranked by windows, the best so far is the base (WindowedMeasures).
+  void Rebase() {
+    if (measure_ == ScreenMeasure::kWindows) windows_.Rebase(out_->start);
+  }
+  const WindowedMeasures& windows() const { return windows_; }
 
   // The force balance of the fitted runs' smooth slides, read once.
   void ReadSlides() {
@@ -279,6 +285,7 @@ class Screen {
       return;
     Parameters pairwise = std::exchange(out_->start, start);  // the joint search from the start
     const double pairwise_ranked = std::exchange(out_->ranked_after, out_->ranked_before);
+    Rebase();
     JointGrid();
     PatternSearch();
     if (pairwise_ranked < out_->ranked_after) {
@@ -289,12 +296,14 @@ class Screen {
     if (!keep_simulated_) return;                         // no alternatives asked for
     Parameters best = std::exchange(out_->start, start);  // the profiled search from the start
     const double best_ranked = std::exchange(out_->ranked_after, out_->ranked_before);
+    Rebase();
     profiling_ = true;  // its candidates are not ranked among the alternatives
     ProfiledGrid(start);
     PatternSearch();
     profiling_ = false;
     profiled_ = std::exchange(out_->start, std::move(best));
     out_->ranked_after = best_ranked;
+    Rebase();
   }
 
   // The next-best candidates that differ from `start`, from the best and
@@ -376,7 +385,10 @@ class Screen {
     bool exact = true;
     const double measure = Score(p, above.value_or(out_->ranked_after), &exact);
     if (keep_simulated_ && !profiling_) simulated_.Add(measure, exact, p);
-    if (measure < out_->ranked_after) out_->ranked_after = measure, out_->start = std::move(p);
+    if (measure < out_->ranked_after) {
+      out_->ranked_after = measure, out_->start = std::move(p);
+      Rebase();  // the set just measured: no simulation
+    }
     return measure;
   }
 
@@ -407,6 +419,7 @@ class Screen {
   const ScreenMeasure measure_;
   const bool keep_simulated_;
   FrictionScreen* out_;
+  WindowedMeasures windows_;  // ranked by windows
   friction_internal::StrokeData data_;
   std::vector<Direction> directions_;
   RankedCandidates simulated_;           // all but the profiled search's, for the alternatives
@@ -416,16 +429,6 @@ class Screen {
 };
 
 }  // namespace
-
-void ForgetMoved(const Parameters& start, const FitSpec& spec, Parameters* p) {
-  for (const FreeParameter& free : spec.parameters) {
-    double before = 0, after = 0;
-    if (GetParameter(start, free.path, &before) && GetParameter(*p, free.path, &after) &&
-        before != after) {
-      p->uncertainty.erase(free.path);
-    }
-  }
-}
 
 FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
                                     const RefineOptions& options, bool even_if_explained,
@@ -438,7 +441,7 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   const char* name = measure == ScreenMeasure::kWindows
                          ? "friction start read off the logs, ranked by windows"
                          : "friction start read off the logs";
-  char line[240];
+  char line[320];
   if (Explains(out.chi_square_before, options) && !even_if_explained) {
     // The fit from it failed the verdict, but the start itself passes: the
     // screen's measure cannot rank a candidate above it.
@@ -451,6 +454,7 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   }
   const bool windows = measure == ScreenMeasure::kWindows;
   out.ranked_before = out.ranked_after = windows ? screen.Score(start) : out.chi_square_before;
+  screen.Rebase();
   if (windows) {
     screen.SearchByWindows(start);
   } else {
@@ -477,10 +481,11 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
     const std::size_t ranked =
         SubsetSize(all, static_cast<std::size_t>(options.screen_windows_max));
     std::snprintf(line, sizeof(line),
-                  "%s (%zu of %zu): mean square "
-                  "%.3g -> %.3g, median reduced chi-square %.3g -> %.3g (%d candidates simulated)",
+                  "%s (%zu of %zu): mean square %.3g -> %.3g, median reduced chi-square %.3g -> "
+                  "%.3g (%d candidates simulated; windows: %ld simulated, %ld as the best's)",
                   name, ranked, all, out.ranked_before, out.ranked_after, out.chi_square_before,
-                  out.chi_square_after, out.candidates);
+                  out.chi_square_after, out.candidates, screen.windows().windows_simulated(),
+                  screen.windows().windows_taken());
   } else {
     out.chi_square_after = out.ranked_after;
     std::snprintf(line, sizeof(line),

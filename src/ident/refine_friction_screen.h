@@ -74,9 +74,4 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
                                     int alternatives = 0,
                                     ScreenMeasure measure = ScreenMeasure::kWholeRuns);
 
-// A free coefficient of `spec` that `p` moved from `start` loses its
-// standard error in `p->uncertainty` (the component fit's no longer applies:
-// the start prior treats it as undetermined).
-void ForgetMoved(const Parameters& start, const FitSpec& spec, Parameters* p);
-
 }  // namespace pneumaid::refine_internal

@@ -147,4 +147,14 @@ bool StartPriorCost::Evaluate(double const* const* theta, double* residuals,
   return true;
 }
 
+void ForgetMoved(const Parameters& start, const FitSpec& spec, Parameters* p) {
+  for (const FreeParameter& free : spec.parameters) {
+    double before = 0, after = 0;
+    if (GetParameter(start, free.path, &before) && GetParameter(*p, free.path, &after) &&
+        before != after) {
+      p->uncertainty.erase(free.path);
+    }
+  }
+}
+
 }  // namespace pneumaid::refine_internal

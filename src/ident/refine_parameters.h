@@ -118,4 +118,9 @@ class StartPriorCost final : public ceres::CostFunction {
   StartPrior prior_;
 };
 
+// A free coefficient of `spec` that `p` moved from `start` loses its
+// standard error in `p->uncertainty` (the component fit's no longer applies:
+// the start prior treats it as undetermined).
+void ForgetMoved(const Parameters& start, const FitSpec& spec, Parameters* p);
+
 }  // namespace pneumaid::refine_internal

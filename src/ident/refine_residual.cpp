@@ -23,12 +23,13 @@ FittedRunSet::FittedRunSet(const Parameters& params, const Unit& unit, const Fit
   }
 }
 
-Eigen::VectorXd FittedRunSet::Residuals(std::size_t k) const {
-  const ExperimentResidual residual(&conditioned_, &map_, &runs_[k], &simulation_, jacobian_);
-  Eigen::VectorXd r(residual.num_residuals());
+Eigen::VectorXd FittedRunSet::Residuals(std::size_t k, FrictionUse* use) const {
+  const FitExperiment& run = runs_[k];
+  const ExperimentResidual residual(&conditioned_, &map_, &run, &simulation_, jacobian_);
   const StartOffsets as_logged = {0, 0};
-  const double* blocks[] = {theta_.data(), as_logged.data()};
-  if (!residual.Evaluate(blocks, r.data(), nullptr)) r.setConstant(NAN);
+  const std::vector<double> z = Coordinates(run, theta_.data(), map_.size(), as_logged.data());
+  Eigen::VectorXd r;
+  if (!residual.ResidualsAt(z, &r, use)) r.setConstant(NAN);
   return r;
 }
 

@@ -85,10 +85,13 @@ class ExperimentResidual final : public ceres::CostFunction {
     return true;
   }
 
-  // The residuals alone at z (the plain run); false where it fails.
-  bool ResidualsAt(const std::vector<double>& z, Eigen::VectorXd* residuals) const {
+  // The residuals alone at z (the plain run); false where it fails. With
+  // `use`, what the run read of the friction (always simulated then).
+  bool ResidualsAt(const std::vector<double>& z, Eigen::VectorXd* residuals,
+                   FrictionUse* use = nullptr) const {
     residuals->resize(num_residuals());
     try {
+      if (use != nullptr) return Residuals(z.data(), residuals->data(), use);
       return EvaluateOrFail(z, residuals->data(), nullptr);
     } catch (...) {
       return false;
@@ -145,7 +148,7 @@ class ExperimentResidual final : public ceres::CostFunction {
   // sensitivities takes slightly different steps, and with stick-slip its
   // trajectory differs by more than Levenberg-Marquardt's cost comparisons
   // between trial points (residuals only) and accepted points tolerate.
-  bool Residuals(const double* z, double* residuals) const {
+  bool Residuals(const double* z, double* residuals, FrictionUse* use = nullptr) const {
     const Parameters params = WithValues(*base_, *map_, z);
     if (!Validate(params).empty()) return false;
     const FitExperiment& e = *experiment_;
@@ -153,6 +156,7 @@ class ExperimentResidual final : public ceres::CostFunction {
     const SimulationSummary summary = Simulate(params, e.command, StartOf(e, z + map_->size()),
                                                e.measured.t_s, *simulation_, &sim);
     if (!summary.ok() || sim.size() != e.measured.size()) return false;
+    if (use != nullptr) *use = summary.friction_use;
     const long n = static_cast<long>(e.measured.size());
     long row = 0;
     for (const Channel& c : e.channels) {
@@ -271,8 +275,11 @@ class FittedRunSet {
                const RefineOptions& options, bool windows, std::size_t max_runs = 0);
 
   const std::vector<FitExperiment>& runs() const { return runs_; }
-  // Run k's weighted residuals (NaN where it cannot be simulated).
-  Eigen::VectorXd Residuals(std::size_t k) const;
+  // Run k's weighted residuals (NaN where it cannot be simulated); with
+  // `use`, what its simulation read of the friction.
+  Eigen::VectorXd Residuals(std::size_t k, FrictionUse* use = nullptr) const;
+  // The conditioned set the runs are simulated with (WithRigConditions).
+  const Parameters& conditioned() const { return conditioned_; }
   // The runs, handed over: the set has none left to simulate.
   std::vector<FitExperiment> ReleaseRuns() { return std::move(runs_); }
 

@@ -7,6 +7,7 @@
 
 #include "refine_parameters.h"
 #include "refine_residual.h"
+#include "windowed_measures.h"
 
 namespace pneumaid::refine_internal {
 
@@ -61,25 +62,7 @@ double VerdictMeasure(const Parameters& params, const Unit& unit, const FitSpec&
 
 double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec& spec,
                        const RefineOptions& options, double above, bool* exact) {
-  if (exact != nullptr) *exact = true;
-  const auto max_windows = static_cast<std::size_t>(options.screen_windows_max);
-  FittedRunSet windows(params, unit, spec, options, true, max_windows);
-  long rows = 0;
-  for (const FitExperiment& w : windows.runs()) rows += w.data_rows();
-  if (rows == 0) return HUGE_VAL;
-  double squares = 0;
-  for (std::size_t k = 0; k < windows.runs().size(); ++k) {
-    const Eigen::VectorXd r = windows.Residuals(k);
-    const auto data = r.head(windows.runs()[k].data_rows());
-    if (!data.allFinite()) return HUGE_VAL;
-    squares += data.squaredNorm();
-    const double mean_square = squares / static_cast<double>(rows);
-    if (mean_square > above && k + 1 < windows.runs().size()) {
-      if (exact != nullptr) *exact = false;
-      return mean_square;
-    }
-  }
-  return squares / static_cast<double>(rows);
+  return WindowedMeasures(unit, spec, options).Measure(params, above, exact);
 }
 
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {

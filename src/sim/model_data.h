@@ -6,6 +6,7 @@
 
 #include <ceres/jet.h>
 
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -53,6 +54,7 @@ struct ModelData {
   // right after a restart v is only known to within its tolerance.
   double reversal_velocity_m_per_s = 0.0;
   std::string last_solver_message;
+  FrictionUse friction_use;  // what the run read of the friction so far
   // Parameter sensitivities: how many (0: none), and the model's
   // derivatives with respect to each (null without).
   int parameter_count = 0;
@@ -70,13 +72,30 @@ inline bool AtRetractedStop(const ModelData& data, double position_m) {
   return position_m <= -data.coefficients.end_stop.half_stroke_m + kAtStop_m;
 }
 
+// Notes in `use` the breakaway tests of a rod at rest at position x under
+// the driving force `force_N` (each side's unless an end stop holds it that
+// way), with the friction's pressure scale `scale`.
+inline void NoteBreakawayTests(const ModelData& data, double force_N, double scale, double x,
+                               FrictionUse* use) {
+  if (!(scale > 0) || !std::isfinite(force_N)) {  // no test to read: count both sides as read
+    use->NoteSliding(0);
+    use->NoteSliding(1);
+    return;
+  }
+  const double margin = data.breakaway_margin_N;
+  if (!AtExtendedStop(data, x)) use->NoteBreakawayTest(0, (force_N - margin) / scale);
+  if (!AtRetractedStop(data, x)) use->NoteBreakawayTest(1, (-force_N - margin) / scale);
+}
+
 // Stick/slip and end-stop switching surfaces. Stuck: the driving force
 // reaches the breakaway force plus a margin (the switching hysteresis) in a
 // direction the rod can move. Sliding: the velocity returns to zero (g0) or
 // the rod reaches the end of the stroke (g1). Templated so that the event
-// sensitivities can differentiate them.
+// sensitivities can differentiate them. With `use`, the breakaway tests are
+// noted there (FrictionUse).
 template <typename T>
-void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g) {
+void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g,
+                     FrictionUse* use = nullptr) {
   const T half_stroke = c.end_stop.half_stroke_m;
   const T margin(data.breakaway_margin_N);
   const T reversal(data.reversal_velocity_m_per_s);
@@ -87,6 +106,8 @@ void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, co
       const double x = Value(y[kPosition]);
       g[0] = AtExtendedStop(data, x) ? T(-1.0) : force - BreakawayForce(c, p, +1.0) - margin;
       g[1] = AtRetractedStop(data, x) ? T(1.0) : force + BreakawayForce(c, p, -1.0) + margin;
+      if (use != nullptr)
+        NoteBreakawayTests(data, Value(force), Value(FrictionScale(c, p)), x, use);
       break;
     }
     case MotionMode::kSlidingPositive:

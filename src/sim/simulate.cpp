@@ -66,18 +66,21 @@ PNEUMAID_FLATTEN int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacob
 
 // CVODE root function. Never throws.
 int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
-  const auto* data = static_cast<const ModelData*>(user_data);
-  SwitchingValues(*data, data->coefficients, N_VGetArrayPointer(y), g);
+  auto* data = static_cast<ModelData*>(user_data);
+  SwitchingValues(*data, data->coefficients, N_VGetArrayPointer(y), g, &data->friction_use);
   return 0;
 }
 
 // The motion mode for a rod at rest at state y: held by static friction
 // unless the driving force exceeds the breakaway force (plus the margin), and
-// held by an end stop it is pushed against.
-MotionMode ModeAtRest(const ModelData& data, const double* y) {
+// held by an end stop it is pushed against. The tests are noted in
+// data->friction_use.
+MotionMode ModeAtRest(ModelData* mutable_data, const double* y) {
+  const ModelData& data = *mutable_data;
   const auto& c = data.coefficients;
   const ChamberPressures<double> p = DecodeChambers(c, y);
   const double force = DrivingForce(c, y, p);
+  NoteBreakawayTests(data, force, FrictionScale(c, p), y[kPosition], &mutable_data->friction_use);
   if (!AtExtendedStop(data, y[kPosition]) &&
       force > BreakawayForce(c, p, +1.0) + data.breakaway_margin_N) {
     return MotionMode::kSlidingPositive;
@@ -89,10 +92,19 @@ MotionMode ModeAtRest(const ModelData& data, const double* y) {
   return MotionMode::kStuck;
 }
 
-MotionMode InitialMode(const ModelData& data, const double* y) {
+MotionMode InitialMode(ModelData* data, const double* y) {
   if (y[kVelocity] > 0) return MotionMode::kSlidingPositive;
   if (y[kVelocity] < 0) return MotionMode::kSlidingNegative;
   return ModeAtRest(data, y);
+}
+
+// Sets the motion mode and notes the friction it reads (FrictionUse).
+void SetMotion(ModelData* data, MotionMode motion) {
+  data->motion = motion;
+  if (motion == MotionMode::kSlidingPositive || motion == MotionMode::kRegularized)
+    data->friction_use.NoteSliding(0);
+  if (motion == MotionMode::kSlidingNegative || motion == MotionMode::kRegularized)
+    data->friction_use.NoteSliding(1);
 }
 
 // Keeps CVODE's error text for the summary instead of printing it.
@@ -247,7 +259,7 @@ class Integrator {
     const bool with_sensitivities = Sensitivities() != nullptr;
     if (with_sensitivities) jump = EventTimeSensitivities(fired);
     if (data_->motion == MotionMode::kStuck) {
-      data_->motion = fired == 0 ? MotionMode::kSlidingPositive : MotionMode::kSlidingNegative;
+      SetMotion(data_, fired == 0 ? MotionMode::kSlidingPositive : MotionMode::kSlidingNegative);
     } else {
       if (fired == 1) {
         const double half_stroke = data_->coefficients.end_stop.half_stroke_m;
@@ -256,7 +268,7 @@ class Integrator {
       }
       y[kVelocity] = 0.0;
       jump.reset_velocity = true;
-      data_->motion = ModeAtRest(*data_, y);
+      SetMotion(data_, ModeAtRest(data_, y));
     }
     if (with_sensitivities) ApplySensitivityJump(jump);
   }
@@ -441,7 +453,7 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
   data.reversal_velocity_m_per_s = options.velocity_tolerance_m_per_s;
   // A rod that creeps (stick_creep) has no stuck mode to switch to.
   const bool events = options.stick_slip == StickSlipTreatment::kEvents && !Creeps(params);
-  data.motion = events ? InitialMode(data, y0) : MotionMode::kRegularized;
+  SetMotion(&data, events ? InitialMode(&data, y0) : MotionMode::kRegularized);
   if (data.motion == MotionMode::kStuck) y0[kVelocity] = 0.0;
 
   // Taken where y0 is: before the knots at t0 change the command.
@@ -526,6 +538,7 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
     AppendSample(data, t_out, current_V, integrator.state(), out);
   }
   summary = integrator.Counters();
+  summary.friction_use = data.friction_use;
   return summary;
 }
 
@@ -560,6 +573,17 @@ InitialState RetractedAtRest(const Parameters& params) {
   state.p1_Pa = params.supply.atmospheric_pressure_Pa;
   state.p2_Pa = params.supply.atmospheric_pressure_Pa;
   return state;
+}
+
+void FrictionUse::NoteBreakawayTest(int side, double needed_N) {
+  breakaway_needed_N[side] = std::fmax(breakaway_needed_N[side], needed_N);
+}
+
+bool FrictionUse::Unaffected(int side, double static_force_N) const {
+  // Above by a relative 1e-9: the switching function, computed otherwise
+  // than `needed`, keeps its sign through the round-off.
+  const double needed = breakaway_needed_N[side];
+  return !slid[side] && static_force_N > needed + 1e-9 * std::fabs(needed) + 1e-12;
 }
 
 std::string SimulationSummary::BriefReport() const {

@@ -15,6 +15,7 @@
 
 #include "../../src/ident/refine_residual.h"
 #include "../../src/ident/refine_verdict.h"
+#include "../../src/ident/windowed_measures.h"
 #include "pneumaid/ident/refine.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
@@ -352,6 +353,60 @@ TEST(RefineFrictionScreenTest, TheWindowsStopOnceACandidateMeasuresAboveTheBound
       }
     }
   }
+}
+
+// WindowedMeasures: with the start as the base, a candidate one
+// direction's friction away (Fs from 0.3 to 3 times, vs, b and Fd changed)
+// measures to the bit what WindowedMeasure gives when it simulates every
+// window, though it takes some windows from the base; one that differs in
+// both directions takes none. With a bound, a lower bound above it.
+TEST(RefineFrictionScreenTest, OneDirectionAwayACandidateTakesTheWindowsItCannotChange) {
+  const ScreenCase& c = LightUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineOptions options;
+  refine_internal::WindowedMeasures measures(c.unit, spec, options);
+  measures.Rebase(c.start);
+  const long windows = measures.windows_simulated();
+  ASSERT_GT(windows, 4);
+  EXPECT_EQ(measures.windows_taken(), 0);
+  const auto whole = [&](const Parameters& p) {
+    return refine_internal::WindowedMeasure(p, c.unit, spec, options);
+  };
+  for (const bool positive : {true, false}) {
+    for (const double fs : {0.3, 0.7, 1.0, 1.5, 3.0}) {
+      for (const double vs : {0.5, 2.0}) {
+        Parameters p = c.start;
+        StribeckParams& f = positive ? p.friction.positive : p.friction.negative;
+        f.static_force_N *= fs;
+        f.stribeck_velocity_m_per_s *= vs;
+        f.viscous_N_s_per_m *= 1.3;
+        f.dynamic_force_N = std::min(0.8 * f.dynamic_force_N, f.static_force_N);
+        bool exact = false;
+        EXPECT_EQ(measures.Measure(p, HUGE_VAL, &exact), whole(p)) << positive << fs << vs;
+        EXPECT_TRUE(exact);
+      }
+    }
+  }
+  const long taken = measures.windows_taken();
+  std::cout << taken << " windows taken, " << measures.windows_simulated() - windows
+            << " simulated for 20 candidates of " << windows << " windows\n";
+  EXPECT_GT(taken, 0);
+  EXPECT_LT(measures.windows_simulated() - windows, 20 * windows);
+
+  Parameters both = c.start;
+  both.friction.positive.static_force_N *= 1.5;
+  both.friction.negative.static_force_N *= 1.5;
+  EXPECT_EQ(measures.Measure(both), whole(both));
+  EXPECT_EQ(measures.windows_taken(), taken);
+
+  Parameters off = c.start;
+  off.friction.negative.static_force_N *= 2;
+  const double measure = whole(off);
+  bool exact = true;
+  const double bound = measures.Measure(off, 0.2 * measure, &exact);
+  EXPECT_FALSE(exact);
+  EXPECT_GT(bound, 0.2 * measure);
+  EXPECT_LE(bound, measure);
 }
 
 // The screen ranked by windows from `start` on the heavy unit, with what

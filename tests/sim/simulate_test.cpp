@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "pneumaid/eval/stroke_summary.h"
@@ -292,6 +293,52 @@ TEST(SimulateTest, InvalidInputsAreReportedNotThrown) {
   options.relative_tolerance = 0;
   EXPECT_EQ(Simulate(Parameters{}, CommandSignal{}, InitialState{}, {0.0}, options, &run).status,
             SimulationStatus::kInvalidInput);
+}
+
+// FrictionUse: a rod held against its negative static friction at 0.7 Fs
+// (valves closed) reads nothing of the positive direction and only the
+// negative Fs against 0.7 Fs (less the margin). So the same run with the
+// negative Fs at 0.8 of it, and every other negative coefficient changed,
+// is the same to the bit; at 0.6 it slides. A stroke that extends slides
+// only that way (horizontal, no tube: it never runs back).
+TEST(SimulateTest, WhatARunReadsOfEachDirectionsFrictionIsRecorded) {
+  Parameters p = HorizontalWithoutTube();
+  const double fs = p.friction.negative.static_force_N;
+  const double p2 = 2e5;
+  const double p1 = (-0.7 * fs - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
+  const InitialState start{0.0, 0.0, p1, p2};
+  const SimulationOptions options;
+  const auto times = UniformTimes(0, 0.5, 200);
+  Trajectory held;
+  const SimulationSummary summary = Simulate(p, CommandSignal{}, start, times, options, &held);
+  ASSERT_TRUE(summary.ok()) << summary.message;
+  const FrictionUse& use = summary.friction_use;
+  EXPECT_FALSE(use.slid[0]);
+  EXPECT_FALSE(use.slid[1]);
+  EXPECT_NEAR(use.breakaway_needed_N[1], 0.7 * fs - options.breakaway_margin_N, 1e-6 * fs);
+  EXPECT_LT(use.breakaway_needed_N[0], 0.0);
+  EXPECT_TRUE(use.Unaffected(0, 0.01));
+  EXPECT_TRUE(use.Unaffected(1, 0.8 * fs));
+  EXPECT_FALSE(use.Unaffected(1, 0.6 * fs));
+
+  Parameters changed = p;
+  changed.friction.negative = {0.8 * fs, 0.5 * fs, 3.0, 0.02};
+  const Trajectory same = MustSimulate(changed, CommandSignal{}, start, times, options);
+  EXPECT_EQ(same.x_m, held.x_m);
+  EXPECT_EQ(same.p1_Pa, held.p1_Pa);
+  changed.friction.negative.static_force_N = 0.6 * fs;
+  const Trajectory slides = MustSimulate(changed, CommandSignal{}, start, times, options);
+  EXPECT_LT(slides.x_m.back(), -1e-4);
+
+  Trajectory stroke;
+  const SimulationSummary extends =
+      Simulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p), times, options, &stroke);
+  ASSERT_TRUE(extends.ok()) << extends.message;
+  EXPECT_GT(stroke.x_m.back(), 0.0);
+  EXPECT_GE(*std::min_element(stroke.v_m_per_s.begin(), stroke.v_m_per_s.end()), 0.0);
+  EXPECT_TRUE(extends.friction_use.slid[0]);
+  EXPECT_FALSE(extends.friction_use.slid[1]);
+  EXPECT_FALSE(extends.friction_use.Unaffected(0, 1e3));
 }
 
 TEST(SimulateTest, StepBudgetEndsARunInsteadOfHanging) {

@@ -84,6 +84,30 @@ InitialState RetractedAtRest(const Parameters& params);
 
 enum class SimulationStatus { kSuccess, kInvalidInput, kSolverFailure };
 
+// What a run's trajectory read of each direction's friction coefficients
+// (side 0: positive, 1: negative), recorded as it is simulated. A direction
+// the rod never slid in (nor ran regularised) is read only by its breakaway
+// tests (stuck, and coming to rest), each comparing its static force with
+// the driving force. Such a test keeps its outcome for any static force
+// above the largest force the tests saw, and a switching function that
+// keeps its sign is all CVODES' root finding reads of it: the same run with
+// that direction's coefficients changed, its Fs above that force, follows
+// the same trajectory to the bit (Unaffected).
+struct FrictionUse {
+  bool slid[2] = {false, false};
+  // The largest force [N] a breakaway test of the side asked its static
+  // force to hold: the driving force (along the side) less the margin, over
+  // the friction's pressure scale; -inf when never tested.
+  double breakaway_needed_N[2] = {-std::numeric_limits<double>::infinity(),
+                                  -std::numeric_limits<double>::infinity()};
+
+  void NoteSliding(int side) { slid[side] = true; }
+  void NoteBreakawayTest(int side, double needed_N);
+  // Whether the run, simulated again with side's coefficients changed and
+  // its static force `static_force_N`, would follow the same trajectory.
+  bool Unaffected(int side, double static_force_N) const;
+};
+
 struct SimulationSummary {
   SimulationStatus status = SimulationStatus::kSuccess;
   std::string message;  // why it failed; empty on success
@@ -96,6 +120,7 @@ struct SimulationSummary {
   long events = 0;  // stick/slip switches
   double simulated_time_s = 0.0;
   double wall_time_s = 0.0;
+  FrictionUse friction_use;  // of a successful run
 
   bool ok() const { return status == SimulationStatus::kSuccess; }
   std::string BriefReport() const;

@@ -1,0 +1,91 @@
+#include "windowed_measures.h"
+
+#include <cmath>
+#include <utility>
+
+#include "pneumaid/io/params_yaml.h"
+#include "refine_residual.h"
+
+namespace pneumaid::refine_internal {
+
+WindowedMeasures::WindowedMeasures(const Unit& unit, const FitSpec& spec,
+                                   const RefineOptions& options)
+    : unit_(unit), spec_(spec), options_(options) {}
+
+double WindowedMeasures::Measure(const Parameters& params, double above, bool* exact) {
+  if (exact != nullptr) *exact = true;
+  const auto max_windows = static_cast<std::size_t>(options_.screen_windows_max);
+  const FittedRunSet windows(params, unit_, spec_, options_, true, max_windows);
+  const std::size_t n = windows.runs().size();
+  Measured m;
+  m.squares.assign(n, 0.0);
+  m.use.resize(n);
+  long rows = 0;
+  for (const FitExperiment& w : windows.runs()) {
+    m.rows.push_back(w.data_rows());
+    rows += w.data_rows();
+  }
+  if (rows == 0) return HUGE_VAL;
+
+  // The windows the base gives, counted first.
+  std::vector<bool> known(n, false);
+  double squares = 0;
+  const int side = base_ && base_->rows == m.rows ? SideApartFromBase(params) : -1;
+  if (side >= 0) {
+    const StribeckParams& friction =
+        side == 0 ? params.friction.positive : params.friction.negative;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!base_->use[k].Unaffected(side, friction.static_force_N)) continue;
+      known[k] = true;
+      m.squares[k] = base_->squares[k];
+      m.use[k] = base_->use[k];
+      squares += m.squares[k];
+      ++windows_taken_;
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    if (known[k]) continue;
+    // Windows are left to simulate: above the bound already, the measure is too.
+    if (squares / static_cast<double>(rows) > above) {
+      if (exact != nullptr) *exact = false;
+      return squares / static_cast<double>(rows);
+    }
+    const Eigen::VectorXd r = windows.Residuals(k, &m.use[k]);
+    ++windows_simulated_;
+    const auto data = r.head(m.rows[k]);
+    if (!data.allFinite()) return HUGE_VAL;
+    m.squares[k] = data.squaredNorm();
+    squares += m.squares[k];
+  }
+  double total = 0;  // in the windows' order, whichever were simulated
+  for (const double s : m.squares) total += s;
+  m.params = params;
+  last_ = std::move(m);
+  return total / static_cast<double>(rows);
+}
+
+void WindowedMeasures::Rebase(const Parameters& params) {
+  const std::string text = ParamsToYaml(params);
+  if (!last_ || ParamsToYaml(last_->params) != text) {
+    last_.reset();
+    Measure(params);
+  }
+  base_ = std::move(last_);  // none when `params` cannot be simulated
+  last_.reset();
+  if (base_) base_->text = text;
+}
+
+int WindowedMeasures::SideApartFromBase(const Parameters& params) const {
+  for (const int side : {0, 1}) {
+    Parameters same = params;  // `params` with the base's friction on `side`
+    if (side == 0) {
+      same.friction.positive = base_->params.friction.positive;
+    } else {
+      same.friction.negative = base_->params.friction.negative;
+    }
+    if (ParamsToYaml(same) == base_->text) return side;
+  }
+  return -1;
+}
+
+}  // namespace pneumaid::refine_internal

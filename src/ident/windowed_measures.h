@@ -1,0 +1,59 @@
+// WindowedMeasure (refine_verdict.h) for a search's many candidates, each
+// one direction's friction away from the best so far. For one set, the base,
+// each window's squares and what its simulation read of the friction
+// (FrictionUse, simulate.h) are kept. A candidate that differs from the base
+// in one direction's friction alone takes from it every window that
+// direction cannot change (the base never slid that way there, and the
+// candidate's static force holds each breakaway test the base's held): the
+// same trajectory to the bit, so the same squares. It simulates the rest. The
+// value is WindowedMeasure's, exact or bound alike, summed in the same order
+// when exact; the windows taken are counted first, so a candidate that
+// measures above the bound stops sooner.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pneumaid/ident/refine.h"
+#include "pneumaid/sim/simulate.h"
+
+namespace pneumaid::refine_internal {
+
+class WindowedMeasures {
+ public:
+  // `unit`, `spec` and `options` must outlive it.
+  WindowedMeasures(const Unit& unit, const FitSpec& spec, const RefineOptions& options);
+
+  // WindowedMeasure(params, unit, spec, options, above, exact).
+  double Measure(const Parameters& params, double above = HUGE_VAL, bool* exact = nullptr);
+
+  // The base from now on: the set last measured exactly, when that is
+  // `params` (a search's new best), else `params` measured whole (one
+  // simulation of each window).
+  void Rebase(const Parameters& params);
+
+  long windows_simulated() const { return windows_simulated_; }
+  long windows_taken() const { return windows_taken_; }  // from the base, not simulated
+
+ private:
+  struct Measured {
+    Parameters params;
+    std::string text;              // ParamsToYaml(params), filled when it becomes the base
+    std::vector<long> rows;        // each window's data rows
+    std::vector<double> squares;   // each window's sum of squared data residuals
+    std::vector<FrictionUse> use;  // each window's simulation's
+  };
+
+  // The side (0: positive, 1: negative) whose friction alone `params` may
+  // differ in from the base; -1 when it differs in more, or there is none.
+  int SideApartFromBase(const Parameters& params) const;
+
+  const Unit& unit_;
+  const FitSpec& spec_;
+  const RefineOptions& options_;
+  std::optional<Measured> base_, last_;  // last_: the last set measured exactly
+  long windows_simulated_ = 0, windows_taken_ = 0;
+};
+
+}  // namespace pneumaid::refine_internal
