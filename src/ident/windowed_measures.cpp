@@ -3,7 +3,7 @@
 #include <cmath>
 #include <utility>
 
-#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/model/parameter_table.h"
 #include "refine_residual.h"
 
 namespace pneumaid::refine_internal {
@@ -65,14 +65,12 @@ double WindowedMeasures::Measure(const Parameters& params, double above, bool* e
 }
 
 void WindowedMeasures::Rebase(const Parameters& params) {
-  const std::string text = ParamsToYaml(params);
-  if (!last_ || ParamsToYaml(last_->params) != text) {
+  if (!last_ || !SameValues(last_->params, params)) {
     last_.reset();
     Measure(params);
   }
   base_ = std::move(last_);  // none when `params` cannot be simulated
   last_.reset();
-  if (base_) base_->text = text;
 }
 
 int WindowedMeasures::SideApartFromBase(const Parameters& params) const {
@@ -83,7 +81,7 @@ int WindowedMeasures::SideApartFromBase(const Parameters& params) const {
     } else {
       same.friction.negative = base_->params.friction.negative;
     }
-    if (ParamsToYaml(same) == base_->text) return side;
+    if (SameValues(same, base_->params)) return side;
   }
   return -1;
 }

@@ -12,7 +12,6 @@
 #pragma once
 
 #include <optional>
-#include <string>
 #include <vector>
 
 #include "pneumaid/ident/refine.h"
@@ -39,7 +38,6 @@ class WindowedMeasures {
  private:
   struct Measured {
     Parameters params;
-    std::string text;              // ParamsToYaml(params), filled when it becomes the base
     std::vector<long> rows;        // each window's data rows
     std::vector<double> squares;   // each window's sum of squared data residuals
     std::vector<FrictionUse> use;  // each window's simulation's

@@ -1,5 +1,6 @@
 #include "pneumaid/model/parameter_table.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -163,6 +164,20 @@ bool SetParameter(Parameters* params, const std::string& path, double value) {
   if (entry == effect->second.end()) return false;
   entry->second = value;
   return true;
+}
+
+bool SameValues(const Parameters& a, const Parameters& b) {
+  for (const auto& info : ScalarParameterTable()) {
+    if (!(info.get(a) == info.get(b))) return false;  // NaN counts as apart
+  }
+  const auto same_entry = [](const DeltaAtLength& x, const DeltaAtLength& y) {
+    return x.tube_length_m == y.tube_length_m && x.delta_per_s == y.delta_per_s;
+  };
+  const auto& la = a.pipeline.delta_by_length;
+  const auto& lb = b.pipeline.delta_by_length;
+  return a.cylinder.orientation == b.cylinder.orientation && a.valve.branch == b.valve.branch &&
+         a.pipeline.model == b.pipeline.model && a.effects == b.effects &&
+         std::equal(la.begin(), la.end(), lb.begin(), lb.end(), same_entry);
 }
 
 }  // namespace pneumaid

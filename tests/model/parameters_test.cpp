@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -53,6 +56,34 @@ TEST(ParametersTest, CatalogHoldsTheSpecNames) {
         "supply_droop", "friction_pressure", "valve_deadzone", "stick_creep"}) {
     EXPECT_NE(FindEffect(name), nullptr) << name;
   }
+}
+
+// SameValues: a set is the same as its copy, whatever its name, uncertainty
+// and provenance; any one scalar of the table, effect value, mode or delta(L)
+// entry changed sets it apart.
+TEST(ParametersTest, SameValuesTellsEveryFieldApart) {
+  Parameters base;
+  base.effects["valve_lag"] = {{"tau", 0.005}};
+  base.pipeline.delta_by_length = {{1.0, 8.0}};
+  Parameters copy = base;
+  copy.unit = "another";
+  copy.uncertainty["friction.positive.Fs"] = 0.1;
+  copy.provenance_yaml = "{tool: test}";
+  EXPECT_TRUE(SameValues(base, copy));
+  for (const auto& info : ScalarParameterTable()) {
+    Parameters changed = base;
+    double& value = info.ref(changed);
+    value = value == 0 ? 1e-300 : std::nextafter(value, 2 * value);
+    EXPECT_FALSE(SameValues(base, changed)) << info.path;
+  }
+  std::vector<Parameters> changed(6, base);
+  changed[0].cylinder.orientation = Orientation::kHorizontal;
+  changed[1].valve.branch = ValveBranchMode::kHysteresis;
+  changed[2].pipeline.model = PipelineModel::kNone;
+  changed[3].pipeline.delta_by_length[0].delta_per_s = 8.5;
+  changed[4].pipeline.delta_by_length.push_back({2.0, 6.0});
+  changed[5].effects["valve_lag"]["tau"] = 0.006;
+  for (std::size_t k = 0; k < changed.size(); ++k) EXPECT_FALSE(SameValues(base, changed[k])) << k;
 }
 
 TEST(ParametersTest, PathsAddressScalarsAndEffects) {
