@@ -482,7 +482,7 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
         SubsetSize(all, static_cast<std::size_t>(options.screen_windows_max));
     std::snprintf(line, sizeof(line),
                   "%s (%zu of %zu): mean square %.3g -> %.3g, median reduced chi-square %.3g -> "
-                  "%.3g (%d candidates simulated; windows: %ld simulated, %ld as the best's)",
+                  "%.3g (%d candidates simulated; windows: %ld simulated, %ld taken unchanged)",
                   name, ranked, all, out.ranked_before, out.ranked_after, out.chi_square_before,
                   out.chi_square_after, out.candidates, screen.windows().windows_simulated(),
                   screen.windows().windows_taken());

@@ -278,8 +278,9 @@ class FittedRunSet {
   // Run k's weighted residuals (NaN where it cannot be simulated); with
   // `use`, what its simulation read of the friction.
   Eigen::VectorXd Residuals(std::size_t k, FrictionUse* use = nullptr) const;
-  // The conditioned set the runs are simulated with (WithRigConditions).
-  const Parameters& conditioned() const { return conditioned_; }
+  // The set the runs are simulated with: the rig's conditions, the free
+  // parameters through the bounds map (as the residual blocks see them).
+  Parameters Simulated() const { return WithValues(conditioned_, map_, theta_.data()); }
   // The runs, handed over: the set has none left to simulate.
   std::vector<FitExperiment> ReleaseRuns() { return std::move(runs_); }
 

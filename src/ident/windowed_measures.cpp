@@ -5,6 +5,7 @@
 
 #include "pneumaid/model/parameter_table.h"
 #include "refine_residual.h"
+#include "refine_solve.h"
 
 namespace pneumaid::refine_internal {
 
@@ -16,8 +17,13 @@ double WindowedMeasures::Measure(const Parameters& params, double above, bool* e
   if (exact != nullptr) *exact = true;
   const auto max_windows = static_cast<std::size_t>(options_.screen_windows_max);
   const FittedRunSet windows(params, unit_, spec_, options_, true, max_windows);
+  const Parameters simulated = windows.Simulated();
+  // What a simulation would refuse, whatever the windows taken say.
+  if (!Validate(simulated).empty() || StopRequested(options_)) return HUGE_VAL;
   const std::size_t n = windows.runs().size();
   Measured m;
+  m.static_force_N[0] = simulated.friction.positive.static_force_N;
+  m.static_force_N[1] = simulated.friction.negative.static_force_N;
   m.squares.assign(n, 0.0);
   m.use.resize(n);
   long rows = 0;
@@ -32,10 +38,11 @@ double WindowedMeasures::Measure(const Parameters& params, double above, bool* e
   double squares = 0;
   const int side = base_ && base_->rows == m.rows ? SideApartFromBase(params) : -1;
   if (side >= 0) {
-    const StribeckParams& friction =
-        side == 0 ? params.friction.positive : params.friction.negative;
     for (std::size_t k = 0; k < n; ++k) {
-      if (!base_->use[k].Unaffected(side, friction.static_force_N)) continue;
+      const FrictionUse& use = base_->use[k];
+      if (!use.Unaffected(side, m.static_force_N[side]) ||
+          !use.Unaffected(side, base_->static_force_N[side]))
+        continue;
       known[k] = true;
       m.squares[k] = base_->squares[k];
       m.use[k] = base_->use[k];

@@ -3,14 +3,17 @@
 // each window's squares and what its simulation read of the friction
 // (FrictionUse, simulate.h) are kept. A candidate that differs from the base
 // in one direction's friction alone takes from it every window that
-// direction cannot change (the base never slid that way there, and the
-// candidate's static force holds each breakaway test the base's held): the
-// same trajectory to the bit, so the same squares. It simulates the rest. The
-// value is WindowedMeasure's, exact or bound alike, summed in the same order
-// when exact; the windows taken are counted first, so a candidate that
-// measures above the bound stops sooner.
+// direction cannot change (the base never slid that way there, and both the
+// candidate's static force and the base's hold each breakaway test the
+// base's run made): the same trajectory to the bit, so the same squares. It
+// simulates the rest. An exact measure is WindowedMeasure's to the bit
+// (summed in the windows' order); a lower bound is one too, above the bound
+// asked for, though not WindowedMeasure's own: the windows taken count
+// first, so a candidate that measures above the bound stops sooner. One
+// instance per search: Measure keeps state and is not for two threads.
 #pragma once
 
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -38,13 +41,15 @@ class WindowedMeasures {
  private:
   struct Measured {
     Parameters params;
-    std::vector<long> rows;        // each window's data rows
-    std::vector<double> squares;   // each window's sum of squared data residuals
-    std::vector<FrictionUse> use;  // each window's simulation's
+    double static_force_N[2] = {0, 0};  // each side's Fs as simulated
+    std::vector<long> rows;             // each window's data rows
+    std::vector<double> squares;        // each window's sum of squared data residuals
+    std::vector<FrictionUse> use;       // each window's simulation's
   };
 
   // The side (0: positive, 1: negative) whose friction alone `params` may
-  // differ in from the base; -1 when it differs in more, or there is none.
+  // differ in from the base (0 when it is the base's); -1 when it differs in
+  // more, or there is no base.
   int SideApartFromBase(const Parameters& params) const;
 
   const Unit& unit_;

@@ -166,9 +166,17 @@ bool SetParameter(Parameters* params, const std::string& path, double value) {
   return true;
 }
 
+// 480 bytes with libstdc++ on x86-64 (GCC and Clang): a field added to
+// Parameters changes it. Compare the new field in SameValues (a scalar of
+// the table needs nothing), then update the size.
+#if defined(__GLIBCXX__) && defined(__x86_64__)
+static_assert(sizeof(Parameters) == 480,
+              "Parameters changed: compare the new field in SameValues, then update this size");
+#endif
+
 bool SameValues(const Parameters& a, const Parameters& b) {
   for (const auto& info : ScalarParameterTable()) {
-    if (!(info.get(a) == info.get(b))) return false;  // NaN counts as apart
+    if (!(info.get(a) == info.get(b))) return false;  // a NaN is apart
   }
   const auto same_entry = [](const DeltaAtLength& x, const DeltaAtLength& y) {
     return x.tube_length_m == y.tube_length_m && x.delta_per_s == y.delta_per_s;

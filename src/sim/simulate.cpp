@@ -580,10 +580,12 @@ void FrictionUse::NoteBreakawayTest(int side, double needed_N) {
 }
 
 bool FrictionUse::Unaffected(int side, double static_force_N) const {
+  if (slid[side]) return false;
+  const double needed = breakaway_needed_N[side];
+  if (needed == -std::numeric_limits<double>::infinity()) return true;  // never tested
   // Above by a relative 1e-9: the switching function, computed otherwise
   // than `needed`, keeps its sign through the round-off.
-  const double needed = breakaway_needed_N[side];
-  return !slid[side] && static_force_N > needed + 1e-9 * std::fabs(needed) + 1e-12;
+  return static_force_N > needed + 1e-9 * std::fabs(needed) + 1e-12;
 }
 
 std::string SimulationSummary::BriefReport() const {

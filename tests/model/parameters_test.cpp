@@ -59,8 +59,8 @@ TEST(ParametersTest, CatalogHoldsTheSpecNames) {
 }
 
 // SameValues: a set is the same as its copy, whatever its name, uncertainty
-// and provenance; any one scalar of the table, effect value, mode or delta(L)
-// entry changed sets it apart.
+// and provenance; any one scalar of the table (every row, so a row added is
+// tested too), effect value, mode or delta(L) entry changed sets it apart.
 TEST(ParametersTest, SameValuesTellsEveryFieldApart) {
   Parameters base;
   base.effects["valve_lag"] = {{"tau", 0.005}};

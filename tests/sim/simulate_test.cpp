@@ -300,7 +300,8 @@ TEST(SimulateTest, InvalidInputsAreReportedNotThrown) {
 // negative Fs against 0.7 Fs (less the margin). So the same run with the
 // negative Fs at 0.8 of it, and every other negative coefficient changed,
 // is the same to the bit; at 0.6 it slides. A stroke that extends slides
-// only that way (horizontal, no tube: it never runs back).
+// only that way (horizontal, no tube: it never runs back); one resting on
+// the retracted stop never tests its negative side.
 TEST(SimulateTest, WhatARunReadsOfEachDirectionsFrictionIsRecorded) {
   Parameters p = HorizontalWithoutTube();
   const double fs = p.friction.negative.static_force_N;
@@ -330,6 +331,15 @@ TEST(SimulateTest, WhatARunReadsOfEachDirectionsFrictionIsRecorded) {
   const Trajectory slides = MustSimulate(changed, CommandSignal{}, start, times, options);
   EXPECT_LT(slides.x_m.back(), -1e-4);
 
+  // At rest on the retracted stop: the negative side is never tested.
+  Trajectory resting;
+  const SimulationSummary at_stop =
+      Simulate(p, CommandSignal{}, RetractedAtRest(p), times, options, &resting);
+  ASSERT_TRUE(at_stop.ok()) << at_stop.message;
+  EXPECT_FALSE(at_stop.friction_use.slid[1]);
+  EXPECT_TRUE(std::isinf(at_stop.friction_use.breakaway_needed_N[1]));
+  EXPECT_TRUE(at_stop.friction_use.Unaffected(1, 1e-3));
+
   Trajectory stroke;
   const SimulationSummary extends =
       Simulate(p, StepCommand({{0.0, 1.0}}), RetractedAtRest(p), times, options, &stroke);
@@ -350,6 +360,9 @@ TEST(SimulateTest, StepBudgetEndsARunInsteadOfHanging) {
                UniformTimes(0, 1.0, 100), options, &run);
   EXPECT_EQ(summary.status, SimulationStatus::kSolverFailure);
   EXPECT_NE(summary.message.find("step budget"), std::string::npos);
+  // A run that failed vouches for nothing: every coefficient counts as read.
+  EXPECT_FALSE(summary.friction_use.Unaffected(0, 1e3));
+  EXPECT_FALSE(summary.friction_use.Unaffected(1, 1e3));
 }
 
 }  // namespace

@@ -43,12 +43,13 @@ bool GetParameter(const Parameters& params, const std::string& path, double* val
 // Writes a scalar by path, including effect parameters of effects present.
 bool SetParameter(Parameters* params, const std::string& path, double value);
 
-// Whether two sets hold the same model: every scalar of the table bit for
-// bit, the effects and their values, the modes (orientation, valve branch,
-// pipeline model) and the delta(L) list. The name, uncertainty and
-// provenance are not the model and are not compared. A field added to
-// Parameters that is not a scalar of the table is added here too
-// (ParametersTest.SameValuesTellsEveryFieldApart).
+// Whether two sets hold the same model: every scalar of the table, the
+// effects and their values, compared with == (so -0 and +0 alike, a NaN
+// apart from everything), the modes (orientation, valve branch, pipeline
+// model) and the delta(L) list. The name, uncertainty and provenance are not
+// the model and are not compared. A field added to Parameters that is not a
+// scalar of the table must be added there too: a static_assert on the
+// struct's size says so.
 bool SameValues(const Parameters& a, const Parameters& b);
 
 }  // namespace pneumaid

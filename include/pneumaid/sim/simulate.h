@@ -85,14 +85,15 @@ InitialState RetractedAtRest(const Parameters& params);
 enum class SimulationStatus { kSuccess, kInvalidInput, kSolverFailure };
 
 // What a run's trajectory read of each direction's friction coefficients
-// (side 0: positive, 1: negative), recorded as it is simulated. A direction
-// the rod never slid in (nor ran regularised) is read only by its breakaway
-// tests (stuck, and coming to rest), each comparing its static force with
-// the driving force. Such a test keeps its outcome for any static force
-// above the largest force the tests saw, and a switching function that
+// (side 0: positive, 1: negative), recorded by Simulate as it goes (not by
+// the sensitivity runs' event jumps, which do not steer the trajectory). A
+// direction the rod never slid in (nor ran regularised) is read only by its
+// breakaway tests (stuck, and coming to rest), each comparing its static
+// force with the driving force. Such a test keeps its outcome for any static
+// force above the largest force the tests saw, and a switching function that
 // keeps its sign is all CVODES' root finding reads of it: the same run with
-// that direction's coefficients changed, its Fs above that force, follows
-// the same trajectory to the bit (Unaffected).
+// that direction's coefficients changed, its Fs and the run's own above that
+// force, follows the same trajectory to the bit (Unaffected).
 struct FrictionUse {
   bool slid[2] = {false, false};
   // The largest force [N] a breakaway test of the side asked its static
@@ -101,10 +102,19 @@ struct FrictionUse {
   double breakaway_needed_N[2] = {-std::numeric_limits<double>::infinity(),
                                   -std::numeric_limits<double>::infinity()};
 
+  // Every coefficient read: what a run that failed, or was not recorded, says.
+  static FrictionUse Everything() {
+    FrictionUse use;
+    use.slid[0] = use.slid[1] = true;
+    return use;
+  }
   void NoteSliding(int side) { slid[side] = true; }
   void NoteBreakawayTest(int side, double needed_N);
-  // Whether the run, simulated again with side's coefficients changed and
-  // its static force `static_force_N`, would follow the same trajectory.
+  // Whether a static force of `static_force_N` on the side holds every
+  // breakaway test the run made there, by a margin the round-off keeps, and
+  // the run never slid that way: with both its own and another set's Fs
+  // unaffected, the other set's run (that side's coefficients alone changed)
+  // is this one to the bit.
   bool Unaffected(int side, double static_force_N) const;
 };
 
@@ -120,7 +130,7 @@ struct SimulationSummary {
   long events = 0;  // stick/slip switches
   double simulated_time_s = 0.0;
   double wall_time_s = 0.0;
-  FrictionUse friction_use;  // of a successful run
+  FrictionUse friction_use = FrictionUse::Everything();  // recorded by a successful run
 
   bool ok() const { return status == SimulationStatus::kSuccess; }
   std::string BriefReport() const;
