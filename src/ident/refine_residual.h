@@ -153,8 +153,11 @@ class ExperimentResidual final : public ceres::CostFunction {
     if (!Validate(params).empty()) return false;
     const FitExperiment& e = *experiment_;
     Trajectory sim;
-    const SimulationSummary summary = Simulate(params, e.command, StartOf(e, z + map_->size()),
-                                               e.measured.t_s, *simulation_, &sim);
+    SimulationOptions recording;  // what the run reads of the friction, when asked
+    if (use != nullptr) recording = *simulation_, recording.record_friction_use = true;
+    const SimulationSummary summary =
+        Simulate(params, e.command, StartOf(e, z + map_->size()), e.measured.t_s,
+                 use != nullptr ? recording : *simulation_, &sim);
     if (!summary.ok() || sim.size() != e.measured.size()) return false;
     if (use != nullptr) *use = summary.friction_use;
     const long n = static_cast<long>(e.measured.size());

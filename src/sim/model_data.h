@@ -91,11 +91,9 @@ inline void NoteBreakawayTests(const ModelData& data, double force_N, double sca
 // reaches the breakaway force plus a margin (the switching hysteresis) in a
 // direction the rod can move. Sliding: the velocity returns to zero (g0) or
 // the rod reaches the end of the stroke (g1). Templated so that the event
-// sensitivities can differentiate them. With `use`, the breakaway tests are
-// noted there (FrictionUse).
+// sensitivities can differentiate them.
 template <typename T>
-void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g,
-                     FrictionUse* use = nullptr) {
+void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g) {
   const T half_stroke = c.end_stop.half_stroke_m;
   const T margin(data.breakaway_margin_N);
   const T reversal(data.reversal_velocity_m_per_s);
@@ -106,8 +104,6 @@ void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, co
       const double x = Value(y[kPosition]);
       g[0] = AtExtendedStop(data, x) ? T(-1.0) : force - BreakawayForce(c, p, +1.0) - margin;
       g[1] = AtRetractedStop(data, x) ? T(1.0) : force + BreakawayForce(c, p, -1.0) + margin;
-      if (use != nullptr)
-        NoteBreakawayTests(data, Value(force), Value(FrictionScale(c, p)), x, use);
       break;
     }
     case MotionMode::kSlidingPositive:

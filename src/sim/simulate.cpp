@@ -66,8 +66,23 @@ PNEUMAID_FLATTEN int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacob
 
 // CVODE root function. Never throws.
 int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
+  const auto* data = static_cast<const ModelData*>(user_data);
+  SwitchingValues(*data, data->coefficients, N_VGetArrayPointer(y), g);
+  return 0;
+}
+
+// The same, noting the breakaway tests in data->friction_use
+// (SimulationOptions::record_friction_use). Never throws.
+int RecordedSwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
   auto* data = static_cast<ModelData*>(user_data);
-  SwitchingValues(*data, data->coefficients, N_VGetArrayPointer(y), g, &data->friction_use);
+  const double* state = N_VGetArrayPointer(y);
+  SwitchingValues(*data, data->coefficients, state, g);
+  if (data->motion == MotionMode::kStuck) {
+    const auto& c = data->coefficients;
+    const ChamberPressures<double> p = DecodeChambers(c, state);
+    NoteBreakawayTests(*data, DrivingForce(c, state, p), FrictionScale(c, p), state[kPosition],
+                       &data->friction_use);
+  }
   return 0;
 }
 
@@ -148,7 +163,10 @@ class Integrator {
     CheckFlag(CVodeSetJacFn(mem, Jacobian), "CVodeSetJacFn");
     CheckFlag(CVodeSetMaxNumSteps(mem, 100000), "CVodeSetMaxNumSteps");
     if (data_->motion != MotionMode::kRegularized) {
-      CheckFlag(CVodeRootInit(mem, 2, SwitchingFunctions), "CVodeRootInit");
+      CheckFlag(CVodeRootInit(
+                    mem, 2,
+                    options.record_friction_use ? RecordedSwitchingFunctions : SwitchingFunctions),
+                "CVodeRootInit");
       // A switching surface met at the start of a segment (zero at t0) is
       // ignored by CVODE until it moves away: no Zeno loop at breakaway.
       CheckFlag(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn");
@@ -538,7 +556,7 @@ SimulationSummary Run(const Parameters& params, const CommandSignal& command,
     AppendSample(data, t_out, current_V, integrator.state(), out);
   }
   summary = integrator.Counters();
-  summary.friction_use = data.friction_use;
+  if (options.record_friction_use) summary.friction_use = data.friction_use;
   return summary;
 }
 

@@ -308,7 +308,8 @@ TEST(SimulateTest, WhatARunReadsOfEachDirectionsFrictionIsRecorded) {
   const double p2 = 2e5;
   const double p1 = (-0.7 * fs - NetForce(p, 0.0, p2)) / p.cylinder.area_1_m2;
   const InitialState start{0.0, 0.0, p1, p2};
-  const SimulationOptions options;
+  SimulationOptions options;
+  options.record_friction_use = true;
   const auto times = UniformTimes(0, 0.5, 200);
   Trajectory held;
   const SimulationSummary summary = Simulate(p, CommandSignal{}, start, times, options, &held);

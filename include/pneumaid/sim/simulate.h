@@ -61,6 +61,10 @@ struct SimulationOptions {
   long max_events = 100'000;
   // Numerical treatment of stick (regularized mode), end stops and the orifice.
   ModelRegularization regularization;
+  // Record what the run reads of each direction's friction
+  // (SimulationSummary::friction_use; FrictionUse::Everything without). Off
+  // by default: the stuck phases' root function then notes nothing.
+  bool record_friction_use = false;
 
   bool IsValid(std::string* error) const;
 };
@@ -85,7 +89,8 @@ InitialState RetractedAtRest(const Parameters& params);
 enum class SimulationStatus { kSuccess, kInvalidInput, kSolverFailure };
 
 // What a run's trajectory read of each direction's friction coefficients
-// (side 0: positive, 1: negative), recorded by Simulate as it goes (not by
+// (side 0: positive, 1: negative), recorded by Simulate as it goes when
+// SimulationOptions::record_friction_use asks (not by
 // the sensitivity runs' event jumps, which do not steer the trajectory). A
 // direction the rod never slid in (nor ran regularised) is read only by its
 // breakaway tests (stuck, and coming to rest), each comparing its static
@@ -130,7 +135,7 @@ struct SimulationSummary {
   long events = 0;  // stick/slip switches
   double simulated_time_s = 0.0;
   double wall_time_s = 0.0;
-  FrictionUse friction_use = FrictionUse::Everything();  // recorded by a successful run
+  FrictionUse friction_use = FrictionUse::Everything();  // recorded by a successful run on request
 
   bool ok() const { return status == SimulationStatus::kSuccess; }
   std::string BriefReport() const;
