@@ -45,36 +45,9 @@ if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
   BUILD_DIR=build-asan CMAKE_ARGS="-DPNEUMAID_SANITIZE=ON -DPNEUMAID_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo" \
     scripts/setup.sh
   phase "sanitizer build"
-  # The multi-second statistical recovery tests (many seeds, multistart, whole
-  # refinements) run in the Release pass only: under the sanitizers they take
-  # minutes each and exercise no code path that the other tests leave out.
-  SLOW='StandardErrorsAreHonestOverTenSeeds|HalvesTheHeldOutPositionError'
-  SLOW+='|MultistartKeepsTheBest|FromTrajectoriesAloneStartingThirtyPercentOff'
-  SLOW+='|RecoversAHorizontalCylindersFriction|RecoversTheTenDefaultParametersFromTheComponentFits'
-  # Diagnose: one run under the sanitizers (the cross-leakage unit), the rest
-  # in the Release pass.
-  SLOW+='|ClosesMostOfItsGap/(ValveLag|FlowSensorLag|PipelineLag|HeatTransfer|SupplyDroop|FrictionPressure|ValveDeadzone|StickCreep)'
-  SLOW+='|NamesNothingOnCleanUnits|SlightlyOffBaseCoefficients|NamesTwoHiddenEffects'
-  SLOW+='|TellsAValveLagFromAFlowMeterLag|ValidatesAndDiagnosesEachUnitWhenAsked'
-  # Whole batch processes with refinement, killed and resumed: process-level
-  # behaviour the Release pass checks; the resume path's code runs in BatchTest.
-  SLOW+='|AKilledRunResumesToTheSameResults'
-  # The windows' screen (three searches, ~3 800 simulations in all) and the
-  # fits by windows first, each test of them: under the sanitizers one whole
-  # refinement runs them all (TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect:
-  # both screens, the profiled search, 3 next-best candidates fitted, by
-  # windows first where not explained). FromBiasedComponentFits... took 444 s
-  # there (session 29); the fresh-clone CI took 40.5 min with it excluded.
-  SLOW+='|TheScreenRankedByWindowsFindsTheSameBasin|RankedByWindowsTheJointSearchMovesFdAndBToo|TheProfiledSearchRanksNearTheTruth'
-  SLOW+='|RankedByWindowsTheScreenFindsEachDirectionsBasin|ALightRodLoggedAt500HzIsFoundByMultipleShooting'
-  SLOW+='|FromBiasedComponentFitsItSaysWhenTheRunsAreNotExplained'
-  # The friction fit's replays of every stop of many strokes (11 s in
-  # Release); the stop segments' code runs in the other friction tests.
-  SLOW+='|AnFsTheMidStrokeSlidesLeaveOpenIsReadAtTheStops'
-  # identify --refine of the bundled unit with the creep fit (11 s in Release,
-  # five more fits of the last stage); the creep fit runs under the sanitizers
-  # in RefineCreepTest, identify --refine in RefineCliTest.
-  SLOW+='|AUnitWithoutDeclaredNoiseIsIdentifiedAndRefined'
+  # Each whole workflow once, at its smallest: tests/release-only.txt names
+  # the tests of the Release pass only, and why.
+  SLOW=$(grep -v -e '^#' -e '^$' tests/release-only.txt | paste -sd'|')
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
     ctest --test-dir build-asan --output-on-failure -j"$(nproc)" -E "$SLOW"
   phase "sanitizer tests"
