@@ -65,7 +65,7 @@ PNEUMAID_FLATTEN int Jacobian(sunrealtype, N_Vector y, N_Vector, SUNMatrix jacob
 }
 
 // CVODE root function. Never throws.
-int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
+PNEUMAID_FLATTEN int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
   const auto* data = static_cast<const ModelData*>(user_data);
   SwitchingValues(*data, data->coefficients, N_VGetArrayPointer(y), g);
   return 0;
