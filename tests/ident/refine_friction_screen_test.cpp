@@ -486,8 +486,7 @@ TEST(RefineFrictionScreenTest, RankedByWindowsTheScreenFindsEachDirectionsBasin)
 
 // With Fd twice and b half the truth's as well, the screen's start is not
 // explained: 76.9 with the joint search, 284 with the pairwise search alone
-// (session 26); the test asks below 150, between the two. (Release pass
-// only, scripts/test.sh: a third screen of this unit.)
+// (session 26); the test asks below 150, between the two.
 TEST(RefineFrictionScreenTest, RankedByWindowsTheJointSearchMovesFdAndBToo) {
   EXPECT_LT(ScreenedByWindows(WithSlidingOff(true)).chi_square_after, 150);
 }
