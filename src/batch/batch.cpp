@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <locale>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -31,6 +32,7 @@ using Clock = std::chrono::steady_clock;
 // prior, the steps asked for and the refinement spec.
 std::string OptionsFingerprint(const BatchOptions& o) {
   std::ostringstream text;
+  text.imbue(std::locale::classic());
   text << "tool " << o.identify.tool_version << "\nprior " << Sha256Hex(ParamsToYaml(o.prior))
        << "\ncomponents";
   for (Component c : o.identify.components) text << " " << ToString(c);
@@ -41,6 +43,17 @@ std::string OptionsFingerprint(const BatchOptions& o) {
     spec_text = Sha256Hex(ReadTextFile(o.spec.source, "the fit spec"));
   text << "\nfit_u_sat " << o.identify.valve.fit_u_sat << "\nrefine " << o.refine << " "
        << spec_text << "\nvalidate " << o.validate << "\ndiagnose " << o.diagnose << "\n";
+  if (o.diagnose) {
+    // Whatever changes a diagnosis (candidates, iterations, decision rule,
+    // windows), not how it is run (threads, stop, log).
+    const DiagnoseOptions& d = o.diagnosis;
+    text << "diagnosis " << d.max_effects << " " << d.max_iterations << " " << std::hexfloat
+         << d.min_held_back_gain << " " << d.min_improved_share << " " << d.min_signature_share
+         << " " << d.min_gap_over_noise << " " << d.window_s << " " << d.worst_windows << " "
+         << d.after_change_s << std::defaultfloat << " effects";
+    for (const std::string& effect : d.effects) text << " " << effect;
+    text << "\n";
+  }
   return text.str();
 }
 
@@ -128,8 +141,7 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
     json << ", \"validation\": " << ReportToJson(validation);
   }
   if (options.diagnose) {
-    DiagnoseOptions d;
-    d.max_effects = 1;
+    DiagnoseOptions d = options.diagnosis;
     d.stop = stop;
     const DiagnoseResult diagnosis = Diagnose(params, unit, d);
     if (diagnosis.before.numerical_failure() || (stop != nullptr && stop->load())) {
@@ -226,6 +238,12 @@ bool BatchOptions::IsValid(std::string* error) const {
   if (!(timeout_per_unit_s >= 0)) return fail("timeout_per_unit_s must be >= 0");
   if (!identify.IsValid(error)) return false;
   if (refine && !spec.IsValid(error)) return false;
+  if (diagnose) {
+    std::string why;
+    if (!diagnosis.IsValid(&why)) return fail("diagnosis." + why);
+    if (diagnosis.threads != 1)
+      return fail("diagnosis.threads must be 1 (a batch runs its units in parallel: jobs)");
+  }
   return true;
 }
 

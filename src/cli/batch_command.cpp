@@ -21,6 +21,7 @@ struct BatchArgs {
   int jobs = 1;
   std::string shard;  // "i/N" or "auto"
   bool resume = false, refine = false, validate = false, diagnose = false;
+  std::string effects;  // --diagnose's candidates, "a,b,..."
   double timeout_s = 0;
   std::string prior_path = DefaultConfig("paper.yaml");
   std::string spec_path = DefaultConfig("fit-default.yaml");
@@ -61,6 +62,9 @@ int RunBatchCommand(const BatchArgs& args) {
   if (args.refine) options.spec = LoadFitSpec(args.spec_path);
   options.validate = args.validate;
   options.diagnose = args.diagnose;
+  options.diagnosis.effects = SplitList(args.effects);
+  if (!args.effects.empty() && !args.diagnose)
+    throw InputError("--effects", 0, 0, "names diagnose's candidates: give --diagnose too");
   options.jobs = args.jobs;
   options.shard = ParseShard(args.shard);
   options.resume = args.resume;
@@ -70,7 +74,9 @@ int RunBatchCommand(const BatchArgs& args) {
     // A terminal gets one line that updates; a log file plain lines.
     std::cerr << (terminal ? "\r\033[K" : "") << line << (terminal ? "" : "\n") << std::flush;
   };
-  const BatchSummary summary = RunBatch(args.fleet_dir, args.out_dir, options);
+  const BatchSummary summary = NamingFlag("batch options", "diagnosis.effects", "--effects", [&] {
+    return RunBatch(args.fleet_dir, args.out_dir, options);
+  });
   if (terminal) std::cerr << "\n";
   std::cout << summary.BriefReport();
   if (!args.html_path.empty()) {
@@ -99,6 +105,9 @@ CommandRunner AddBatchCommand(CLI::App* app) {
   app->add_flag("--refine", args->refine, "refine each identified set (see --spec)");
   app->add_flag("--validate", args->validate, "validate each final set on its validation runs");
   app->add_flag("--diagnose", args->diagnose, "diagnose each final set (one effect at most)");
+  app->add_option("--effects", args->effects,
+                  "--diagnose's candidate effects, comma-separated (default: every one the set "
+                  "lacks)");
   app->add_option("--timeout-per-unit", args->timeout_s,
                   "seconds after which a unit's work stops (0: none)")
       ->check(CLI::NonNegativeNumber);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "pneumaid/ident/refine.h"
+#include "pneumaid/io/input_error.h"
 
 namespace pneumaid::cli {
 
@@ -28,6 +29,24 @@ using CommandRunner = std::function<int()>;
 std::map<std::string, double> ParseAssignments(
     const std::vector<std::string>& items, const std::string& option, const std::string& expected,
     const std::function<bool(const std::string&)>& key_allowed = {});
+
+// "a,b,..." -> {"a", "b", ...}; empty items dropped (--effects).
+std::vector<std::string> SplitList(const std::string& text);
+
+// Runs `work`; an InputError the library raises about one field of its
+// options ("effects: unknown ..." from "diagnose options") is raised again
+// naming the flag the user typed instead (`flag`: "--effects").
+template <typename Work>
+auto NamingFlag(const std::string& options, const std::string& field, const std::string& flag,
+                Work work) -> decltype(work()) {
+  try {
+    return work();
+  } catch (const InputError& error) {
+    const std::string object = field + ": ";
+    if (error.file() != options || error.message().compare(0, object.size(), object)) throw;
+    throw InputError(flag, 0, 0, error.message().substr(object.size()));
+  }
+}
 
 // Prints a refinement's report and writes its parameter set (and, with
 // `html_path`, the unit's report of it, `text_before` heading its text); the

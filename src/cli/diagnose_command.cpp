@@ -29,16 +29,6 @@ struct DiagnoseArgs {
   std::string html_path;
 };
 
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    if (!item.empty()) items.push_back(item);
-  }
-  return items;
-}
-
 // The output directory is replaced as a whole: it must be new, empty, or an
 // earlier diagnose's output (never a directory of other files).
 void CheckOutDirectory(const std::string& out) {
@@ -63,16 +53,8 @@ int RunDiagnose(const DiagnoseArgs& args) {
   options.effects = SplitList(args.effects);
   options.threads = args.threads;
   if (args.verbose) options.log = [](const std::string& line) { std::cerr << line << "\n"; };
-  DiagnoseResult result;
-  try {
-    result = Diagnose(params, unit, options);
-  } catch (const InputError& error) {
-    // The library names its option ("effects: ..."); the user typed a flag.
-    const std::string object = "effects: ";
-    if (error.file() != "diagnose options" || error.message().compare(0, object.size(), object))
-      throw;
-    throw InputError("--effects", 0, 0, error.message().substr(object.size()));
-  }
+  const DiagnoseResult result = NamingFlag("diagnose options", "effects", "--effects",
+                                           [&] { return Diagnose(params, unit, options); });
   std::cout << result.BriefReport();
   // Everything is computed before anything is written, and the whole output
   // directory is replaced at once: no mix of this run's files and an older one's.

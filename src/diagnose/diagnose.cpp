@@ -305,10 +305,6 @@ void CheckInputs(const Parameters& params, const Unit& unit, const DiagnoseOptio
   if (!options.IsValid(&error)) throw InputError("diagnose options", 0, 0, error);
   const std::vector<std::string> absent = AbsentEffects(params);
   for (const std::string& effect : options.effects) {
-    if (FindEffect(effect) == nullptr) {
-      throw InputError("diagnose options", 0, 0,
-                       "effects: unknown effect '" + effect + "' (docs/effects.md lists them)");
-    }
     if (std::find(absent.begin(), absent.end(), effect) == absent.end()) {
       throw InputError("diagnose options", 0, 0,
                        "effects: '" + effect + "' is already in the parameter set" +
@@ -326,11 +322,15 @@ void CheckInputs(const Parameters& params, const Unit& unit, const DiagnoseOptio
 }  // namespace
 
 bool DiagnoseOptions::IsValid(std::string* error) const {
-  const auto fail = [error](const char* what) {
+  const auto fail = [error](const std::string& what) {
     if (error != nullptr) *error = what;
     return false;
   };
   if (max_effects < 0) return fail("max_effects must be >= 0");
+  for (const std::string& effect : effects) {
+    if (FindEffect(effect) == nullptr)
+      return fail("effects: unknown effect '" + effect + "' (docs/effects.md lists them)");
+  }
   if (threads < 1) return fail("threads must be >= 1");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
   if (!(min_held_back_gain > 0 && min_held_back_gain < 1))

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <type_traits>
 
 #include "pneumaid/model/actuator.h"
 #include "pneumaid/sim/simulate.h"
@@ -91,9 +92,13 @@ inline void NoteBreakawayTests(const ModelData& data, double force_N, double sca
 // reaches the breakaway force plus a margin (the switching hysteresis) in a
 // direction the rod can move. Sliding: the velocity returns to zero (g0) or
 // the rod reaches the end of the stroke (g1). Templated so that the event
-// sensitivities can differentiate them.
+// sensitivities can differentiate them. With `use` (double only), a stuck
+// rod's breakaway tests are noted there (SimulationOptions::
+// record_friction_use); the plain root function passes none, and the test
+// folds away where it is inlined.
 template <typename T>
-void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g) {
+void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, const T* y, T* g,
+                     FrictionUse* use = nullptr) {
   const T half_stroke = c.end_stop.half_stroke_m;
   const T margin(data.breakaway_margin_N);
   const T reversal(data.reversal_velocity_m_per_s);
@@ -104,6 +109,9 @@ void SwitchingValues(const ModelData& data, const ActuatorCoefficients<T>& c, co
       const double x = Value(y[kPosition]);
       g[0] = AtExtendedStop(data, x) ? T(-1.0) : force - BreakawayForce(c, p, +1.0) - margin;
       g[1] = AtRetractedStop(data, x) ? T(1.0) : force + BreakawayForce(c, p, -1.0) + margin;
+      if constexpr (std::is_same_v<T, double>) {
+        if (use != nullptr) NoteBreakawayTests(data, force, FrictionScale(c, p), x, use);
+      }
       break;
     }
     case MotionMode::kSlidingPositive:

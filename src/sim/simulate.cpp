@@ -73,16 +73,10 @@ PNEUMAID_FLATTEN int SwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g,
 
 // The same, noting the breakaway tests in data->friction_use
 // (SimulationOptions::record_friction_use). Never throws.
-int RecordedSwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g, void* user_data) {
+PNEUMAID_FLATTEN int RecordedSwitchingFunctions(sunrealtype, N_Vector y, sunrealtype* g,
+                                                void* user_data) {
   auto* data = static_cast<ModelData*>(user_data);
-  const double* state = N_VGetArrayPointer(y);
-  SwitchingValues(*data, data->coefficients, state, g);
-  if (data->motion == MotionMode::kStuck) {
-    const auto& c = data->coefficients;
-    const ChamberPressures<double> p = DecodeChambers(c, state);
-    NoteBreakawayTests(*data, DrivingForce(c, state, p), FrictionScale(c, p), state[kPosition],
-                       &data->friction_use);
-  }
+  SwitchingValues(*data, data->coefficients, N_VGetArrayPointer(y), g, &data->friction_use);
   return 0;
 }
 

@@ -201,6 +201,9 @@ TEST(BatchTest, ValidatesAndDiagnosesEachUnitWhenAsked) {
   BatchOptions options = Options(1);
   options.validate = true;
   options.diagnose = true;
+  // Two candidates: the batch's plumbing, not diagnose's choice among all
+  // (diagnose_test.cpp).
+  options.diagnosis.effects = {"flow_sensor_lag", "valve_lag"};
   const fs::path results = Fresh("diagnose_results");
   const BatchSummary summary = RunBatch(fleet.string(), results.string(), options);
   ASSERT_EQ(summary.units.size(), 1u);
@@ -211,6 +214,19 @@ TEST(BatchTest, ValidatesAndDiagnosesEachUnitWhenAsked) {
   const std::string json = Read(results / "VL-0001" / "report.json");
   EXPECT_NE(json.find("\"named_effects\": [\"valve_lag\"]"), std::string::npos);
   EXPECT_NE(json.find("\"validation\": {\"format\": \"pneumaid-report/1\""), std::string::npos);
+  // The candidates asked for, and no other, were fitted.
+  EXPECT_NE(json.find("\"flow_sensor_lag\""), std::string::npos);
+  EXPECT_EQ(json.find("\"cross_leakage\""), std::string::npos);
+  // The same options: up to date. Other candidates: another result, redone
+  // (and here stopped at once by a time limit, to keep the test short).
+  options.resume = true;
+  EXPECT_EQ(RunBatch(fleet.string(), results.string(), options).units[0].status,
+            UnitOutcome::Status::kUpToDate);
+  options.diagnosis.effects = {"valve_lag"};
+  options.timeout_per_unit_s = 1e-3;
+  const UnitOutcome redone = RunBatch(fleet.string(), results.string(), options).units[0];
+  EXPECT_EQ(redone.status, UnitOutcome::Status::kFailed);
+  EXPECT_NE(redone.reason.find("time limit"), std::string::npos) << redone.reason;
 }
 
 TEST(BatchTest, BadFleetsAndOptionsAreInputErrors) {
@@ -223,6 +239,22 @@ TEST(BatchTest, BadFleetsAndOptionsAreInputErrors) {
   std::string error;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("shard"), std::string::npos);
+  // The diagnosis's options are checked before any unit, by their names.
+  options = Options();
+  options.diagnose = true;
+  options.diagnosis.effects = {"warp_drive"};
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("diagnosis.effects: unknown effect 'warp_drive'"), std::string::npos)
+      << error;
+  const fs::path not_written = Fresh("bad_diagnosis");
+  EXPECT_THROW(RunBatch(kFleet, not_written.string(), options), InputError);
+  EXPECT_FALSE(fs::exists(not_written));
+  options.diagnosis.effects.clear();
+  options.diagnosis.threads = 2;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("diagnosis.threads"), std::string::npos) << error;
+  options.diagnose = false;  // not asked for: not checked
+  EXPECT_TRUE(options.IsValid(&error)) << error;
   EXPECT_THROW(MergeResults({empty.string()}), InputError);
 }
 

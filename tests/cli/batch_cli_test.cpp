@@ -35,6 +35,19 @@ TEST_F(BatchCliTest, AFleetWithACorruptUnitExitsThreeAndMergeFlagsTheOutlier) {
   EXPECT_EQ(
       Run("batch " + testing::Source("datasets/fleet") + " --out " + results + " --shard auto"), 2);
   EXPECT_NE(Stderr().find("SLURM_ARRAY_TASK_ID"), std::string::npos) << Stderr();
+  // diagnose's candidates: with --diagnose only, and each one known; the
+  // message names the flag.
+  const std::string fresh = (dir_ / "fresh").string();
+  EXPECT_EQ(Run("batch " + testing::Source("datasets/fleet") + " --out " + fresh +
+                " --effects valve_lag"),
+            2);
+  EXPECT_NE(Stderr().find("--effects"), std::string::npos) << Stderr();
+  EXPECT_EQ(Run("batch " + testing::Source("datasets/fleet") + " --out " + fresh +
+                " --diagnose --effects valve_lag,warp_drive"),
+            2);
+  EXPECT_NE(Stderr().find("--effects"), std::string::npos) << Stderr();
+  EXPECT_NE(Stderr().find("unknown effect 'warp_drive'"), std::string::npos) << Stderr();
+  EXPECT_FALSE(fs::exists(fresh));
 }
 
 // SIGKILL mid-run, then --resume: units finished before the kill are not

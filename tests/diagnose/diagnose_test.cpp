@@ -249,6 +249,9 @@ TEST(DiagnoseTest, BadOptionsAndUnitsAreInputErrors) {
   const Unit unit = ValidationUnit(base, 25, "bad_options");
   DiagnoseOptions options;
   options.effects = {"warp_drive"};
+  std::string error;
+  EXPECT_FALSE(options.IsValid(&error));  // the catalog is known without a set
+  EXPECT_NE(error.find("effects: unknown effect 'warp_drive'"), std::string::npos) << error;
   EXPECT_THROW(Diagnose(base, unit, options), InputError);
   Parameters with_lag = base;
   with_lag.effects["valve_lag"] = {{"tau", 0.01}};
@@ -256,7 +259,6 @@ TEST(DiagnoseTest, BadOptionsAndUnitsAreInputErrors) {
   EXPECT_THROW(Diagnose(with_lag, unit, options), InputError);
   options.effects.clear();
   options.min_held_back_gain = 0;
-  std::string error;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("min_held_back_gain"), std::string::npos);
   Unit empty = unit;

@@ -42,8 +42,18 @@ struct BatchOptions {
   bool refine = false;       // identify --refine with `spec`
   FitSpec spec;
   bool validate = false;  // validate the final set on the unit's validation runs
-  bool diagnose = false;  // diagnose the final set (one effect at most)
-  int jobs = 1;           // worker threads; never more busy threads than this
+  bool diagnose = false;  // diagnose the final set with `diagnosis`
+  // The diagnosis of each unit: one effect at most by default; `effects`
+  // restricts the candidates, the thresholds are diagnose's own. `threads`
+  // must stay 1 (the units run in parallel instead: `jobs`), and `stop` is
+  // the unit's time limit, set by the batch. A given `log` is called from the
+  // worker threads.
+  DiagnoseOptions diagnosis = [] {
+    DiagnoseOptions d;
+    d.max_effects = 1;
+    return d;
+  }();
+  int jobs = 1;  // worker threads; never more busy threads than this
   Shard shard;
   bool resume = false;  // skip units whose result is complete and up to date
   // A unit's work stops (cooperatively: the simulator and the refinement
