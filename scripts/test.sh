@@ -24,8 +24,10 @@ if [ -n "$long" ]; then
 fi
 
 # openmpi-bin: the batch test launches `mpirun -n 2 pneumaid batch --shard auto`;
-# chromium: the report's own check in a headless browser (Release pass only).
-EXTRA_PACKAGES="openmpi-bin chromium" scripts/setup.sh
+# chromium: the report's own check in a headless browser (Release pass only);
+# clang and its sanitizer runtimes: the sanitizer builds below (clang compiles
+# them in two thirds of GCC's time: docs/performance.md).
+EXTRA_PACKAGES="openmpi-bin chromium clang libclang-rt-14-dev" scripts/setup.sh
 phase "setup (packages, CVODES, Release build)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 phase "Release tests"
@@ -42,7 +44,8 @@ build/tests/bench/robustness_sweep 6 --seed 2026 --jobs "$(nproc)" --min-units-v
 phase "6-unit robustness gate"
 
 if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
-  BUILD_DIR=build-asan CMAKE_ARGS="-DPNEUMAID_SANITIZE=ON -DPNEUMAID_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo" \
+  # Built with clang: the Release build is GCC's, so both compilers see the code.
+  BUILD_DIR=build-asan CMAKE_ARGS="-DCMAKE_CXX_COMPILER=clang++ -DPNEUMAID_SANITIZE=ON -DPNEUMAID_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo" \
     scripts/setup.sh
   phase "sanitizer build"
   # Each whole workflow once, at its smallest: tests/release-only.txt names
@@ -57,7 +60,7 @@ fi
 # worker threads, compared with one thread's results); skip with
 # PNEUMAID_SKIP_TSAN=1.
 if [ "${PNEUMAID_SKIP_TSAN:-0}" != 1 ]; then
-  cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPNEUMAID_TSAN=ON \
+  cmake -S . -B build-tsan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPNEUMAID_TSAN=ON \
     -DPNEUMAID_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build build-tsan -j"$(nproc)" --target batch_test >/dev/null
   TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" \

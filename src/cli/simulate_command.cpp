@@ -162,7 +162,7 @@ CommandRunner AddSimulateCommand(CLI::App* app) {
   app->add_option("--until", args->until_s, "end time [s] (default: end of --input)");
   app->add_option("--rate", args->rate_Hz, "output rate [Hz]")->capture_default_str();
   app->add_option("--out", args->out_path, "output CSV (a validation log)")->required();
-  app->callback([app, step, input]() {
+  app->callback([step, input]() {
     if (step->count() == 0 && input->count() == 0) {
       throw CLI::ValidationError("simulate", "one of --step or --input is required");
     }

@@ -11,13 +11,13 @@
 #include <numeric>
 #include <sstream>
 
+#include "../util/median.h"
 #include "friction_cost.h"
 #include "friction_covariance.h"
 #include "friction_problem.h"
 #include "friction_segments.h"
 #include "friction_slides.h"
 #include "friction_starts.h"
-#include "median.h"
 #include "pneumaid/ident/rod_replay.h"
 #include "pneumaid/model/load.h"
 #include "quiet_solver.h"

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "median.h"
+#include "../util/median.h"
 
 namespace pneumaid::friction_internal {
 

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "../util/median.h"
 #include "centred_mean.h"
 
 namespace pneumaid::internal {
@@ -55,8 +56,7 @@ inline std::vector<double> CommandAsSet(const std::vector<double>& u) {
   std::vector<double> curvature(u.size() - 2);
   for (std::size_t i = 1; i + 1 < u.size(); ++i)
     curvature[i - 1] = std::fabs(u[i + 1] - 2 * u[i] + u[i - 1]);
-  std::nth_element(curvature.begin(), curvature.begin() + curvature.size() / 2, curvature.end());
-  const double sigma_V = 1.4826 * curvature[curvature.size() / 2] / std::sqrt(6.0);
+  const double sigma_V = 1.4826 * Median(std::move(curvature)) / std::sqrt(6.0);
   if (!(sigma_V > 1e-4)) return u;
   const double ratio = sigma_V / 5e-4;
   const std::size_t half =

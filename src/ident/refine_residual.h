@@ -154,7 +154,10 @@ class ExperimentResidual final : public ceres::CostFunction {
     const FitExperiment& e = *experiment_;
     Trajectory sim;
     SimulationOptions recording;  // what the run reads of the friction, when asked
-    if (use != nullptr) recording = *simulation_, recording.record_friction_use = true;
+    if (use != nullptr) {
+      recording = *simulation_;
+      recording.record_friction_use = true;
+    }
     const SimulationSummary summary =
         Simulate(params, e.command, StartOf(e, z + map_->size()), e.measured.t_s,
                  use != nullptr ? recording : *simulation_, &sim);

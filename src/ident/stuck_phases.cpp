@@ -4,7 +4,7 @@
 #include <cassert>
 #include <cmath>
 
-#include "median.h"
+#include "../util/median.h"
 #include "pneumaid/io/channel_noise.h"
 
 namespace pneumaid::internal {

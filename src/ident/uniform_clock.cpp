@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "../util/median.h"
+
 namespace pneumaid::internal {
 
 double UniformPeriod(const std::vector<double>& t) {
@@ -18,8 +20,7 @@ double MedianInterval(const std::vector<double>& t) {
   if (t.size() < 2) return 0;
   std::vector<double> intervals(t.size() - 1);
   for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];
-  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
-  return intervals[intervals.size() / 2];
+  return Median(std::move(intervals));
 }
 
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {

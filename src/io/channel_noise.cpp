@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <utility>
 
+#include "../util/median.h"
+
 namespace pneumaid {
 namespace {
 
@@ -48,9 +50,7 @@ double FourthDifference(const double* y) { return y[2] - 4 * y[1] + 6 * y[0] - 4
 // The sigma of white noise whose fourth differences have these magnitudes:
 // their median is 0.6745 of the differences' sigma.
 double SigmaOfDifferences(std::vector<double> magnitudes) {
-  std::nth_element(magnitudes.begin(), magnitudes.begin() + magnitudes.size() / 2,
-                   magnitudes.end());
-  return magnitudes[magnitudes.size() / 2] / 0.6745 / std::sqrt(kFourthDifferenceVariance);
+  return internal::Median(std::move(magnitudes)) / 0.6745 / std::sqrt(kFourthDifferenceVariance);
 }
 
 // The quietest stretches of `columns`: the fourth differences in blocks of
@@ -148,16 +148,12 @@ ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& column
   noise.quantum = Quantum(columns, stride);
   std::vector<double> magnitude(d4.size());
   std::transform(d4.begin(), d4.end(), magnitude.begin(), [](double d) { return std::fabs(d); });
-  std::nth_element(magnitude.begin(), magnitude.begin() + magnitude.size() / 2, magnitude.end());
-  double median = magnitude[magnitude.size() / 2];
+  double median = internal::Median(magnitude);
   if (median == 0) {  // at rest more than half the time: the scale of the moves
     std::vector<double> moves;
     for (double m : magnitude)
       if (m > 0) moves.push_back(m);
-    if (!moves.empty()) {
-      std::nth_element(moves.begin(), moves.begin() + moves.size() / 2, moves.end());
-      median = moves[moves.size() / 2];
-    }
+    if (!moves.empty()) median = internal::Median(std::move(moves));
   }
   // A trimmed second moment rather than the median alone: on readings that
   // lie on a coarse ADC step the median of |d4| is a whole number of steps.

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "../util/median.h"
 #include "pneumaid/eval/metrics.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/load.h"
@@ -76,9 +77,9 @@ PositionZero ReadPositionZero(const Unit& unit) {
         ++j;
       }
       if (end >= 0 && j - i >= kMinStopRestSamples) {
-        std::vector<double> at(x.begin() + static_cast<long>(i), x.begin() + static_cast<long>(j));
-        std::nth_element(at.begin(), at.begin() + static_cast<long>(at.size() / 2), at.end());
-        rests[end].push_back(at[at.size() / 2] - (end == 0 ? -half : half));
+        const std::vector<double> at(x.begin() + static_cast<long>(i),
+                                     x.begin() + static_cast<long>(j));
+        rests[end].push_back(internal::Median(at) - (end == 0 ? -half : half));
       }
       i = j;
     }
@@ -89,9 +90,7 @@ PositionZero ReadPositionZero(const Unit& unit) {
   for (int end = 0; end < 2; ++end) {
     out.rests[end] = static_cast<int>(rests[end].size());
     if (rests[end].empty()) continue;
-    std::vector<double>& r = rests[end];
-    std::nth_element(r.begin(), r.begin() + static_cast<long>(r.size() / 2), r.end());
-    out.from_stop_m[end] = r[r.size() / 2];
+    out.from_stop_m[end] = internal::Median(rests[end]);
     sum += out.from_stop_m[end];
     ++ends;
   }

@@ -1,5 +1,6 @@
-// The median of a sample, as the fits read a typical value (the upper one of
-// the two middle values for an even count).
+// The median of a sample, as the fits, the noise estimates and validation
+// read a typical value (the upper one of the two middle values for an even
+// count): the one home of that rule.
 #pragma once
 
 #include <algorithm>
