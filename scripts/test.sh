@@ -43,7 +43,12 @@ phase "install test and report check"
 build/tests/bench/robustness_sweep 6 --seed 2026 --jobs "$(nproc)" --min-units-valve-tube 5
 phase "6-unit robustness gate"
 
+# The sanitizer trees are clang's. One that an older test.sh configured with
+# GCC is built anew: CMake would drop its other options with the compiler.
+clang_tree() { grep -qs '^CMAKE_CXX_COMPILER:.*clang' "$1/CMakeCache.txt" || rm -rf "$1"; }
+
 if [ "${PNEUMAID_SKIP_SANITIZERS:-0}" != 1 ]; then
+  clang_tree build-asan
   # Built with clang: the Release build is GCC's, so both compilers see the code.
   BUILD_DIR=build-asan CMAKE_ARGS="-DCMAKE_CXX_COMPILER=clang++ -DPNEUMAID_SANITIZE=ON -DPNEUMAID_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo" \
     scripts/setup.sh
@@ -60,6 +65,7 @@ fi
 # worker threads, compared with one thread's results); skip with
 # PNEUMAID_SKIP_TSAN=1.
 if [ "${PNEUMAID_SKIP_TSAN:-0}" != 1 ]; then
+  clang_tree build-tsan
   cmake -S . -B build-tsan -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPNEUMAID_TSAN=ON \
     -DPNEUMAID_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build build-tsan -j"$(nproc)" --target batch_test >/dev/null

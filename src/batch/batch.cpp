@@ -148,8 +148,10 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
       throw FitError("diagnose of unit " + name, "a simulation failed or the time limit passed");
     }
     report << diagnosis.BriefReport();
-    verdict += diagnosis.named_effects.empty() ? "; diagnose: none named"
-                                               : "; diagnose: " + diagnosis.named_effects.front();
+    verdict += "; diagnose: ";
+    if (diagnosis.named_effects.empty()) verdict += "none named";
+    for (std::size_t k = 0; k < diagnosis.named_effects.size(); ++k)
+      verdict += (k > 0 ? ", " : "") + diagnosis.named_effects[k];
     json << ", \"diagnose\": " << DiagnoseToJson(diagnosis);
   }
   json << ", \"verdict\": " << JsonString(verdict) << "}\n";
@@ -241,6 +243,15 @@ bool BatchOptions::IsValid(std::string* error) const {
   if (diagnose) {
     std::string why;
     if (!diagnosis.IsValid(&why)) return fail("diagnosis." + why);
+    // identify keeps the prior's effects (and its tube lag): a candidate
+    // there would fail every unit after its fits.
+    const std::vector<std::string> absent = AbsentEffects(prior);
+    for (const std::string& effect : diagnosis.effects) {
+      if (std::find(absent.begin(), absent.end(), effect) == absent.end()) {
+        return fail("diagnosis.effects: '" + effect + "' is already in the prior" +
+                    (effect == "pipeline_lag" ? " (or it has a tube lag)" : ""));
+      }
+    }
     if (diagnosis.threads != 1)
       return fail("diagnosis.threads must be 1 (a batch runs its units in parallel: jobs)");
   }
@@ -304,6 +315,16 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
   std::atomic<bool> finished{false};
   std::atomic<std::size_t> next{0}, done{0};
   std::mutex progress_mutex;
+  // A diagnose log of the caller's is called from every worker, one line at
+  // a time.
+  std::mutex diagnosis_log_mutex;
+  BatchOptions unit_options = options;
+  if (options.diagnosis.log) {
+    unit_options.diagnosis.log = [&options, &diagnosis_log_mutex](const std::string& line) {
+      std::lock_guard<std::mutex> lock(diagnosis_log_mutex);
+      options.diagnosis.log(line);
+    };
+  }
   const auto started = Clock::now();
   const auto worker = [&](int w) {
     for (std::size_t i = next++; i < units.size(); i = next++) {
@@ -317,7 +338,7 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
                           .count();
       }
       try {
-        outcome = ProcessUnit(units[i], fs::path(fleet_dir) / units[i], results_dir, options,
+        outcome = ProcessUnit(units[i], fs::path(fleet_dir) / units[i], results_dir, unit_options,
                               fingerprint, &stop[i]);
       } catch (const std::exception& failure) {
         outcome = UnitOutcome{};

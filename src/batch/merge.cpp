@@ -19,6 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The fleet's median: the mean of the two middle values for an even count
+// (a fleet of two units is summarised by both), unlike the fits' upper
+// median (src/util/median.h).
 double Median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   const std::size_t n = values.size();

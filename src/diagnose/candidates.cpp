@@ -19,17 +19,6 @@ std::vector<std::string> SignatureChannels(const std::string& effect) {
   return {"x", "p1", "p2", "q1", "q2"};
 }
 
-std::vector<std::string> AbsentEffects(const Parameters& params) {
-  std::vector<std::string> absent;
-  for (const EffectInfo& effect : EffectCatalog()) {
-    if (params.effects.count(effect.name)) continue;
-    const std::string name = effect.name;
-    if (name == "pipeline_lag" && params.pipeline.model != PipelineModel::kNone) continue;
-    absent.push_back(name);
-  }
-  return absent;
-}
-
 std::vector<FreeParameter> BaseParameters(const Parameters& params, bool static_friction) {
   std::vector<FreeParameter> base;
   const auto around = [&params](const std::string& path, double low, double high,
@@ -149,3 +138,18 @@ std::vector<std::string> MovedBase(const Parameters& reference, const Parameters
 }
 
 }  // namespace pneumaid::diagnose_internal
+
+namespace pneumaid {
+
+std::vector<std::string> AbsentEffects(const Parameters& params) {
+  std::vector<std::string> absent;
+  for (const EffectInfo& effect : EffectCatalog()) {
+    if (params.effects.count(effect.name)) continue;
+    const std::string name = effect.name;
+    if (name == "pipeline_lag" && params.pipeline.model != PipelineModel::kNone) continue;
+    absent.push_back(name);
+  }
+  return absent;
+}
+
+}  // namespace pneumaid

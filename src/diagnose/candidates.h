@@ -17,10 +17,6 @@ namespace pneumaid::diagnose_internal {
 // a plant effect's every channel.
 std::vector<std::string> SignatureChannels(const std::string& effect);
 
-// The catalog effects a parameter set lacks and could gain (pipeline_lag
-// only when the base has no tube lag).
-std::vector<std::string> AbsentEffects(const Parameters& params);
-
 // The base coefficients the reference fit and every candidate fit free: the
 // valve's gain, the tube's lag (when the base has one) and the sliding
 // friction of each direction, in a box around their values; with

@@ -77,9 +77,10 @@ PositionZero ReadPositionZero(const Unit& unit) {
         ++j;
       }
       if (end >= 0 && j - i >= kMinStopRestSamples) {
-        const std::vector<double> at(x.begin() + static_cast<long>(i),
-                                     x.begin() + static_cast<long>(j));
-        rests[end].push_back(internal::Median(at) - (end == 0 ? -half : half));
+        rests[end].push_back(
+            internal::Median(std::vector<double>(x.begin() + static_cast<long>(i),
+                                                 x.begin() + static_cast<long>(j))) -
+            (end == 0 ? -half : half));
       }
       i = j;
     }

@@ -93,7 +93,7 @@ TEST_P(DiagnoseHiddenEffectTest, NamesTheEffectAndClosesMostOfItsGap) {
   options.max_effects = 1;
   // The rig's creep is the mismatch these units carry, not the question:
   // the candidates are the others (the creep's own case has them all).
-  for (const std::string& name : diagnose_internal::AbsentEffects(base)) {
+  for (const std::string& name : AbsentEffects(base)) {
     if (name != "stick_creep" || hidden.effect == name) options.effects.push_back(name);
   }
   const DiagnoseResult result = Diagnose(base, unit, options);

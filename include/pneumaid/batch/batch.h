@@ -47,7 +47,7 @@ struct BatchOptions {
   // restricts the candidates, the thresholds are diagnose's own. `threads`
   // must stay 1 (the units run in parallel instead: `jobs`), and `stop` is
   // the unit's time limit, set by the batch. A given `log` is called from the
-  // worker threads.
+  // worker threads, one line at a time.
   DiagnoseOptions diagnosis = [] {
     DiagnoseOptions d;
     d.max_effects = 1;

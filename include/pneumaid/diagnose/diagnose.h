@@ -17,6 +17,8 @@
 
 namespace pneumaid {
 
+// A batch's resume stamp holds every field that changes a diagnosis
+// (src/batch/batch.cpp, OptionsFingerprint): a new one belongs there too.
 struct DiagnoseOptions {
   // At most this many effects are added, one per iteration.
   int max_effects = 2;
@@ -113,6 +115,10 @@ struct DiagnoseResult {
   std::string MarkdownReport() const;
   std::string BriefReport() const;
 };
+
+// The catalog effects a parameter set lacks and could gain, diagnose's
+// candidates by default (pipeline_lag only when the set has no tube lag).
+std::vector<std::string> AbsentEffects(const Parameters& params);
 
 // Throws InputError for bad options, an unknown or present effect, or a unit
 // without simulable runs.
