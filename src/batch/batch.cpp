@@ -245,13 +245,7 @@ bool BatchOptions::IsValid(std::string* error) const {
     if (!diagnosis.IsValid(&why)) return fail("diagnosis." + why);
     // identify keeps the prior's effects (and its tube lag): a candidate
     // there would fail every unit after its fits.
-    const std::vector<std::string> absent = AbsentEffects(prior);
-    for (const std::string& effect : diagnosis.effects) {
-      if (std::find(absent.begin(), absent.end(), effect) == absent.end()) {
-        return fail("diagnosis.effects: '" + effect + "' is already in the prior" +
-                    (effect == "pipeline_lag" ? " (or it has a tube lag)" : ""));
-      }
-    }
+    if (!EffectsAbsent(diagnosis.effects, prior, "prior", &why)) return fail("diagnosis." + why);
     if (diagnosis.threads != 1)
       return fail("diagnosis.threads must be 1 (a batch runs its units in parallel: jobs)");
   }

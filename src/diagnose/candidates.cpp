@@ -152,4 +152,19 @@ std::vector<std::string> AbsentEffects(const Parameters& params) {
   return absent;
 }
 
+bool EffectsAbsent(const std::vector<std::string>& effects, const Parameters& params,
+                   const std::string& set_name, std::string* error) {
+  const std::vector<std::string> absent = AbsentEffects(params);
+  for (const std::string& effect : effects) {
+    if (std::find(absent.begin(), absent.end(), effect) == absent.end()) {
+      if (error != nullptr) {
+        *error = "effects: '" + effect + "' is already in the " + set_name +
+                 (effect == "pipeline_lag" ? " (or its base model has a tube lag)" : "");
+      }
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace pneumaid

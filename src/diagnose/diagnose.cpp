@@ -303,14 +303,8 @@ void CheckInputs(const Parameters& params, const Unit& unit, const DiagnoseOptio
                  std::vector<std::string>* runs) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("diagnose options", 0, 0, error);
-  const std::vector<std::string> absent = AbsentEffects(params);
-  for (const std::string& effect : options.effects) {
-    if (std::find(absent.begin(), absent.end(), effect) == absent.end()) {
-      throw InputError("diagnose options", 0, 0,
-                       "effects: '" + effect + "' is already in the parameter set" +
-                           (effect == "pipeline_lag" ? " (or its base model has a tube lag)" : ""));
-    }
-  }
+  if (!EffectsAbsent(options.effects, params, "parameter set", &error))
+    throw InputError("diagnose options", 0, 0, error);
   *runs = SimulableRuns(unit);
   if (runs->empty()) {
     throw InputError(unit.manifest_path(), 0, 0,

@@ -120,6 +120,13 @@ struct DiagnoseResult {
 // candidates by default (pipeline_lag only when the set has no tube lag).
 std::vector<std::string> AbsentEffects(const Parameters& params);
 
+// Whether every one of `effects` is among AbsentEffects(params); else
+// `error` names the first that is not ("effects: 'valve_lag' is already in
+// the <set_name>"). Diagnose's rule for its candidates, which a batch also
+// applies to its prior before any unit.
+bool EffectsAbsent(const std::vector<std::string>& effects, const Parameters& params,
+                   const std::string& set_name, std::string* error);
+
 // Throws InputError for bad options, an unknown or present effect, or a unit
 // without simulable runs.
 DiagnoseResult Diagnose(const Parameters& params, const Unit& unit, const DiagnoseOptions& options);
