@@ -143,6 +143,17 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
   if (options.diagnose) {
     DiagnoseOptions d = options.diagnosis;
     d.stop = stop;
+    // A candidate asked for that this unit's set has gained since the prior
+    // (refine's creep fit adds stick_creep) is not tried; with none left, the
+    // diagnosis maps the discrepancy alone.
+    const std::vector<std::string> gained = PresentEffects(d.effects, params);
+    for (const std::string& effect : gained)
+      d.effects.erase(std::find(d.effects.begin(), d.effects.end(), effect));
+    if (!gained.empty() && d.effects.empty()) d.max_effects = 0;
+    std::string not_tried;
+    for (const std::string& effect : gained) not_tried += (not_tried.empty() ? "" : ", ") + effect;
+    if (!not_tried.empty())
+      not_tried = " (not tried, already in the unit's set: " + not_tried + ")";
     const DiagnoseResult diagnosis = Diagnose(params, unit, d);
     if (diagnosis.before.numerical_failure() || (stop != nullptr && stop->load())) {
       throw FitError("diagnose of unit " + name, "a simulation failed or the time limit passed");
@@ -152,6 +163,7 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
     if (diagnosis.named_effects.empty()) verdict += "none named";
     for (std::size_t k = 0; k < diagnosis.named_effects.size(); ++k)
       verdict += (k > 0 ? ", " : "") + diagnosis.named_effects[k];
+    verdict += not_tried;
     json << ", \"diagnose\": " << DiagnoseToJson(diagnosis);
   }
   json << ", \"verdict\": " << JsonString(verdict) << "}\n";

@@ -152,19 +152,26 @@ std::vector<std::string> AbsentEffects(const Parameters& params) {
   return absent;
 }
 
+std::vector<std::string> PresentEffects(const std::vector<std::string>& effects,
+                                        const Parameters& params) {
+  const std::vector<std::string> absent = AbsentEffects(params);
+  std::vector<std::string> present;
+  for (const std::string& effect : effects) {
+    if (std::find(absent.begin(), absent.end(), effect) == absent.end()) present.push_back(effect);
+  }
+  return present;
+}
+
 bool EffectsAbsent(const std::vector<std::string>& effects, const Parameters& params,
                    const std::string& set_name, std::string* error) {
-  const std::vector<std::string> absent = AbsentEffects(params);
-  for (const std::string& effect : effects) {
-    if (std::find(absent.begin(), absent.end(), effect) == absent.end()) {
-      if (error != nullptr) {
-        *error = "effects: '" + effect + "' is already in the " + set_name +
-                 (effect == "pipeline_lag" ? " (or its base model has a tube lag)" : "");
-      }
-      return false;
-    }
+  const std::vector<std::string> present = PresentEffects(effects, params);
+  if (present.empty()) return true;
+  if (error != nullptr) {
+    const std::string& effect = present.front();
+    *error = "effects: '" + effect + "' is already in the " + set_name +
+             (effect == "pipeline_lag" ? " (or its base model has a tube lag)" : "");
   }
-  return true;
+  return false;
 }
 
 }  // namespace pneumaid

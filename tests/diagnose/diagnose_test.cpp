@@ -257,6 +257,14 @@ TEST(DiagnoseTest, BadOptionsAndUnitsAreInputErrors) {
   with_lag.effects["valve_lag"] = {{"tau", 0.01}};
   options.effects = {"valve_lag"};  // already in the set
   EXPECT_THROW(Diagnose(with_lag, unit, options), InputError);
+  // The rule behind it: which candidates asked for a set has (a batch drops
+  // those a unit's refinement added), in the order asked.
+  EXPECT_EQ(PresentEffects({"cross_leakage", "valve_lag", "pipeline_lag"}, with_lag),
+            (std::vector<std::string>{"valve_lag", "pipeline_lag"}));  // the paper has a tube lag
+  EXPECT_TRUE(PresentEffects({"cross_leakage", "stick_creep"}, with_lag).empty());
+  EXPECT_TRUE(EffectsAbsent({"cross_leakage"}, with_lag, "set", &error));
+  EXPECT_FALSE(EffectsAbsent({"cross_leakage", "valve_lag"}, with_lag, "set", &error));
+  EXPECT_EQ(error, "effects: 'valve_lag' is already in the set");
   options.effects.clear();
   options.min_held_back_gain = 0;
   EXPECT_FALSE(options.IsValid(&error));

@@ -120,6 +120,12 @@ struct DiagnoseResult {
 // candidates by default (pipeline_lag only when the set has no tube lag).
 std::vector<std::string> AbsentEffects(const Parameters& params);
 
+// Those of `effects` that are not among AbsentEffects(params), in their
+// order: a candidate the set has already (a batch's unit whose refinement
+// added stick_creep, for one).
+std::vector<std::string> PresentEffects(const std::vector<std::string>& effects,
+                                        const Parameters& params);
+
 // Whether every one of `effects` is among AbsentEffects(params); else
 // `error` names the first that is not ("effects: 'valve_lag' is already in
 // the <set_name>"). Diagnose's rule for its candidates, which a batch also
