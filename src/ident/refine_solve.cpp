@@ -119,6 +119,13 @@ double SolveFromStarts(const std::vector<std::vector<double>>& starts,
   std::vector<double> best_theta = p->theta;
   std::vector<StartOffsets> best_offsets = p->offsets;
   for (size_t s = 0; s < starts.size(); ++s) {
+    if (StopRequested(options)) {
+      // Stopped before this start: its first evaluation would fail, and
+      // Ceres would log that failure through glog (quiet_solver.h).
+      if (r->status == FitStatus::kConverged) r->status = FitStatus::kNotConverged;
+      r->reason = "stopped";
+      break;
+    }
     p->theta = starts[s];
     std::fill(p->offsets.begin(), p->offsets.end(), StartOffsets{0, 0});  // as logged
     // A stage before the last only prepares the next one's start, which

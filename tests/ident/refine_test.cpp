@@ -413,6 +413,21 @@ TEST_F(RefineSpecTest, AStopRaisedDuringTheFitEndsItNotConverged) {
   }
 }
 
+// A stop raised before the fit (a batch unit's time limit passed during
+// identify) starts no solve: nothing to evaluate, nothing for Ceres to log.
+TEST_F(RefineSpecTest, AStopRaisedBeforeTheFitStartsNoSolve) {
+  std::atomic<bool> stop{true};
+  RefineOptions options;
+  options.simulation.stop = &stop;
+  int lines = 0;
+  options.log = [&](const std::string&) { ++lines; };
+  const RefineResult result = Refine(Parameters{}, *unit_, TwoParameters(), options);
+  EXPECT_NE(result.status, FitStatus::kConverged);
+  EXPECT_NE(result.reason.find("stopped"), std::string::npos) << result.reason;
+  EXPECT_EQ(result.iterations, 0);
+  EXPECT_EQ(lines, 0);  // no solver progress or report
+}
+
 // A log sink that throws loses its lines, not the fit (nothing may throw
 // through Ceres' callbacks).
 TEST_F(RefineSpecTest, ALogSinkThatThrowsLosesItsLinesNotTheFit) {
