@@ -10,6 +10,7 @@
 #include <set>
 #include <thread>
 
+#include "../util/run_all.h"
 #include "candidates.h"
 #include "discrepancy_map.h"
 #include "pneumaid/ident/fit_result.h"
@@ -27,6 +28,7 @@ namespace pneumaid {
 namespace {
 
 using namespace diagnose_internal;
+using internal::RunAll;
 
 // One fit's outcome: its parameters (the input set with the fitted values)
 // and the channel sums of every run under them.
@@ -173,30 +175,6 @@ Outcome FitNamed(const std::string& effect, const Parameters& refitted, const Un
         return spec;
       },
       unit, runs, runs, scale, options);
-}
-
-// Runs `tasks` on up to `threads` threads; the first exception a task threw
-// is rethrown here, after every thread has joined (none escapes a thread).
-void RunAll(std::vector<std::function<void()>>* tasks, int threads) {
-  std::atomic<std::size_t> next{0};
-  std::mutex failure_mutex;
-  std::exception_ptr failure;
-  const auto worker = [&] {
-    for (std::size_t i = next++; i < tasks->size(); i = next++) {
-      try {
-        (*tasks)[i]();
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  const int extra = std::min<int>(threads, static_cast<int>(tasks->size())) - 1;
-  for (int t = 0; t < extra; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-  if (failure) std::rethrow_exception(failure);
 }
 
 // The decision rule's numbers for one candidate from its folds

@@ -1,8 +1,11 @@
 #include "windowed_measures.h"
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
 #include <utility>
 
+#include "../util/run_all.h"
 #include "pneumaid/model/parameter_table.h"
 #include "refine_residual.h"
 #include "refine_solve.h"
@@ -14,7 +17,44 @@ WindowedMeasures::WindowedMeasures(const Unit& unit, const FitSpec& spec,
     : unit_(unit), spec_(spec), options_(options) {}
 
 double WindowedMeasures::Measure(const Parameters& params, double above, bool* exact) {
-  if (exact != nullptr) *exact = true;
+  Measured m;
+  bool is_exact = true;
+  const double measure =
+      MeasureInto(params, above, &is_exact, &m, &windows_simulated_, &windows_taken_);
+  if (exact != nullptr) *exact = is_exact;
+  last_.clear();
+  if (std::isfinite(measure) && is_exact) last_.push_back(std::move(m));
+  return measure;
+}
+
+std::vector<std::pair<double, bool>> WindowedMeasures::MeasureSeveral(
+    const std::vector<Parameters>& candidates, double above, int threads) {
+  const std::size_t n = candidates.size();
+  std::vector<std::pair<double, bool>> measures(n, {HUGE_VAL, true});
+  std::vector<Measured> measured(n);
+  std::vector<long> simulated(n, 0), taken(n, 0);
+  std::vector<std::function<void()>> tasks;
+  for (std::size_t i = 0; i < n; ++i) {
+    tasks.push_back([&, i] {
+      measures[i].first = MeasureInto(candidates[i], above, &measures[i].second, &measured[i],
+                                      &simulated[i], &taken[i]);
+    });
+  }
+  internal::RunAll(&tasks, threads);
+  last_.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    windows_simulated_ += simulated[i];
+    windows_taken_ += taken[i];
+    if (std::isfinite(measures[i].first) && measures[i].second)
+      last_.push_back(std::move(measured[i]));
+  }
+  return measures;
+}
+
+double WindowedMeasures::MeasureInto(const Parameters& params, double above, bool* exact,
+                                     Measured* out, long* simulated_windows,
+                                     long* taken_windows) const {
+  *exact = true;
   const auto max_windows = static_cast<std::size_t>(options_.screen_windows_max);
   const FittedRunSet windows(params, unit_, spec_, options_, true, max_windows);
   const Parameters simulated = windows.Simulated();
@@ -47,18 +87,18 @@ double WindowedMeasures::Measure(const Parameters& params, double above, bool* e
       m.squares[k] = base_->squares[k];
       m.use[k] = base_->use[k];
       squares += m.squares[k];
-      ++windows_taken_;
+      ++*taken_windows;
     }
   }
   for (std::size_t k = 0; k < n; ++k) {
     if (known[k]) continue;
     // Windows are left to simulate: above the bound already, the measure is too.
     if (squares / static_cast<double>(rows) > above) {
-      if (exact != nullptr) *exact = false;
+      *exact = false;
       return squares / static_cast<double>(rows);
     }
     const Eigen::VectorXd r = windows.Residuals(k, &m.use[k]);
-    ++windows_simulated_;
+    ++*simulated_windows;
     const auto data = r.head(m.rows[k]);
     if (!data.allFinite()) return HUGE_VAL;
     m.squares[k] = data.squaredNorm();
@@ -67,17 +107,22 @@ double WindowedMeasures::Measure(const Parameters& params, double above, bool* e
   double total = 0;  // in the windows' order, whichever were simulated
   for (const double s : m.squares) total += s;
   m.params = params;
-  last_ = std::move(m);
+  *out = std::move(m);
   return total / static_cast<double>(rows);
 }
 
 void WindowedMeasures::Rebase(const Parameters& params) {
-  if (!last_ || !SameValues(last_->params, params)) {
-    last_.reset();
+  const auto same = [&params](const Measured& m) { return SameValues(m.params, params); };
+  auto found = std::find_if(last_.begin(), last_.end(), same);
+  if (found == last_.end()) {
     Measure(params);
+    found = std::find_if(last_.begin(), last_.end(), same);
   }
-  base_ = std::move(last_);  // none when `params` cannot be simulated
-  last_.reset();
+  base_.reset();  // none when `params` cannot be simulated
+  if (found != last_.end()) {
+    base_ = std::move(*found);
+    last_.erase(found);
+  }
 }
 
 int WindowedMeasures::SideApartFromBase(const Parameters& params) const {

@@ -10,11 +10,13 @@
 // (summed in the windows' order); a lower bound is one too, above the bound
 // asked for, though not WindowedMeasure's own: the windows taken count
 // first, so a candidate that measures above the bound stops sooner. One
-// instance per search: Measure keeps state and is not for two threads.
+// instance per search: its calls are not for two threads (MeasureSeveral
+// runs its candidates on threads of its own).
 #pragma once
 
 #include <cmath>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "pneumaid/ident/refine.h"
@@ -30,8 +32,14 @@ class WindowedMeasures {
   // WindowedMeasure(params, unit, spec, options, above, exact).
   double Measure(const Parameters& params, double above = HUGE_VAL, bool* exact = nullptr);
 
-  // The base from now on: the set last measured exactly, when that is
-  // `params` (a search's new best), else `params` measured whole (one
+  // Each of `candidates` measured as Measure measures it alone, on up to
+  // `threads` threads, against the one bound `above`: a measure and whether
+  // it is exact, per candidate.
+  std::vector<std::pair<double, bool>> MeasureSeveral(const std::vector<Parameters>& candidates,
+                                                      double above, int threads);
+
+  // The base from now on: a set of the last call's measured exactly, when
+  // one is `params` (a search's new best), else `params` measured whole (one
   // simulation of each window).
   void Rebase(const Parameters& params);
 
@@ -47,6 +55,11 @@ class WindowedMeasures {
     std::vector<FrictionUse> use;       // each window's simulation's
   };
 
+  // Measure's work, for any thread: into `m` (its params set when exact),
+  // counting the windows simulated and taken.
+  double MeasureInto(const Parameters& params, double above, bool* exact, Measured* m,
+                     long* simulated_windows, long* taken_windows) const;
+
   // The side (0: positive, 1: negative) whose friction alone `params` may
   // differ in from the base (0 when it is the base's); -1 when it differs in
   // more, or there is no base.
@@ -55,7 +68,8 @@ class WindowedMeasures {
   const Unit& unit_;
   const FitSpec& spec_;
   const RefineOptions& options_;
-  std::optional<Measured> base_, last_;  // last_: the last set measured exactly
+  std::optional<Measured> base_;
+  std::vector<Measured> last_;  // the sets the last call measured exactly
   long windows_simulated_ = 0, windows_taken_ = 0;
 };
 

@@ -409,6 +409,52 @@ TEST(RefineFrictionScreenTest, OneDirectionAwayACandidateTakesTheWindowsItCannot
   EXPECT_LE(bound, measure);
 }
 
+// Measured several at a time on threads, each candidate measures as it does
+// alone, to the bit, and so the screen ranked by windows decides as on one
+// thread: the same start, next-best candidates and ranks.
+TEST(RefineFrictionScreenTest, OnSeveralThreadsTheScreenDecidesAsOnOne) {
+  const ScreenCase& c = LightUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineOptions one;
+  refine_internal::WindowedMeasures alone(c.unit, spec, one), several(c.unit, spec, one);
+  alone.Rebase(c.start);
+  several.Rebase(c.start);
+  std::vector<Parameters> candidates;
+  for (const double fs : {0.5, 0.9, 1.1, 2.0}) {
+    Parameters p = c.start;
+    p.friction.negative.static_force_N *= fs;
+    candidates.push_back(p);
+  }
+  const double bound = alone.Measure(candidates[2]);  // some stop below it, some do not
+  const auto measures = several.MeasureSeveral(candidates, bound, 3);
+  ASSERT_EQ(measures.size(), candidates.size());
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    bool exact = false;
+    EXPECT_EQ(measures[k].first, alone.Measure(candidates[k], bound, &exact)) << k;
+    EXPECT_EQ(measures[k].second, exact) << k;
+  }
+
+  RefineOptions fewer = one;  // 16 windows per candidate: the test's time
+  fewer.screen_windows_max = 16;
+  RefineOptions threads = fewer;
+  threads.threads = 3;
+  const auto screen = [&](const RefineOptions& options) {
+    return refine_internal::ScreenFrictionStarts(c.start, c.unit, spec, options, true, 3,
+                                                 refine_internal::ScreenMeasure::kWindows);
+  };
+  const refine_internal::FrictionScreen a = screen(fewer), b = screen(threads);
+  std::cout << a.report << "\n" << b.report << "\n";
+  EXPECT_TRUE(a.moved);
+  EXPECT_EQ(a.ranked_after, b.ranked_after);
+  EXPECT_EQ(a.chi_square_after, b.chi_square_after);
+  EXPECT_TRUE(SameValues(a.start, b.start));
+  ASSERT_EQ(a.alternatives.size(), b.alternatives.size());
+  for (std::size_t k = 0; k < a.alternatives.size(); ++k)
+    EXPECT_TRUE(SameValues(a.alternatives[k], b.alternatives[k])) << k;
+  EXPECT_EQ(a.runner_ups, b.runner_ups);
+  EXPECT_EQ(a.profiled_alternative, b.profiled_alternative);
+}
+
 // The screen ranked by windows from `start` on the heavy unit, with what
 // holds for every start: it moves the start, the windows' measure drops
 // tenfold, the other search's best is the first next-best candidate (ranked
