@@ -102,22 +102,26 @@ void FrictionScreenSearch::ProfiledGrid(const Parameters& start) {
         for (const double b : {2.5, 6.0, 15.0}) {
           int best_k = 0;
           double best = HUGE_VAL;
-          // Ranked against the line's best so far (at least the search's).
           const auto at = [&](int k) {
             Parameters p = Candidate(d, centre * (1 + 0.015 * k), vs, &base);
             double fs = 0;  // within the spec's bounds
             GetParameter(p, d.prefix + "Fs", &fs);
             SetParameter(&p, d.prefix + "Fd", std::min(Bounded(d.prefix + "Fd", share * fs), fs));
             SetParameter(&p, d.prefix + "b", Bounded(d.prefix + "b", b));
-            return Consider(std::move(p), std::max(best, out_->ranked_after));
+            return p;
           };
-          for (int k = -10; k <= 10; k += 2) {
-            const double measure = at(k);
-            if (measure < best) best = measure, best_k = k;
-          }
+          // Ranked against the line's best so far (at least the search's).
+          const auto bound = [&] { return std::max(best, out_->ranked_after); };
+          std::vector<Parameters> line;
+          for (int k = -10; k <= 10; k += 2) line.push_back(at(k));
+          ConsiderAll(std::move(line), bound, [&](std::size_t i, double measure) {
+            if (measure < best) best = measure, best_k = -10 + 2 * static_cast<int>(i);
+          });
+          std::vector<Parameters> neighbours;
           for (const int k : {best_k - 1, best_k + 1}) {
-            if (std::abs(k) <= 10) at(k);
+            if (std::abs(k) <= 10) neighbours.push_back(at(k));
           }
+          ConsiderAll(std::move(neighbours), bound);
         }
       }
     }

@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -176,11 +178,16 @@ class FrictionScreenSearch {
   // compare is the same either way.
   double Consider(Parameters p, std::optional<double> above = std::nullopt);
 
-  // Consider for each of `candidates` in turn, the same decisions and
-  // measures; ranked by windows with options.threads > 1, measured that many
-  // at a time in parallel against the best before them (a candidate that
-  // measures above that bound measures above any later best too).
-  void ConsiderAll(std::vector<Parameters> candidates);
+  // Consider for each of `candidates` in turn, each ranked against `above()`
+  // (by default the best so far) and its measure handed to `measured` with
+  // its index: the same decisions and measures, whatever the threads. Ranked
+  // by windows with options.threads > 1, kCandidatesPerThread x threads of
+  // them are measured at a time in parallel against the bound before them
+  // (one that measures above that bound measures above any lower one too,
+  // and its lower bound ranks it the same).
+  void ConsiderAll(std::vector<Parameters> candidates, const std::function<double()>& above = {},
+                   const std::function<void(std::size_t, double)>& measured = {});
+  static constexpr int kCandidatesPerThread = 4;
 
   // `p` measured: kept for the alternatives, and the best when it ranks
   // first yet.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -83,20 +84,26 @@ double FrictionScreenSearch::Consider(Parameters p, std::optional<double> above)
   return measure;
 }
 
-void FrictionScreenSearch::ConsiderAll(std::vector<Parameters> candidates) {
-  const std::size_t threads =
-      measure_ == ScreenMeasure::kWindows ? static_cast<std::size_t>(options_.threads) : 1;
-  for (std::size_t i = 0; i < candidates.size(); i += threads) {
+void FrictionScreenSearch::ConsiderAll(std::vector<Parameters> candidates,
+                                       const std::function<double()>& above,
+                                       const std::function<void(std::size_t, double)>& measured) {
+  const int threads = measure_ == ScreenMeasure::kWindows ? options_.threads : 1;
+  const std::size_t chunk = threads == 1 ? 1 : kCandidatesPerThread * threads;
+  for (std::size_t i = 0; i < candidates.size(); i += chunk) {
+    const double bound = above ? above() : out_->ranked_after;
     if (threads == 1) {
-      Consider(std::move(candidates[i]));
+      const double measure = Consider(std::move(candidates[i]), bound);
+      if (measured) measured(i, measure);
       continue;
     }
-    const std::size_t end = std::min(i + threads, candidates.size());
+    const std::size_t end = std::min(i + chunk, candidates.size());
     const std::vector<Parameters> some(candidates.begin() + i, candidates.begin() + end);
-    const auto measures = windows_.MeasureSeveral(some, out_->ranked_after, options_.threads);
+    const auto measures = windows_.MeasureSeveral(some, bound, threads);
     out_->candidates += static_cast<int>(some.size());
-    for (std::size_t k = 0; k < some.size(); ++k)
+    for (std::size_t k = 0; k < some.size(); ++k) {
       Take(std::move(candidates[i + k]), measures[k].first, measures[k].second);
+      if (measured) measured(i + k, measures[k].first);
+    }
   }
 }
 

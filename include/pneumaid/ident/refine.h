@@ -36,7 +36,11 @@ struct RefineOptions {
   SimulationOptions simulation = FittingSimulation();
   // How held-out experiments are validated before and after (the defaults).
   SimulationOptions validation;
-  // Threads for evaluating experiments in parallel (Ceres num_threads).
+  // Threads for evaluating experiments in parallel (Ceres num_threads), and
+  // for the candidates of the windows' friction screen (measured several at
+  // a time, the screen's decisions the same as on one thread). Ceres sums a
+  // cost over threads in another order than over one, so a fit through
+  // stick-slip may end elsewhere on more than one thread.
   int threads = 1;
   // Relative change of the cost below which a start has converged.
   double function_tolerance = 1e-6;
