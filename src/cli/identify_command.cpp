@@ -88,7 +88,11 @@ int RunIdentify(const IdentifyArgs& args) {
   SaveParams(identified, args.out_path);
   std::cout << "wrote " << args.out_path << "\n";
   WriteHtml(args.html_path, html);
-  return kSuccess;
+  // A fit that did not converge: its best point is written (its provenance
+  // says so), and the exit status is the spec's numerical failure.
+  const std::vector<std::string> failed = report.NotConverged();
+  for (const std::string& fit : failed) std::cout << "not converged: " << fit << "\n";
+  return failed.empty() ? kSuccess : kNumericalFailure;
 }
 
 }  // namespace
@@ -115,7 +119,9 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
                 "--refine: fit the paper model's event stick only, no creep speed "
                 "(effects.stick_creep.v; docs/refinement.md)")
       ->needs(refine);
-  app->add_option("--threads", args->threads, "--refine: experiments simulated in parallel")
+  app->add_option(
+         "--threads", args->threads,
+         "--refine: experiments, and the friction screen's candidates, simulated in parallel")
       ->check(CLI::Range(1, 256))
       ->needs(refine);
   AddHtmlOption(app, &args->html_path);

@@ -91,6 +91,7 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
                                   std::make_pair("valve_decreasing", &report.valve.decreasing)}) {
     if (!fit->has_values()) continue;
     YAML::Node entry(YAML::NodeType::Map);
+    entry["status"] = ToString(fit->status);
     entry["final_cost"] = FormatDouble(fit->final_cost);
     entry["iterations"] = fit->iterations;
     entry["plateaus"] = fit->plateaus;
@@ -98,12 +99,14 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
   }
   if (report.pipeline.has_values()) {
     YAML::Node entry(YAML::NodeType::Map);
+    entry["status"] = ToString(report.pipeline.status);
     entry["delta_at_rig"] = FormatDouble(report.pipeline.coefficients.front().value);
     entry["tubes"] = report.pipeline.tubes.size();
     root["pipeline"] = entry;
   }
   if (report.friction.has_values()) {
     YAML::Node entry(YAML::NodeType::Map);
+    entry["status"] = ToString(report.friction.status);
     entry["final_cost"] = FormatDouble(report.friction.final_cost);
     entry["iterations"] = report.friction.iterations;
     entry["segments"] = report.friction.segments;
@@ -189,6 +192,19 @@ const char* ToString(Component component) {
 
 bool IdentifyOptions::IsValid(std::string* error) const {
   return valve.IsValid(error) && pipeline.IsValid(error) && friction.IsValid(error);
+}
+
+std::vector<std::string> IdentifyReport::NotConverged() const {
+  std::vector<std::string> out;
+  using Named = std::pair<const char*, const FitResult*>;
+  for (const auto& [name, fit] : {Named{"valve increasing", &valve.increasing},
+                                  Named{"valve decreasing", &valve.decreasing},
+                                  Named{"pipeline", &pipeline}, Named{"friction", &friction}}) {
+    if (fit->status == FitStatus::kNotConverged || fit->status == FitStatus::kNotExplained)
+      out.push_back(std::string(name) + ": " + ToString(fit->status) +
+                    (fit->reason.empty() ? "" : " (" + fit->reason + ")"));
+  }
+  return out;
 }
 
 std::string IdentifyReport::BriefReport() const {

@@ -94,6 +94,27 @@ TEST(IdentifyTest, TheProvenanceNamesTheHeldCoefficientsWithWhy) {
   EXPECT_EQ(held.count("friction.positive.Fs"), 0u);  // not requested: no fit ran
 }
 
+// A fit that ran out of iterations still gives its best point, and says so:
+// in the report's list of fits not converged (the CLI's exit 3) and in the
+// provenance's status of that fit; the fits that converged say that too.
+TEST(IdentifyTest, AFitThatDidNotConvergeSaysSoInTheReportAndTheProvenance) {
+  const Unit unit = ReadUnit(kUnit);
+  IdentifyOptions options;
+  options.components = {Component::kValve, Component::kFriction};
+  IdentifyReport report;
+  Parameters p = Identify(unit, Parameters{}, options, &report);
+  EXPECT_TRUE(report.NotConverged().empty()) << report.BriefReport();
+  EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "friction").at("status"), "converged");
+  options.friction.max_iterations = 1;
+  p = Identify(unit, Parameters{}, options, &report);
+  ASSERT_EQ(report.NotConverged().size(), 1u) << report.BriefReport();
+  EXPECT_EQ(report.NotConverged().front().rfind("friction: NOT converged (", 0), 0u)
+      << report.NotConverged().front();
+  EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "friction").at("status"), "NOT converged");
+  EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "valve_increasing").at("status"),
+            "converged");
+}
+
 TEST(IdentifyTest, ComponentsWithoutDataAreRefusedWhenAskedForAndPriorsOtherwise) {
   const Unit unit = ReadUnit(kUnit);
   IdentifyReport report;
