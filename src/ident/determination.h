@@ -1,7 +1,9 @@
 // What the data determine: the one rule of the tube and friction fits (the
 // valve fit and refinement have their own, to be brought here). A coefficient
-// counts as determined by the logs when its standard error (with model error,
-// and with whatever prior the fit states) is below a fraction of its value or
+// counts as determined by the logs when its standard error (the fit's own:
+// with model error as the fit scales it, and with whatever prior the fit
+// states; the friction fit's widening where it disagrees with its reading
+// off the logs comes after) is below a fraction of its value or
 // below its tolerance, whichever is larger; a fit reports every other
 // coefficient by name as held, with the reason. Partial
 // identifiability instead of all-or-nothing: one poorly determined

@@ -40,7 +40,9 @@ void SmoothStuckForce(const Runs& runs, std::size_t window, std::vector<double>*
     // The first samples of a run still carry the arrest's pressure transient.
     const std::size_t first =
         end - std::min(window, end - begin - std::min<std::size_t>(3, end - begin));
-    const std::size_t n = end - 1 - first;  // the run's last sample may already move
+    // The run's last sample may already move (a run of 3 samples or fewer,
+    // which min_stuck_samples allows, leaves none).
+    const std::size_t n = end > first + 1 ? end - 1 - first : 0;
     if (n < 8) continue;
     Eigen::MatrixXd design(n, 3);
     Eigen::VectorXd y(n);

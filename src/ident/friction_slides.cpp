@@ -1,8 +1,27 @@
 #include "friction_slides.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace pneumaid::internal {
+namespace {
+
+// The RMS of x about the window's quadratic mean + c1 j + c2 (j^2 - m),
+// j = -k..k around sample i (three coefficients fitted).
+double QuadraticMisfit(const std::vector<double>& x_m, std::size_t i, int k, double m, double c1,
+                       double c2) {
+  double mean = 0;
+  for (int j = -k; j <= k; ++j) mean += x_m[i + j];
+  mean /= 2 * k + 1;
+  double squares = 0;
+  for (int j = -k; j <= k; ++j) {
+    const double r = x_m[i + j] - mean - c1 * j - c2 * (j * j - m);
+    squares += r * r;
+  }
+  return std::sqrt(squares / (2 * k + 1 - 3));
+}
+
+}  // namespace
 
 std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
                                          const std::vector<double>& force_N,
@@ -22,6 +41,8 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
   const double sigma_N = std::hypot(sampling.sigma_force_N, sampling.mass_kg * sigma_a);
   // A sample counts as sliding when its speed is well above the speed noise.
   const double min_speed = std::max(sampling.min_speed_m_per_s, 5 * sigma_v);
+  const double max_misfit =
+      std::max(kSmoothMisfitSigmas * sampling.sigma_x_m, kSmoothMisfitFloor_m);
   const std::size_t n = x_m.size();
   std::vector<SlideCluster> clusters;
   SlideCluster current;
@@ -57,6 +78,11 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
       }
       v /= s2 * h;
       a *= 2 / (s4 * h * h);
+      // A window the quadratic does not follow is no smooth slide: stick-slip
+      // cycles shorter than a stuck phase can be (at 250 Hz the paper rod's
+      // 4 to 40 ms sticks) read as a steady speed there, and F - M a swings.
+      if (usable && QuadraticMisfit(x_m, i, k, m, v * h, 0.5 * a * h * h) > max_misfit)
+        usable = false;
     }
     const int direction = v > 0 ? +1 : -1;
     if (!usable || std::fabs(v) < min_speed ||

@@ -42,8 +42,17 @@ struct SlideSampling {
   int min_cluster_samples = 5;
 };
 
+// A slide's window is smooth when the position's RMS about its quadratic is
+// at most the larger of kSmoothMisfitSigmas position sigmas and
+// kSmoothMisfitFloor_m (measured at 250 Hz, sigma_x 5 um: smooth slides of a
+// 1.5 kg rod up to 14 um, the paper rod's stick-slip between stuck phases
+// too short to be found from 47 um, median 172 um).
+inline constexpr double kSmoothMisfitSigmas = 4.0;
+inline constexpr double kSmoothMisfitFloor_m = 25e-6;
+
 // The smoothly sliding samples of one log, grouped by slide. `covered[i]`
-// marks samples to leave out (stuck, or in a replay segment).
+// marks samples to leave out (stuck, or in a replay segment); a window the
+// quadratic does not follow (above) is not sliding smoothly.
 std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
                                          const std::vector<double>& force_N,
                                          const std::vector<bool>& covered,
