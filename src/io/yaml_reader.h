@@ -33,7 +33,24 @@ class YamlReader {
                        "YAML syntax error: " + error.msg);
     }
     if (!root.IsMap()) Fail(root, expected);
+    NoDuplicateKeys(root);
     return root;
+  }
+
+  // A mapping that names a key twice is ambiguous (yaml-cpp keeps both: a
+  // lookup finds the first, a walk ends at the last): bad input, at the
+  // second.
+  void NoDuplicateKeys(const YAML::Node& node) const {
+    if (node.IsMap()) {
+      std::set<std::string> seen;
+      for (const auto& entry : node) {
+        if (entry.first.IsScalar() && !seen.insert(entry.first.Scalar()).second)
+          Fail(entry.first, "duplicate key '" + entry.first.Scalar() + "'");
+        NoDuplicateKeys(entry.second);
+      }
+    } else if (node.IsSequence()) {
+      for (const auto& item : node) NoDuplicateKeys(item);
+    }
   }
 
   [[noreturn]] void Fail(const YAML::Node& node, const std::string& message) const {

@@ -112,6 +112,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"u_sat_above_one", "q_max: 9.25e-5, u_sat: 0.75", "q_max: 9.25e-5, u_sat: 1.5", 19,
                 "u_sat"},
         BadCase{"not_a_number", "delta: 8.0", "delta: fast", 24, "expected a finite number"},
+        BadCase{"duplicate_key", "delta: 8.0", "delta: 8.0\n  delta: 2.0", 25,
+                "duplicate key 'delta'"},
         BadCase{"wrong_format", "pneumaid-params/1", "pneumaid-params/2", 4, "format"},
         BadCase{"bad_enum", "branch: increasing", "branch: sideways", 21,
                 "decreasing | hysteresis | increasing"},
