@@ -56,6 +56,9 @@ int ReportAndSave(const RefineResult& result, const Unit& unit, const std::strin
 
 // --html FILE on a command: one self-contained HTML report (report.h).
 void AddHtmlOption(CLI::App* app, std::string* path);
+// An output file's check before the command runs (CLI11's check: "" or why):
+// its directory must exist, so a long fit does not end in "cannot write".
+std::string InExistingDirectory(const std::string& file);
 // Writes the page atomically and says so; nothing for an empty path.
 void WriteHtml(const std::string& path, const std::string& html);
 

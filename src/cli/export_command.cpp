@@ -16,7 +16,8 @@ CommandRunner AddExportCommand(CLI::App* app) {
   auto args = std::make_shared<Args>();
   app->add_option("--params", args->params_path, "parameter set (params-v1)")->required();
   app->add_option("--format", args->format, "ros2, c-header, matlab or json")->required();
-  app->add_option("--out", args->out_path, "output file (default: stdout)");
+  app->add_option("--out", args->out_path, "output file (default: stdout)")
+      ->check(InExistingDirectory);
   app->add_option("--node", args->node, "ROS 2 node name")->capture_default_str();
   return [args]() {
     ExportOptions options;

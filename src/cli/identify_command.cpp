@@ -104,7 +104,9 @@ CommandRunner AddIdentifyCommand(CLI::App* app) {
                   "components to fit: valve, pipeline, friction (default: all)");
   app->add_option("--prior", args->prior_path, "parameter set for what is not fitted")
       ->capture_default_str();
-  app->add_option("--out", args->out_path, "identified parameter set (params-v1)")->required();
+  app->add_option("--out", args->out_path, "identified parameter set (params-v1)")
+      ->required()
+      ->check(InExistingDirectory);
   auto* fit = app->add_flag("--fit-u-sat", args->fit_u_sat,
                             "fit each valve branch's saturation opening u_sat (the default)");
   app->add_flag("--fix-u-sat", args->fix_u_sat, "keep the prior's u_sat instead of fitting it")

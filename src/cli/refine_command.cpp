@@ -66,7 +66,9 @@ CommandRunner AddRefineCommand(CLI::App* app) {
   app->add_option("unit", args->unit_dir, "unit directory")->required();
   app->add_option("--params", args->params_path, "starting parameter set (params-v1)")->required();
   app->add_option("--spec", args->spec_path, "fit spec (pneumaid-fit/1)")->capture_default_str();
-  app->add_option("--out", args->out_path, "refined parameter set (params-v1)")->required();
+  app->add_option("--out", args->out_path, "refined parameter set (params-v1)")
+      ->required()
+      ->check(InExistingDirectory);
   app->add_option("--threads", args->threads,
                   "experiments, and the friction screen's candidates, simulated in parallel")
       ->check(CLI::Range(1, 256));

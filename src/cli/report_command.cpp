@@ -69,7 +69,9 @@ CommandRunner AddReportCommand(CLI::App* app) {
   app->add_option("--diagnose", args->diagnose_dir,
                   "a diagnose output directory of this unit and parameter set: its report");
   app->add_option("--results", args->results_dir, "a batch results directory: the fleet report");
-  app->add_option("--out", args->out_path, "the report (one self-contained HTML file)")->required();
+  app->add_option("--out", args->out_path, "the report (one self-contained HTML file)")
+      ->required()
+      ->check(InExistingDirectory);
   return [args]() { return RunReport(*args); };
 }
 
@@ -77,12 +79,14 @@ void AddHtmlOption(CLI::App* app, std::string* path) {
   // Checked before the command runs: a page that cannot be written must not
   // leave the command's other outputs behind.
   app->add_option("--html", *path, "also write a self-contained HTML report here")
-      ->check([](const std::string& page) -> std::string {
-        const std::filesystem::path parent = std::filesystem::path(page).parent_path();
-        std::error_code error;
-        if (parent.empty() || std::filesystem::is_directory(parent, error)) return "";
-        return "the directory " + parent.string() + " does not exist";
-      });
+      ->check(InExistingDirectory);
+}
+
+std::string InExistingDirectory(const std::string& file) {
+  const std::filesystem::path parent = std::filesystem::path(file).parent_path();
+  std::error_code error;
+  if (parent.empty() || std::filesystem::is_directory(parent, error)) return "";
+  return "the directory " + parent.string() + " does not exist";
 }
 
 void WriteHtml(const std::string& path, const std::string& html) {

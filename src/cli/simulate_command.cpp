@@ -161,7 +161,9 @@ CommandRunner AddSimulateCommand(CLI::App* app) {
   input->excludes(step);
   app->add_option("--until", args->until_s, "end time [s] (default: end of --input)");
   app->add_option("--rate", args->rate_Hz, "output rate [Hz]")->capture_default_str();
-  app->add_option("--out", args->out_path, "output CSV (a validation log)")->required();
+  app->add_option("--out", args->out_path, "output CSV (a validation log)")
+      ->required()
+      ->check(InExistingDirectory);
   app->callback([step, input]() {
     if (step->count() == 0 && input->count() == 0) {
       throw CLI::ValidationError("simulate", "one of --step or --input is required");

@@ -112,6 +112,13 @@ TEST_F(ReportCliTest, BadInputExitsTwoAndWritesNothing) {
                 " --html " + (dir_ / "no-such-dir" / "page.html").string()),
             2);
   EXPECT_NE(Stderr().find("does not exist"), std::string::npos) << Stderr();
+  // So does a parameter set that cannot be written (checked by the same
+  // rule: before, identify fitted every component, then failed to write).
+  EXPECT_EQ(Run("identify " + testing::Source("datasets/paper-rig") + " --out " +
+                (dir_ / "no-such-dir" / "set.yaml").string()),
+            2);
+  EXPECT_NE(Stderr().find("--out: the directory"), std::string::npos) << Stderr();
+  EXPECT_EQ(Stdout().find("Valve K_vp fit"), std::string::npos) << Stdout();  // no fit ran
   EXPECT_FALSE(std::filesystem::exists(set));
   EXPECT_FALSE(std::filesystem::exists(out));
   EXPECT_EQ(Listing(dir_), listing);
