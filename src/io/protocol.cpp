@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <set>
 
@@ -60,10 +61,22 @@ class ProtocolReader : internal::YamlReader {
         p.pipeline_step_time_s = Positive(pipe["step_time"], "pipeline.step_time");
       if (pipe["duration"]) p.pipeline_duration_s = Positive(pipe["duration"], "pipeline.duration");
       if (pipe["schedule"]) p.pipeline_schedule = Schedule(pipe["schedule"], "pipeline.schedule");
+      if (p.pipeline_command_V > 1) Fail(pipe["command"], "pipeline.command: expected <= 1 V");
+      for (std::size_t k = 0; k < p.pipeline_schedule.size(); ++k) {
+        // A knot the test never reaches, or a command the valve cannot take.
+        const auto [time, level] = p.pipeline_schedule[k];
+        if (!(time < p.pipeline_duration_s) || !(std::fabs(level) <= 1))
+          Fail(pipe["schedule"][k],
+               "pipeline.schedule: expected each knot before "
+               "pipeline.duration and a level in [-1, 1] V");
+      }
     }
     if (const YAML::Node stroke = root["stroke"]) {
       Keys(stroke, "stroke.", {"levels", "cycles", "margin", "max_leg", "dwell"});
       p.stroke_levels_V = List(stroke["levels"], "stroke.levels");
+      for (const double level : p.stroke_levels_V) {
+        if (level > 1) Fail(stroke["levels"], "stroke.levels: expected commands in (0, 1] V");
+      }
       if (stroke["margin"]) p.stroke_margin_m = NonNegative(stroke["margin"], "stroke.margin");
       if (stroke["dwell"]) p.stroke_dwell_s = NonNegative(stroke["dwell"], "stroke.dwell");
       if (stroke["max_leg"]) p.stroke_max_leg_s = Positive(stroke["max_leg"], "stroke.max_leg");

@@ -71,7 +71,11 @@ TEST(ProtocolTest, ABadScheduleOrMismatchNamesItsLine) {
        {"pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5, 1], [0.2, 0]]}\n",
         "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5]]}\n",
         "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n",
-        "\ndropped_samples: 0.5\n", "valve:\n  ramp: -1\n"}) {
+        "\ndropped_samples: 0.5\n", "valve:\n  ramp: -1\n",
+        // Protocols the rig cannot run: a command above 1 V, a knot after the test.
+        "stroke:\n  levels: [0.5, 1.2]\n", "pipeline: {tube_lengths: [0.38],\n  command: 1.5}\n",
+        "pipeline: {tube_lengths: [0.38], duration: 2,\n  schedule: [[0.1, 1], [3.0, 0]]}\n",
+        "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.1, 2]]}\n"}) {
     try {
       ParseProtocol(std::string("format: pneumaid-protocol/1\n") + bad, "p.yaml");
       ADD_FAILURE() << bad << " accepted";
