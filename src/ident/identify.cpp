@@ -197,9 +197,9 @@ bool IdentifyOptions::IsValid(std::string* error) const {
 std::vector<std::string> IdentifyReport::NotConverged() const {
   std::vector<std::string> out;
   using Named = std::pair<const char*, const FitResult*>;
-  for (const auto& [name, fit] : {Named{"valve increasing", &valve.increasing},
-                                  Named{"valve decreasing", &valve.decreasing},
-                                  Named{"pipeline", &pipeline}, Named{"friction", &friction}}) {
+  for (const auto& [name, fit] :
+       {Named{"valve increasing", &valve.increasing}, Named{"valve decreasing", &valve.decreasing},
+        Named{"pipeline", &pipeline}, Named{"friction", &friction}}) {
     if (fit->status == FitStatus::kNotConverged || fit->status == FitStatus::kNotExplained)
       out.push_back(std::string(name) + ": " + ToString(fit->status) +
                     (fit->reason.empty() ? "" : " (" + fit->reason + ")"));

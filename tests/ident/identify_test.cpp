@@ -111,8 +111,7 @@ TEST(IdentifyTest, AFitThatDidNotConvergeSaysSoInTheReportAndTheProvenance) {
   EXPECT_EQ(report.NotConverged().front().rfind("friction: NOT converged (", 0), 0u)
       << report.NotConverged().front();
   EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "friction").at("status"), "NOT converged");
-  EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "valve_increasing").at("status"),
-            "converged");
+  EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "valve_increasing").at("status"), "converged");
 }
 
 TEST(IdentifyTest, ComponentsWithoutDataAreRefusedWhenAskedForAndPriorsOtherwise) {
