@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <utility>
@@ -97,11 +98,12 @@ void FrictionScreenSearch::ConsiderAll(std::vector<Parameters> candidates,
       continue;
     }
     const std::size_t end = std::min(i + chunk, candidates.size());
-    const std::vector<Parameters> some(candidates.begin() + i, candidates.begin() + end);
+    std::vector<Parameters> some(std::make_move_iterator(candidates.begin() + i),
+                                 std::make_move_iterator(candidates.begin() + end));
     const auto measures = windows_.MeasureSeveral(some, bound, threads);
     out_->candidates += static_cast<int>(some.size());
     for (std::size_t k = 0; k < some.size(); ++k) {
-      Take(std::move(candidates[i + k]), measures[k].first, measures[k].second);
+      Take(std::move(some[k]), measures[k].first, measures[k].second);
       if (measured) measured(i + k, measures[k].first);
     }
   }
