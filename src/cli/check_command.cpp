@@ -7,6 +7,7 @@
 #include "commands.h"
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/log_notes.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/io/rig_writer.h"
 #include "pneumaid/validate/logged_run.h"
@@ -50,6 +51,7 @@ void PrintUnit(const Unit& unit) {
   if (!noise.empty()) std::cout << "  " << noise << "\n";
   const PositionZero zero = ReadPositionZero(unit);
   if (zero.offset_m != 0) std::cout << "  " << zero.note << "\n";
+  for (const auto& note : ManifestNotes(unit)) std::cout << "  note: " << note << "\n";
   for (const Experiment& e : unit.experiments) {
     const auto& t = e.column("t");
     const double duration = t.back() - t.front();
@@ -67,6 +69,7 @@ void PrintUnit(const Unit& unit) {
       for (const auto& name : e.ignored_columns) std::cout << " " << name;
       std::cout << "\n";
     }
+    for (const auto& note : LogNotes(e)) std::cout << "    note: " << note << "\n";
   }
 }
 

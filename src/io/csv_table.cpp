@@ -59,15 +59,19 @@ class CsvParser {
     if (text.empty()) Fail(0, 0, "empty file: expected a header line and data rows");
     LineCursor cursor(text);
     std::string_view line;
+    bool last_line_is_row = false;
     while (cursor.Next(&line)) {
+      last_line_is_row = false;
       if (IsSkipped(line)) continue;
       if (table_.header_line == 0) {
         table_.header_line = cursor.number();
         ParseHeader(line);
       } else {
         ParseRow(line, cursor.number());
+        last_line_is_row = true;
       }
     }
+    if (last_line_is_row && text.back() != '\n') table_.unterminated_last_row = true;
     if (table_.header_line == 0) Fail(0, 0, "no header line: expected e.g. 't [s],u [V],...'");
     if (table_.rows() == 0) Fail(table_.header_line, 0, "header with no data rows");
     return std::move(table_);
@@ -79,6 +83,16 @@ class CsvParser {
   }
 
   void ParseHeader(std::string_view line) {
+    if (line.find(',') == std::string_view::npos) {
+      for (const char separator : {';', '\t'}) {
+        if (line.find(separator) != std::string_view::npos) {
+          Fail(table_.header_line, 0,
+               std::string("header separated by ") + (separator == ';' ? "';'" : "tabs") +
+                   ": expected comma-separated cells with a decimal point, e.g. 't [s],u [V],x "
+                   "[mm]'");
+        }
+      }
+    }
     std::set<std::string> seen;
     int column = 0;
     std::size_t start = 0;

@@ -533,6 +533,7 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
   Experiment out;
   out.entry = entry;
   out.path = path;
+  out.unterminated_last_row = table.unterminated_last_row;
 
   std::set<std::string> wanted(kind_columns.required.begin(), kind_columns.required.end());
   wanted.insert(kind_columns.optional.begin(), kind_columns.optional.end());

@@ -10,7 +10,21 @@
 namespace pneumaid {
 namespace {
 
-using CheckCliTest = testing::CliTest;
+class CheckCliTest : public testing::CliTest {
+ protected:
+  // The bundled paper unit copied into the test's directory, its manifest
+  // with `from` replaced by `to`.
+  std::filesystem::path PaperRigWith(const std::string& from, const std::string& to) {
+    const std::filesystem::path unit = dir_ / "paper-rig";
+    std::filesystem::copy(testing::Source("datasets/paper-rig"), unit);
+    std::string manifest = Read(unit / "unit.yaml");
+    const std::size_t at = manifest.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) manifest.replace(at, from.size(), to);
+    std::ofstream(unit / "unit.yaml", std::ios::binary) << manifest;
+    return unit;
+  }
+};
 
 TEST_F(CheckCliTest, SummarisesEveryExperimentInDisplayUnits) {
   ASSERT_EQ(Run("check " + testing::Source("datasets/paper-rig")), 0) << Stderr();
@@ -29,13 +43,7 @@ TEST_F(CheckCliTest, SummarisesEveryExperimentInDisplayUnits) {
 TEST_F(CheckCliTest, NamesADeclaredNoiseTheLogsContradict) {
   ASSERT_EQ(Run("check " + testing::Source("datasets/paper-rig")), 0) << Stderr();
   EXPECT_EQ(Stdout().find("noise"), std::string::npos) << Stdout();
-  const std::filesystem::path unit = dir_ / "paper-rig";
-  std::filesystem::copy(testing::Source("datasets/paper-rig"), unit);
-  std::string manifest = Read(unit / "unit.yaml");
-  const std::size_t at = manifest.find("p1: {sigma: 300}");
-  ASSERT_NE(at, std::string::npos);
-  manifest.replace(at, 16, "p1: {sigma: 100}");
-  std::ofstream(unit / "unit.yaml", std::ios::binary) << manifest;
+  const std::filesystem::path unit = PaperRigWith("p1: {sigma: 300}", "p1: {sigma: 100}");
   ASSERT_EQ(Run("check " + unit.string()), 0) << Stderr();
   EXPECT_NE(Stdout().find("declared noise below what the logs show: p1 100 Pa declared, "
                           "the logs' quietest stretches 2"),
@@ -52,6 +60,38 @@ TEST_F(CheckCliTest, CorruptUnitExitsTwoNamingFileAndLineAndTheOthersAreStillChe
   EXPECT_NE(Stderr().find("PVQ13-0014/step-1.csv:1623: ragged row"), std::string::npos) << Stderr();
   EXPECT_NE(Stdout().find("unit PVQ13-0001"), std::string::npos);
   EXPECT_EQ(Listing(testing::Source("datasets/fleet")), before);
+}
+
+// What the format allows but a rig engineer should hear of before a fit: a
+// supply written as gauge on a rig whose valve log shows it absolute, a log
+// cut mid-row with no line end, and rows lost for a while. The paper unit
+// itself says none of it.
+TEST_F(CheckCliTest, NamesASupplyTheLogsContradictACutLogAndSamplingGaps) {
+  ASSERT_EQ(Run("check " + testing::Source("datasets/paper-rig")), 0) << Stderr();
+  EXPECT_EQ(Stdout().find("note:"), std::string::npos) << Stdout();
+  const std::filesystem::path unit =
+      PaperRigWith("supply_pressure: \"5 bar\"", "supply_pressure: \"5 bar_g\"");
+  // stroke-030: its last row's last number cut short with no line end, and 30
+  // rows lost after its 1000th.
+  std::string log = Read(unit / "stroke-030.csv");
+  log.erase(log.size() - 3);
+  std::size_t row = 0;
+  for (int i = 0; i < 1000; ++i) row = log.find('\n', row) + 1;
+  std::size_t end = row;
+  for (int i = 0; i < 30; ++i) end = log.find('\n', end) + 1;
+  log.erase(row, end - row);
+  std::ofstream(unit / "stroke-030.csv", std::ios::binary) << log;
+
+  ASSERT_EQ(Run("check " + unit.string()), 0) << Stderr();
+  const std::string out = Stdout();
+  EXPECT_NE(out.find("note: valve log 'valve-staircase': p_up's median"), std::string::npos) << out;
+  EXPECT_NE(out.find("below the rig's supply_pressure 6 bar abs"), std::string::npos) << out;
+  const std::size_t stroke = out.find("stroke-030: stroke");
+  ASSERT_NE(stroke, std::string::npos) << out;
+  const std::string after = out.substr(stroke, out.find("stroke-045") - stroke);
+  EXPECT_NE(after.find("note: 1 gap in the sampling"), std::string::npos) << after;
+  EXPECT_NE(after.find("about 30 samples missing"), std::string::npos) << after;
+  EXPECT_NE(after.find("note: the last row has no line end"), std::string::npos) << after;
 }
 
 TEST_F(CheckCliTest, MissingDirectoryIsBadInput) {

@@ -22,6 +22,18 @@ TEST(CsvTableTest, AcceptsBomCrlfCommentsBlankLinesAndUnits) {
   EXPECT_EQ(table.Find("q1"), nullptr);
 }
 
+// A file whose last row has no line end may have been cut while it was
+// written (its last number too): the table says so. A last line that is a
+// comment, or a line end after the row, is a complete file.
+TEST(CsvTableTest, SaysWhenTheLastRowHasNoLineEnd) {
+  EXPECT_TRUE(ParseCsv("t,u\n0,1\n1,2.65", "cut.csv").unterminated_last_row);
+  EXPECT_FALSE(ParseCsv("t,u\n0,1\n1,2.65\n", "whole.csv").unterminated_last_row);
+  EXPECT_FALSE(ParseCsv("t,u\r\n0,1\r\n1,2.65\r\n", "crlf.csv").unterminated_last_row);
+  EXPECT_FALSE(ParseCsv("t,u\n0,1\n1,2.65\n# end", "comment.csv").unterminated_last_row);
+  // A single-column log has no separator to look for.
+  EXPECT_EQ(ParseCsv("t\n0\n1\n", "one.csv").rows(), 2u);
+}
+
 struct BadCsv {
   const char* name;
   const char* text;
@@ -56,7 +68,11 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCsv{"not_finite", "t,u\n0,nan\n", 2, 2, "expected a finite number"},
                       BadCsv{"empty_field", "t,u\n0,\n", 2, 2, "expected a finite number"},
                       BadCsv{"duplicate_column", "t,u,t\n0,1,2\n", 1, 3, "duplicate column"},
-                      BadCsv{"unclosed_unit", "t [s,u\n0,1\n", 1, 1, "name [unit]"}),
+                      BadCsv{"unclosed_unit", "t [s,u\n0,1\n", 1, 1, "name [unit]"},
+                      // A spreadsheet's export in a comma-decimal locale.
+                      BadCsv{"semicolons", "t [s];u [V]\n0;0,5\n", 1, 0,
+                             "header separated by ';': expected comma-separated cells"},
+                      BadCsv{"tabs", "t\tu\n0\t1\n", 1, 0, "header separated by tabs"}),
     [](const ::testing::TestParamInfo<BadCsv>& info) { return std::string(info.param.name); });
 
 }  // namespace

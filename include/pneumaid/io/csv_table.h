@@ -22,6 +22,10 @@ struct CsvTable {
   int header_line = 0;
   std::vector<CsvColumn> columns;
   std::vector<int> row_lines;  // the file line of each data row, for messages
+  // The last data row is the file's last line and has no line end: a log cut
+  // while it was written ends so (its last number may be cut short too). The
+  // dialect allows it; `check` says it.
+  bool unterminated_last_row = false;
 
   // nullptr when there is no such column.
   const CsvColumn* Find(const std::string& name) const;

@@ -1,0 +1,100 @@
+#include "pneumaid/io/log_notes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "../util/median.h"
+
+using pneumaid::internal::Median;
+
+namespace pneumaid {
+namespace {
+
+constexpr const char* kGaugeHint =
+    " (a gauge unit where the supply is absolute, or the other way?)";
+
+template <typename... Numbers>
+std::string Format(const char* format, Numbers... numbers) {
+  char text[256];
+  std::snprintf(text, sizeof(text), format, numbers...);
+  return text;
+}
+
+// `t` counts from the log's first sample; the note shows the log's own time.
+std::string SamplingGapNote(const std::vector<double>& t, double time_origin_s) {
+  if (t.size() < 3) return {};
+  std::vector<double> intervals(t.size() - 1);
+  for (std::size_t i = 0; i + 1 < t.size(); ++i) intervals[i] = t[i + 1] - t[i];
+  const double median = Median(intervals);
+  if (!(median > 0)) return {};
+  std::size_t gaps = 0;
+  std::size_t longest = 0;
+  for (std::size_t i = 0; i < intervals.size(); ++i) {
+    if (intervals[i] <= kSamplingGapIntervals * median) continue;
+    ++gaps;
+    if (gaps == 1 || intervals[i] > intervals[longest]) longest = i;
+  }
+  if (gaps == 0) return {};
+  const double missing = std::round(intervals[longest] / median) - 1;
+  return std::to_string(gaps) + (gaps == 1 ? " gap" : " gaps") +
+         Format(
+             " in the sampling (intervals over %.3g times the median %.3g ms), the longest "
+             "%.4g ms after t = %.8g s, about %.0f samples missing",
+             kSamplingGapIntervals, median * 1e3, intervals[longest] * 1e3,
+             t[longest] + time_origin_s, missing);
+}
+
+}  // namespace
+
+std::vector<std::string> LogNotes(const Experiment& experiment) {
+  std::vector<std::string> notes;
+  const std::string gaps = SamplingGapNote(experiment.column("t"), experiment.time_origin_s);
+  if (!gaps.empty()) notes.push_back(gaps);
+  if (experiment.unterminated_last_row) {
+    notes.push_back(
+        "the last row has no line end: a log cut while it was written ends so, and its last "
+        "number may be cut short");
+  }
+  return notes;
+}
+
+std::vector<std::string> ManifestNotes(const Unit& unit) {
+  std::vector<std::string> notes;
+  const double supply_Pa = unit.manifest.rig.supply_pressure_Pa;
+  for (const Experiment& e : unit.experiments) {
+    const auto& p_up = e.column("p_up");
+    if (!p_up.empty()) {
+      const double median_Pa = Median(p_up);
+      if (std::abs(median_Pa - supply_Pa) > kSupplyMismatchFraction * supply_Pa) {
+        const char* side = median_Pa < supply_Pa ? "below" : "above";
+        notes.push_back("valve log '" + e.entry.id + "'" +
+                        Format(": p_up's median %.4g bar abs is %.0f %% ", median_Pa / 1e5,
+                               std::abs(median_Pa / supply_Pa - 1) * 100) +
+                        side + Format(" the rig's supply_pressure %.4g bar abs", supply_Pa / 1e5) +
+                        kGaugeHint);
+      }
+    }
+    const auto& p1 = e.column("p1");
+    const auto& p2 = e.column("p2");
+    if (p1.empty() || p1.size() != p2.size()) continue;
+    // The higher chamber's pressure that 1 % of the log exceeds: a chamber
+    // compressed by a stopping rod passes the supply for a moment (29 % on
+    // a worn seal's strokes), a supply written wrong is passed at every hold.
+    std::vector<double> higher(p1.size());
+    for (std::size_t i = 0; i < p1.size(); ++i) higher[i] = std::max(p1[i], p2[i]);
+    const std::size_t at = higher.size() - 1 - higher.size() / 100;
+    std::nth_element(higher.begin(), higher.begin() + at, higher.end());
+    const double high_Pa = higher[at];
+    if (high_Pa > (1 + kSupplyMismatchFraction) * supply_Pa) {
+      notes.push_back("log '" + e.entry.id + "'" +
+                      Format(": the higher chamber pressure exceeds %.4g bar abs for 1 %% of "
+                             "the log, %.0f %% above the rig's supply_pressure %.4g bar abs",
+                             high_Pa / 1e5, (high_Pa / supply_Pa - 1) * 100, supply_Pa / 1e5) +
+                      kGaugeHint);
+    }
+  }
+  return notes;
+}
+
+}  // namespace pneumaid
