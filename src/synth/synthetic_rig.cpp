@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 #include <utility>
@@ -464,6 +465,17 @@ SyntheticUnit Synthesize(const Parameters& truth, const Protocol& protocol, std:
   if (!problems.empty()) {
     throw InputError("truth parameter set", 0, 0,
                      problems.front().path + ": " + problems.front().message);
+  }
+  // Each leg drives to `margin` before an end: from mid-stroke, a margin of
+  // half the stroke or more is reached before the rod moves, and every leg
+  // would end at once.
+  const bool has_strokes = !protocol.stroke_levels_V.empty();
+  if (has_strokes && protocol.stroke_margin_m >= 0.5 * truth.cylinder.stroke_m) {
+    char message[160];
+    std::snprintf(message, sizeof(message),
+                  "stroke.margin: %g mm, expected less than half the truth's stroke (%g mm)",
+                  protocol.stroke_margin_m * 1e3, 0.5 * truth.cylinder.stroke_m * 1e3);
+    throw InputError("protocol", 0, 0, message);
   }
   RigBuilder builder(truth, protocol, seed);
   SyntheticUnit unit;

@@ -209,6 +209,30 @@ TEST(SyntheticRigTest, DeterministicPerSeed) {
   EXPECT_NE(a.at("step-1.csv"), c.at("step-1.csv"));
 }
 
+// A stroke margin of half the stroke or more is reached before the rod moves:
+// every leg would end at once and no retract leg be written. Bad input, named.
+TEST(SyntheticRigTest, AStrokeMarginOfHalfTheStrokeIsBadInput) {
+  const Parameters truth;  // a 50 mm stroke
+  Protocol protocol = SmallProtocol(1.0);
+  protocol.valve = false;
+  protocol.tube_lengths_m.clear();
+  protocol.paper_step = false;
+  protocol.stroke_levels_V = {0.7};
+  protocol.stroke_margin_m = 0.025;
+  try {
+    Synthesize(truth, protocol, 5, "D");
+    FAIL() << "a margin of half the stroke was accepted";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what())
+                  .find("stroke.margin: 25 mm, expected less than half the truth's stroke (25 mm)"),
+              std::string::npos)
+        << error.what();
+  }
+  protocol.stroke_margin_m = 0.02;
+  const SyntheticUnit unit = Synthesize(truth, protocol, 5, "D");
+  ASSERT_EQ(unit.logs.size(), 1u);
+}
+
 TEST(SyntheticRigTest, SpreadStaysInsideItsBoundsAndScaleIsExact) {
   const Parameters base;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
