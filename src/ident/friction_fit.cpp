@@ -327,9 +327,11 @@ FrictionFitResult FitStrokes(const Unit& unit, const StrokeData& data, const Fri
   double squares = 0;
   for (std::size_t k = 0; k < data.segments.size(); ++k) {
     const Eigen::VectorXd& r = jacobians[k].residuals;
-    result.samples += static_cast<int>(r.size());
     for (Eigen::Index i = 0; i < r.size(); ++i) {
-      squares += std::pow(r(i) / data.segments[k].weight[i + 1], 2);
+      const double weight = data.segments[k].weight[i + 1];
+      if (weight == 0) continue;  // in a gap of the log: no measurement
+      squares += std::pow(r(i) / weight, 2);
+      ++result.samples;
     }
   }
   result.position_rms_m = std::sqrt(squares / std::max(result.samples, 1));

@@ -77,6 +77,25 @@ void SetWeights(double sigma_x_m, double drift_m, double escape_error_m_per_s, S
   }
 }
 
+// A replay that ran through a gap in the log ran on the forces interpolated
+// across it: the samples in the gap and every sample its replay reaches after
+// it (forward: later, backward from the arrest: earlier) weigh nothing.
+// (Twelve gaps of 21 rows, four per stroke log, once left a fit not
+// converged at 2.7 times its cost, its position RMS 0.10 mm for 0.009.)
+void LeaveOutWhatFollowsAGap(const std::vector<bool>& in_gap, Segment* s) {
+  const std::size_t forward_end = s->two_sided ? s->split + 1 : s->end;
+  bool after_gap = false;
+  for (std::size_t i = s->begin; i < forward_end; ++i) {
+    after_gap = after_gap || in_gap[i];
+    if (after_gap) s->weight[i - s->begin] = 0;
+  }
+  after_gap = false;
+  for (std::size_t i = s->end; i-- > forward_end;) {
+    after_gap = after_gap || in_gap[i];
+    if (after_gap) s->weight[i - s->begin] = 0;
+  }
+}
+
 // The slide of `s` ends in the stuck run `next`: where it stopped, when
 // (a guess and bounds for the nuisance parameter), and its fastest sample.
 // A slide that turned back before it stopped (beyond `band`) arrives in the
@@ -301,8 +320,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     if (!selected(logged)) continue;
     const Experiment* log = &logged;
     double period = internal::UniformPeriod(logged.column("t"));
-    if (period <= 0) {  // read on a uniform clock instead
-      data.resampled.push_back(internal::ResampledUniformly(logged));
+    std::vector<bool> in_gap;  // samples interpolated across rows the logger lost
+    if (period <= 0) {         // read on a uniform clock instead
+      data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap));
       log = data.resampled.back().get();
       period = internal::UniformPeriod(log->column("t"));
     }
@@ -341,8 +361,11 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
                                options.end_margin_m + 4 * sigma_x_m,
                                drift_m};
     CutSegments(stroke_log, runs, options, replay_stops, &data);
+    for (std::size_t k = first_segment; k < data.segments.size() && !in_gap.empty(); ++k)
+      LeaveOutWhatFollowsAGap(in_gap, &data.segments[k]);
     if (!options.force_balance) continue;
-    std::vector<bool> covered(x.size(), false);
+    // Nor is a smooth slide read off the line drawn across a gap.
+    std::vector<bool> covered = in_gap.empty() ? std::vector<bool>(x.size(), false) : in_gap;
     for (const auto& [begin, end] : runs)
       std::fill(covered.begin() + begin, covered.begin() + end, true);
     for (std::size_t k = first_segment;

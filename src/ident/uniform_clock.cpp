@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "../util/median.h"
+#include "pneumaid/io/log_notes.h"
 
 namespace pneumaid::internal {
 
@@ -23,7 +24,8 @@ double MedianInterval(const std::vector<double>& t) {
   return Median(std::move(intervals));
 }
 
-std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {
+std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
+                                                     std::vector<bool>* in_gap) {
   const auto& t = e.column("t");
   auto out = std::make_shared<Experiment>();
   out->entry = e.entry;
@@ -36,6 +38,16 @@ std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e) {
       static_cast<std::size_t>(std::floor((t.back() - t.front()) / period + 1e-9)) + 1;
   std::vector<double> clock(samples);
   for (std::size_t k = 0; k < samples; ++k) clock[k] = t.front() + static_cast<double>(k) * period;
+  if (in_gap != nullptr) {
+    in_gap->assign(samples, false);
+    const double round_off_s = 1e-9 * period;
+    std::size_t j = 0;  // t[j] <= clock[k] < t[j + 1]
+    for (std::size_t k = 0; k < samples; ++k) {
+      while (j + 2 < t.size() && t[j + 1] <= clock[k]) ++j;
+      (*in_gap)[k] = t[j + 1] - t[j] > kSamplingGapIntervals * period &&
+                     clock[k] > t[j] + round_off_s && clock[k] < t[j + 1] - round_off_s;
+    }
+  }
   for (const auto& [name, values] : e.columns) {
     std::vector<double>& column = out->columns[name];
     if (name == "t") {

@@ -19,7 +19,11 @@ double MedianInterval(const std::vector<double>& t);
 
 // `e` on a uniform clock at its median sampling interval: each column
 // interpolated linearly between its samples, the command (`u`) held from
-// each sample.
-std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e);
+// each sample. `in_gap`, when given, marks the clock's samples that lie
+// inside a gap of the log (an interval over kSamplingGapIntervals times the
+// median, the rule `check` notes): interpolated across rows the logger lost,
+// they are no measurement.
+std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
+                                                     std::vector<bool>* in_gap = nullptr);
 
 }  // namespace pneumaid::internal

@@ -565,6 +565,48 @@ TEST(FrictionFitTest, StickSlipTooShortToBeFoundIsNoSmoothSlide) {
   }
 }
 
+// A logger that lost 21 rows at a time, four times in each stroke log: the
+// replays run through the gaps on the forces interpolated across them and
+// are compared with the logged positions only, not with a line drawn
+// between them, and no smooth slide is read off such a line. Before, these
+// gaps left the fit not converged, its position RMS ten times the whole
+// logs' (measured on `pneumaid synth` units of configs/paper.yaml).
+TEST(FrictionFitTest, RowsTheLoggerLostAreNoMeasurement) {
+  const Parameters truth;
+  const Unit whole = MismatchedStrokes(truth, 3, 1000, {0.4, 0.6, 1.0}, 2);
+  Unit gaps = whole;
+  std::size_t lost = 0;
+  for (Experiment& e : gaps.experiments) {
+    const std::size_t n = e.samples();
+    for (std::size_t part = 4; part >= 1; --part) {
+      const auto at = static_cast<std::ptrdiff_t>(part * n / 5);
+      for (auto& [name, column] : e.columns)
+        column.erase(column.begin() + at, column.begin() + at + 21);
+      lost += 21;
+    }
+  }
+  ASSERT_GT(lost, 0u);
+  const FrictionFitResult reference =
+      FitFriction(whole, ThirtyPercentOff(truth.friction), FrictionFitOptions{});
+  const FrictionFitResult fit =
+      FitFriction(gaps, ThirtyPercentOff(truth.friction), FrictionFitOptions{});
+  std::cout << reference.BriefReport() << fit.BriefReport();
+  ASSERT_EQ(reference.status, FitStatus::kConverged) << reference.reason;
+  ASSERT_EQ(fit.status, FitStatus::kConverged) << fit.reason;
+  EXPECT_LT(fit.position_rms_m, 1.5 * reference.position_rms_m);
+  for (const char* direction : {"positive", "negative"}) {
+    EXPECT_EQ(Determined(fit, direction), Determined(reference, direction)) << direction;
+    const auto real = Values(std::string(direction) == "positive" ? truth.friction.positive
+                                                                  : truth.friction.negative);
+    for (int i = 0; i < 4; ++i) {
+      const FittedCoefficient& c = Coefficient(fit, direction, kNames[i]);
+      if (!c.determined()) continue;
+      EXPECT_NEAR(c.value, real[i], std::max(Tolerance(i, real[i]), 3 * c.standard_error))
+          << direction << " " << kNames[i];
+    }
+  }
+}
+
 // At 5 kHz a sample interval is one RK4 step of the replay (0.2 ms, below
 // the 0.25 ms of replay_step_s): the coefficients are those of 8 steps per
 // interval within a fifth of their tolerances, in a fraction of the time.
