@@ -303,6 +303,20 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
     const std::string unit = fs::path(path).filename().string();
     if (options.shard.Contains(unit)) units.push_back(unit);
   }
+  // Each unit's results replace the directory results/<unit> whole: it must
+  // not hold a unit (results in the fleet directory itself would delete
+  // every unit's logs).
+  for (const std::string& unit : units) {
+    const fs::path target = fs::path(results_dir) / unit;
+    std::error_code same;
+    if (fs::exists(target / "unit.yaml") ||
+        fs::equivalent(target, fs::path(fleet_dir) / unit, same)) {
+      throw InputError(results_dir, 0, 0,
+                       "results directory: '" + target.string() +
+                           "' holds a unit (unit.yaml), not an earlier batch result; batch "
+                           "replaces it whole, so it must not be the fleet directory");
+    }
+  }
   std::error_code created;
   fs::create_directories(results_dir, created);
   if (created) throw InputError(results_dir, 0, 0, "cannot create: " + created.message());

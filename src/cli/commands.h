@@ -59,6 +59,9 @@ void AddHtmlOption(CLI::App* app, std::string* path);
 // An output file's check before the command runs (CLI11's check: "" or why):
 // its directory must exist, so a long fit does not end in "cannot write".
 std::string InExistingDirectory(const std::string& file);
+// An output directory's check: an existing directory, or one that can be
+// made in an existing one (not a file).
+std::string DirectoryToWrite(const std::string& directory);
 // Writes the page atomically and says so; nothing for an empty path.
 void WriteHtml(const std::string& path, const std::string& html);
 

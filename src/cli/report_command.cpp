@@ -85,8 +85,17 @@ void AddHtmlOption(CLI::App* app, std::string* path) {
 std::string InExistingDirectory(const std::string& file) {
   const std::filesystem::path parent = std::filesystem::path(file).parent_path();
   std::error_code error;
+  if (std::filesystem::is_directory(file, error)) return file + " is a directory, not a file";
   if (parent.empty() || std::filesystem::is_directory(parent, error)) return "";
   return "the directory " + parent.string() + " does not exist";
+}
+
+std::string DirectoryToWrite(const std::string& directory) {
+  std::error_code error;
+  if (std::filesystem::is_directory(directory, error)) return "";
+  if (std::filesystem::exists(directory, error))
+    return directory + " exists and is not a directory";
+  return InExistingDirectory(directory);
 }
 
 void WriteHtml(const std::string& path, const std::string& html) {

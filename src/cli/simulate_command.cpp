@@ -13,6 +13,7 @@
 #include "pneumaid/io/trajectory_csv.h"
 #include "pneumaid/io/units.h"
 #include "pneumaid/sim/simulate.h"
+#include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid::cli {
 namespace {
@@ -101,9 +102,15 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
   run.command = SampledCommand(run.t_s, columns["u"]);
   run.initial = RetractedAtRest(params);
   if (!columns["x"].empty() && !columns["p1"].empty() && !columns["p2"].empty()) {
-    run.initial.position_m = columns["x"].front();
-    run.initial.p1_Pa = columns["p1"].front();
-    run.initial.p2_Pa = columns["p2"].front();
+    // As validation starts a logged run (a rod on its stop reads a little
+    // beyond it: clamped to the stroke).
+    Trajectory logged;
+    logged.t_s = run.t_s;
+    logged.u_V = columns["u"];
+    logged.x_m = columns["x"];
+    logged.p1_Pa = columns["p1"];
+    logged.p2_Pa = columns["p2"];
+    run.initial = LoggedInitialState(logged, 0.5 * params.cylinder.stroke_m);
   }
   return run;
 }

@@ -52,9 +52,13 @@ int RunValidate(const ValidateArgs& args) {
   const std::string html =
       args.html_path.empty() ? "" : UnitReportHtml(params, unit, page, &report);
   // Everything is computed before anything is written; each file is atomic.
+  if (!args.csv_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(args.csv_dir, error);
+    if (error) throw InputError(args.csv_dir, 0, 0, "cannot create: " + error.message());
+  }
   if (!args.json_path.empty()) WriteFileAtomically(args.json_path, ReportToJson(report));
   if (!args.csv_dir.empty()) {
-    std::filesystem::create_directories(args.csv_dir);
     for (const auto& e : report.experiments) {
       if (!e.simulation.ok()) continue;
       WriteFileAtomically(args.csv_dir + "/" + e.id + "-validation.csv", ComparisonToCsv(e));
@@ -71,9 +75,11 @@ CommandRunner AddValidateCommand(CLI::App* app) {
   auto args = std::make_shared<ValidateArgs>();
   app->add_option("--params", args->params_path, "parameter set (params-v1)")->required();
   app->add_option("unit", args->unit_dir, "unit directory")->required();
-  app->add_option("--json", args->json_path, "write the report (pneumaid-report/1) here");
+  app->add_option("--json", args->json_path, "write the report (pneumaid-report/1) here")
+      ->check(InExistingDirectory);
   app->add_option("--csv-out", args->csv_dir,
-                  "write measured-vs-simulated CSVs into this directory");
+                  "write measured-vs-simulated CSVs into this directory")
+      ->check(DirectoryToWrite);
   app->add_option("--min-fit", args->min_fit,
                   "CHANNEL=PERCENT: lowest NRMSE fit accepted (default x=95; repeatable)");
   app->add_option(

@@ -268,6 +268,23 @@ TEST(BatchTest, BadFleetsAndOptionsAreInputErrors) {
   options.diagnose = false;  // not asked for: not checked
   EXPECT_TRUE(options.IsValid(&error)) << error;
   EXPECT_THROW(MergeResults({empty.string()}), InputError);
+  // Results written into the fleet directory would replace each unit's
+  // directory, logs and all: refused before any unit runs, the logs intact.
+  const fs::path fleet = Fresh("results_in_fleet");
+  fs::create_directories(fleet);
+  fs::copy(fs::path(kFleet) / "PVQ13-0001", fleet / "PVQ13-0001", fs::copy_options::recursive);
+  const auto logs = std::distance(fs::directory_iterator(fleet / "PVQ13-0001"), {});
+  try {
+    RunBatch(fleet.string(), fleet.string(), Options());
+    ADD_FAILURE() << "results written over the fleet's units";
+  } catch (const InputError& error) {
+    EXPECT_NE(
+        std::string(error.what()).find("holds a unit (unit.yaml), not an earlier batch result"),
+        std::string::npos)
+        << error.what();
+  }
+  EXPECT_EQ(std::distance(fs::directory_iterator(fleet / "PVQ13-0001"), {}), logs);
+  EXPECT_TRUE(fs::exists(fleet / "PVQ13-0001" / "unit.yaml"));
 }
 
 }  // namespace

@@ -36,6 +36,19 @@ TEST_F(SimulateCliTest, StepWritesAValidationLogInSI) {
   EXPECT_NEAR(ReadCsv(again).Find("x")->values.back(), table.Find("x")->values.back(), 2e-4);
 }
 
+// A unit's log whose rod rests on its stop reads a little beyond it (the
+// fleet's step-1 starts at -0.01 mm from the retracted end): the run starts
+// as validation starts it, clamped to the stroke, not refused.
+TEST_F(SimulateCliTest, ALogWhoseRodRestsJustBeyondItsStopIsSimulated) {
+  const std::string log =
+      std::string(PNEUMAID_SOURCE_DIR) + "/datasets/fleet/PVQ13-0002/step-1.csv";
+  ASSERT_LT(ReadCsv(log).Find("x")->values.front(), 0.0);  // as logged, in mm from retracted
+  const std::string out = (dir_ / "sim.csv").string();
+  ASSERT_EQ(Run("simulate --params " + kPaper + " --input " + log + " --out " + out), 0)
+      << Stderr();
+  EXPECT_GE(ReadCsv(out).Find("x")->values.front(), -0.025);
+}
+
 TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
   const std::string out = (dir_ / "sim.csv").string();
   std::ifstream paper(kPaper);

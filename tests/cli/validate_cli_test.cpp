@@ -49,6 +49,20 @@ TEST_F(ValidateCliTest, BadInputExitsTwoAndWritesNothing) {
                 testing::Source("datasets/paper-rig") + " --min-fit z=3 --json " + json),
             2);
   EXPECT_EQ(Listing(dir_), before);
+  // A CSV directory that is a file, a JSON path that is a directory: refused
+  // before the validation runs, nothing written (the JSON was written first
+  // and the command ended in an internal error).
+  const std::string file = Write("taken", "x\n");
+  const auto with_file = Listing(dir_);
+  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
+                testing::Source("datasets/paper-rig") + " --json " + json + " --csv-out " + file),
+            2);
+  EXPECT_NE(Stderr().find("exists and is not a directory"), std::string::npos) << Stderr();
+  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
+                testing::Source("datasets/paper-rig") + " --json " + dir_.string()),
+            2);
+  EXPECT_NE(Stderr().find("is a directory, not a file"), std::string::npos) << Stderr();
+  EXPECT_EQ(Listing(dir_), with_file);
 }
 
 }  // namespace
