@@ -1,5 +1,6 @@
 #include "pneumaid/io/export.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
 #include <sstream>
@@ -16,7 +17,31 @@ namespace {
 struct Entry {
   std::string path, unit, doc;
   double value = 0, standard_error = 0;  // 0: none known
+  std::string choice;                    // a model's choice ("vertical"), else empty: a number
 };
+
+// The choices of the model, which a controller needs as much as its numbers
+// (gravity acts on a vertical rod only; a pipeline of model none uses no
+// delta), each inserted before the first number of its section.
+void InsertChoices(const Parameters& params, std::vector<Entry>* entries) {
+  const Entry choices[] = {
+      {"cylinder.orientation", "", "vertical: gravity acts on the rod and load", 0, 0,
+       ToString(params.cylinder.orientation)},
+      {"valve.model", "", "K_vp(u) a quartic per branch, q_max from u_sat", 0, 0, "kvp_poly4"},
+      {"valve.branch", "", "which branch K_vp follows (hysteresis: by the opening's motion)", 0, 0,
+       ToString(params.valve.branch)},
+      {"pipeline.model", "", "the tube's delay of the flow (none: delta unused)", 0, 0,
+       ToString(params.pipeline.model)},
+      {"friction.model", "", "Stribeck friction per direction", 0, 0, "stribeck"},
+  };
+  for (const Entry& choice : choices) {
+    const std::string section = choice.path.substr(0, choice.path.find('.') + 1);
+    auto at = std::find_if(entries->begin(), entries->end(), [&section](const Entry& e) {
+      return e.path.compare(0, section.size(), section) == 0;
+    });
+    entries->insert(at, choice);
+  }
+}
 
 std::vector<Entry> Entries(const Parameters& params) {
   std::vector<Entry> entries;
@@ -25,7 +50,7 @@ std::vector<Entry> Entries(const Parameters& params) {
     return found == params.uncertainty.end() ? 0.0 : found->second;
   };
   for (const ScalarParameterInfo& info : ScalarParameterTable()) {
-    entries.push_back({info.path, info.unit, info.doc, info.get(params), error(info.path)});
+    entries.push_back({info.path, info.unit, info.doc, info.get(params), error(info.path), ""});
   }
   for (const auto& [effect, values] : params.effects) {
     const EffectInfo* info = FindEffect(effect);
@@ -35,9 +60,10 @@ std::vector<Entry> Entries(const Parameters& params) {
         if (name == p.name) unit = p.unit, doc = p.doc;
       }
       const std::string path = "effects." + effect + "." + name;
-      entries.push_back({path, unit, doc, value, error(path)});
+      entries.push_back({path, unit, doc, value, error(path), ""});
     }
   }
+  InsertChoices(params, &entries);
   return entries;
 }
 
@@ -57,6 +83,7 @@ std::string OneLine(const std::string& text) {
 }
 
 std::string Comment(const Entry& e) {
+  if (!e.choice.empty()) return e.doc;
   std::string comment = "[" + e.unit + "] " + e.doc;
   if (e.standard_error > 0) comment += "; standard error " + Number(e.standard_error);
   return comment;
@@ -91,8 +118,9 @@ std::string Ros2(const Parameters& params, const ExportOptions& options,
       out << std::string(4 + 2 * k, ' ') << parts[k] << ":\n";
       open.push_back(parts[k]);
     }
-    out << std::string(4 + 2 * (parts.size() - 1), ' ') << parts.back() << ": " << Number(e.value)
-        << "  # " << Comment(e) << "\n";
+    out << std::string(4 + 2 * (parts.size() - 1), ' ') << parts.back() << ": "
+        << (e.choice.empty() ? Number(e.value) : JsonString(e.choice)) << "  # " << Comment(e)
+        << "\n";
   }
   return out.str();
 }
@@ -131,8 +159,9 @@ std::string CHeader(const Parameters& params, const std::vector<Entry>& entries)
       << "#ifndef " << guard << "\n#define " << guard << "\n\n#define PNEUMAID_UNIT_ID "
       << CString(params.unit) << "\n\n";
   for (const Entry& e : entries) {
-    out << "#define " << Identifier(e.path) << " (" << Number(e.value) << ") /* "
-        << InCComment(Comment(e)) << " */\n";
+    const std::string value = e.choice.empty() ? "(" + Number(e.value) + ")" : CString(e.choice);
+    out << "#define " << Identifier(e.path) << " " << value << " /* " << InCComment(Comment(e))
+        << " */\n";
   }
   out << "\n#endif /* " << guard << " */\n";
   return out.str();
@@ -153,7 +182,8 @@ std::string Matlab(const Parameters& params, const std::vector<Entry>& entries) 
       << ";\npneumaid_params.provenance = " << MatlabString(OneLine(params.provenance_yaml))
       << ";\n";
   for (const Entry& e : entries) {
-    out << "pneumaid_params." << e.path << " = " << Number(e.value) << ";  % "
+    out << "pneumaid_params." << e.path << " = "
+        << (e.choice.empty() ? Number(e.value) : MatlabString(e.choice)) << ";  % "
         << OneLine(Comment(e)) << "\n";
   }
   return out.str();
@@ -165,7 +195,8 @@ std::string Json(const Parameters& params, const std::vector<Entry>& entries) {
       << ", \"provenance\": " << JsonString(params.provenance_yaml) << ",\n \"parameters\": {";
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const Entry& e = entries[i];
-    out << (i ? ",\n  " : "\n  ") << JsonString(e.path) << ": {\"value\": " << Number(e.value)
+    out << (i ? ",\n  " : "\n  ") << JsonString(e.path)
+        << ": {\"value\": " << (e.choice.empty() ? Number(e.value) : JsonString(e.choice))
         << ", \"unit\": " << JsonString(e.unit)
         << ", \"standard_error\": " << (e.standard_error > 0 ? Number(e.standard_error) : "null")
         << "}";

@@ -107,7 +107,7 @@ TEST(ExportTest, MatlabScriptIsAssignmentsOfEveryParameter) {
   const std::regex number(
       "^pneumaid_params\\.([A-Za-z][A-Za-z0-9_]*(?:\\.[A-Za-z][A-Za-z0-9_]*)*) = "
       "(-?[0-9][0-9.eE+-]*|-?inf|nan);  % .*$");
-  const std::regex text("^pneumaid_params\\.[a-z]+ = '([^']|'')*';$");
+  const std::regex text("^pneumaid_params\\.[a-z]+(\\.[a-z_]+)* = '([^']|'')*';(  % .*)?$");
   std::map<std::string, double> values;
   std::stringstream lines(script);
   for (std::string line; std::getline(lines, line);) {
@@ -124,6 +124,28 @@ TEST(ExportTest, MatlabScriptIsAssignmentsOfEveryParameter) {
     EXPECT_EQ(values[info.path], info.get(p)) << info.path;
   EXPECT_EQ(values["effects.valve_lag.tau"], 0.0315);
   EXPECT_NE(script.find("PVQ13-0007"), std::string::npos);
+}
+
+// A controller needs the model's choices as much as its numbers: gravity
+// acts on a vertical rod only, a pipeline of model none uses no delta.
+TEST(ExportTest, EveryFormatStatesTheModelsChoices) {
+  Parameters p = Identified();
+  p.cylinder.orientation = Orientation::kHorizontal;
+  p.pipeline.model = PipelineModel::kNone;
+  const YAML::Node ros2 =
+      YAML::Load(Export(p, ExportFormat::kRos2))["actuator_controller"]["ros__parameters"];
+  EXPECT_EQ(ros2["cylinder"]["orientation"].as<std::string>(), "horizontal");
+  EXPECT_EQ(ros2["pipeline"]["model"].as<std::string>(), "none");
+  EXPECT_EQ(ros2["valve"]["branch"].as<std::string>(), ToString(p.valve.branch));
+  EXPECT_EQ(ros2["cylinder"]["stroke"].as<double>(), p.cylinder.stroke_m);  // the numbers beside
+  const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson))["parameters"];
+  EXPECT_EQ(json["cylinder.orientation"]["value"].as<std::string>(), "horizontal");
+  EXPECT_EQ(json["friction.model"]["value"].as<std::string>(), "stribeck");
+  EXPECT_NE(Export(p, ExportFormat::kCHeader)
+                .find("#define PNEUMAID_CYLINDER_ORIENTATION \"horizontal\" /* vertical: gravity"),
+            std::string::npos);
+  EXPECT_NE(Export(p, ExportFormat::kMatlab).find("pneumaid_params.pipeline.model = 'none';"),
+            std::string::npos);
 }
 
 TEST(ExportTest, JsonAndEveryFormatStateTheUnitAndProvenance) {
