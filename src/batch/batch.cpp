@@ -1,5 +1,7 @@
 #include "pneumaid/batch/batch.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -90,6 +92,17 @@ bool UpToDate(const fs::path& result_dir, const std::string& stamp) {
   return ReadTextFile(stamp_file.string(), "a stamp") == stamp;
 }
 
+// The verdict an up-to-date result was written with (its report.json), so
+// that a resumed run's summary keeps it; empty when it cannot be read.
+std::string EarlierVerdict(const fs::path& result_dir) {
+  try {
+    const YAML::Node json = YAML::LoadFile((result_dir / "report.json").string());
+    if (json["verdict"] && json["verdict"].IsScalar()) return json["verdict"].as<std::string>();
+  } catch (const YAML::Exception&) {
+  }
+  return "";
+}
+
 // One unit, start to finish; throws on failure (InputError, FitError, ...).
 UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
                         const fs::path& results_dir, const BatchOptions& options,
@@ -104,7 +117,8 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
   const std::string stamp = Stamp(unit_dir, fingerprint, unit);
   if (options.resume && UpToDate(results_dir / name, stamp)) {
     outcome.status = UnitOutcome::Status::kUpToDate;
-    outcome.verdict = "up to date";
+    outcome.verdict = EarlierVerdict(results_dir / name);
+    if (outcome.verdict.empty()) outcome.verdict = "up to date";
     return outcome;
   }
   RefineOptions refine = RefineOptions::ForIdentify();

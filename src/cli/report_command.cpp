@@ -32,7 +32,7 @@ DiagnoseReportInput ReadDiagnoseOutput(const std::string& dir, const Parameters&
   input.markdown = ReadTextFile(dir + "/report.md", "a diagnose report (Markdown)");
   input.before_params = before;
   input.after_params = LoadParams(dir + "/params.yaml");
-  input.named_effects = ReadNamedEffects(dir + "/report.json");
+  input.named_effects = ReadNamedEffects(dir + "/report.json", unit.manifest.unit);
   ValidationOptions runs;
   runs.experiment_ids = SimulableRuns(unit);
   input.before = ValidateUnit(input.before_params, unit, runs);

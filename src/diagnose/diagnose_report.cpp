@@ -186,7 +186,7 @@ class NamedEffectsReader : internal::YamlReader {
  public:
   explicit NamedEffectsReader(const std::string& path) : YamlReader(path) {}
 
-  std::vector<std::string> Read(const std::string& text) const {
+  std::vector<std::string> Read(const std::string& text, const std::string& unit) const {
     return Guarded([&]() {
       const YAML::Node root = LoadMapping(text, "expected a pneumaid-report/1 JSON object");
       const YAML::Node format = root["format"];
@@ -195,6 +195,12 @@ class NamedEffectsReader : internal::YamlReader {
       const YAML::Node named = root["named_effects"];
       if (!named || !named.IsSequence())
         Fail(named ? named : root, "named_effects: expected a list (a diagnose report)");
+      const YAML::Node of = root["unit"];
+      if (!of || Text(of) != unit) {
+        Fail(of ? of : root, "unit: a diagnose report of " +
+                                 (of ? "unit '" + Text(of) + "'" : std::string("no unit")) +
+                                 ", expected one of unit '" + unit + "'");
+      }
       std::vector<std::string> effects;
       for (const auto& effect : named) effects.push_back(Text(effect));
       return effects;
@@ -204,9 +210,10 @@ class NamedEffectsReader : internal::YamlReader {
 
 }  // namespace
 
-std::vector<std::string> ReadNamedEffects(const std::string& report_json_path) {
+std::vector<std::string> ReadNamedEffects(const std::string& report_json_path,
+                                          const std::string& unit) {
   return NamedEffectsReader(report_json_path)
-      .Read(ReadTextFile(report_json_path, "a diagnose report (pneumaid-report/1 JSON)"));
+      .Read(ReadTextFile(report_json_path, "a diagnose report (pneumaid-report/1 JSON)"), unit);
 }
 
 }  // namespace pneumaid

@@ -141,11 +141,21 @@ TEST(BatchTest, ResumeSkipsWhatIsUpToDateAndRedoesWhatChanged) {
     fs::copy(fs::path(kFleet) / unit, fleet / unit, fs::copy_options::recursive);
   const fs::path results = Fresh("resume_results");
   BatchOptions options = Options();
-  RunBatch(fleet.string(), results.string(), options);
+  std::map<std::string, std::string> verdicts;
+  for (const UnitOutcome& u : RunBatch(fleet.string(), results.string(), options).units)
+    verdicts[u.unit] = u.verdict;
   const std::string before = Read(results / "PVQ13-0001" / "params.yaml");
   options.resume = true;
-  for (const UnitOutcome& u : RunBatch(fleet.string(), results.string(), options).units)
+  // Skipped, and the summary keeps each result's verdict (it said "up to
+  // date" instead, and merge's fleet summary with it).
+  for (const UnitOutcome& u : RunBatch(fleet.string(), results.string(), options).units) {
     EXPECT_EQ(u.status, UnitOutcome::Status::kUpToDate) << u.unit;
+    EXPECT_EQ(u.verdict, verdicts[u.unit]) << u.unit;
+    EXPECT_NE(u.verdict.find("identified"), std::string::npos) << u.verdict;
+  }
+  EXPECT_NE(Read(results / "summary.csv").find("PVQ13-0001,up to date,identified"),
+            std::string::npos)
+      << Read(results / "summary.csv");
   // A changed input (a re-exported manifest with a comment) is redone.
   std::ofstream(fleet / "PVQ13-0002" / "unit.yaml", std::ios::app) << "# re-exported\n";
   for (const UnitOutcome& u : RunBatch(fleet.string(), results.string(), options).units) {

@@ -102,6 +102,18 @@ TEST_F(ReportCliTest, BadInputExitsTwoAndWritesNothing) {
             2);
   EXPECT_NE(Stderr().find("report.json"), std::string::npos) << Stderr();
   EXPECT_NE(Stderr().find("named_effects: expected a list"), std::string::npos) << Stderr();
+  // A diagnose output of another unit: named, not shown as this unit's.
+  Write("empty/report.json",
+        "{\"format\": \"pneumaid-report/1\", \"unit\": \"paper-rig\", \"experiments\": [],\n"
+        " \"named_effects\": [\"valve_lag\"]}\n");
+  EXPECT_EQ(Run("report --params " + params + " " + unit + " --diagnose " +
+                (dir_ / "empty").string() + " --out " + out),
+            2);
+  EXPECT_NE(Stderr().find("report.json:1:"), std::string::npos) << Stderr();
+  EXPECT_NE(Stderr().find("unit: a diagnose report of unit 'paper-rig', expected one of unit "
+                          "'hidden-valve-lag'"),
+            std::string::npos)
+      << Stderr();
   // A fleet report takes no unit; a unit report needs --params.
   EXPECT_EQ(Run("report --results " + (dir_ / "empty").string() + " " + unit + " --out " + out), 2);
   EXPECT_EQ(Run("report " + unit + " --out " + out), 2);

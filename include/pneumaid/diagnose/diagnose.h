@@ -140,8 +140,10 @@ DiagnoseResult Diagnose(const Parameters& params, const Unit& unit, const Diagno
 // The pneumaid-report/1 JSON of a diagnose run (docs/params-format.md).
 std::string DiagnoseToJson(const DiagnoseResult& result);
 
-// The effects a diagnose run named, in the order added, read back from its
-// pneumaid-report/1 JSON file. InputError (file, line) when it is not one.
-std::vector<std::string> ReadNamedEffects(const std::string& report_json_path);
+// The effects a diagnose run of unit `unit` (its manifest's id) named, in the
+// order added, read back from its pneumaid-report/1 JSON file. InputError
+// (file, line) when it is not one, or one of another unit.
+std::vector<std::string> ReadNamedEffects(const std::string& report_json_path,
+                                          const std::string& unit);
 
 }  // namespace pneumaid
