@@ -410,9 +410,8 @@ TEST(RefineFrictionScreenTest, OneDirectionAwayACandidateTakesTheWindowsItCannot
 }
 
 // Measured several at a time on threads, each candidate measures as it does
-// alone, to the bit, and so the screen ranked by windows decides as on one
-// thread: the same start, next-best candidates and ranks.
-TEST(RefineFrictionScreenTest, OnSeveralThreadsTheScreenDecidesAsOnOne) {
+// alone, to the bit (the threaded code's test under the sanitizers).
+TEST(RefineFrictionScreenTest, MeasuredSeveralAtATimeEachCandidateMeasuresAsAlone) {
   const ScreenCase& c = LightUnit();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   const RefineOptions one;
@@ -433,8 +432,14 @@ TEST(RefineFrictionScreenTest, OnSeveralThreadsTheScreenDecidesAsOnOne) {
     EXPECT_EQ(measures[k].first, alone.Measure(candidates[k], bound, &exact)) << k;
     EXPECT_EQ(measures[k].second, exact) << k;
   }
+}
 
-  RefineOptions fewer = one;  // 16 windows per candidate: the test's time
+// And so the screen ranked by windows decides on several threads as on one:
+// the same start, next-best candidates and ranks.
+TEST(RefineFrictionScreenTest, OnSeveralThreadsTheScreenDecidesAsOnOne) {
+  const ScreenCase& c = LightUnit();
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  RefineOptions fewer;  // 16 windows per candidate: the test's time
   fewer.screen_windows_max = 16;
   RefineOptions threads = fewer;
   threads.threads = 3;
