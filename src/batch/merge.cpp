@@ -75,6 +75,7 @@ std::string Format(double value) { return FormatSignificant(value, 6); }
 FleetSummary MergeResults(const std::vector<std::string>& results_dirs, double outlier_z) {
   FleetSummary summary;
   summary.outlier_z = outlier_z;
+  std::vector<fs::path> seen;  // each directory once, however it was named
   for (const std::string& dir : results_dirs) {
     bool any = false;
     std::map<std::string, std::string> verdicts, statuses;
@@ -82,6 +83,9 @@ FleetSummary MergeResults(const std::vector<std::string>& results_dirs, double o
     if (!fs::is_directory(dir, error)) {
       throw InputError(dir, 0, 0, "not a results directory (pneumaid batch --out)");
     }
+    const fs::path canonical = fs::canonical(dir, error);
+    if (std::find(seen.begin(), seen.end(), canonical) != seen.end()) continue;
+    seen.push_back(canonical);
     for (const auto& entry : fs::directory_iterator(dir)) {
       const std::string name = entry.path().filename().string();
       if (entry.is_regular_file() && name.rfind("failures", 0) == 0 &&
@@ -107,8 +111,18 @@ FleetSummary MergeResults(const std::vector<std::string>& results_dirs, double o
           !fs::exists(entry.path() / "stamp.txt"))
         continue;
       any = true;
-      // An older result whose unit failed in the latest run is not current.
+      // An older result whose unit failed in the latest run is not current,
+      // nor one the directory's runs no longer list (a unit since removed
+      // from the fleet).
       if (statuses.count(name) && statuses[name] == "failed") continue;
+      if (!statuses.empty() && !statuses.count(name)) continue;
+      const auto other = std::find_if(summary.units.begin(), summary.units.end(),
+                                      [&name](const FleetUnit& u) { return u.unit == name; });
+      if (other != summary.units.end()) {
+        throw InputError(dir, 0, 0,
+                         "unit '" + name + "' has results here and in " + other->results_dir +
+                             ": a fleet summary takes each unit once");
+      }
       FleetUnit unit;
       unit.unit = entry.path().filename().string();
       unit.results_dir = dir;
