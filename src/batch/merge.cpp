@@ -196,21 +196,22 @@ std::string FleetSummary::Csv() const {
         << (u.outlying.empty() ? "no" : "yes") << "," << outlying;
     for (const FleetParameter& p : parameters) {
       const auto found = u.values.find(p.path);
-      out << "," << (found == u.values.end() ? "" : Format(found->second));
+      // Every digit of the set (params.yaml's), for a program reading the table.
+      out << "," << (found == u.values.end() ? "" : FormatDouble(found->second));
     }
     out << "\n";
   }
-  out << "median,,,,";
-  for (const FleetParameter& p : parameters) out << "," << Format(p.median);
-  out << "\nmad,,,,";
-  for (const FleetParameter& p : parameters) out << "," << Format(p.mad);
-  out << "\n";
   for (const FleetFailure& f : failures) {
     out << CsvField(f.unit) << "," << CsvField(f.file) << "," << CsvField("FAILED: " + f.reason)
         << ",,";
     for (std::size_t k = 0; k < parameters.size(); ++k) out << ",";
     out << "\n";
   }
+  out << "median,,,,";
+  for (const FleetParameter& p : parameters) out << "," << FormatDouble(p.median);
+  out << "\nmad,,,,";
+  for (const FleetParameter& p : parameters) out << "," << FormatDouble(p.mad);
+  out << "\n";
   return out.str();
 }
 

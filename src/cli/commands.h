@@ -62,6 +62,11 @@ std::string InExistingDirectory(const std::string& file);
 // An output directory's check: an existing directory, or one that can be
 // made in an existing one (not a file).
 std::string DirectoryToWrite(const std::string& directory);
+// InputError naming the first of `outputs` that is one of `inputs` (files,
+// or directories whose files are inputs: a unit directory's manifest and
+// logs), before the command writes anything.
+void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
+                             const std::vector<std::string>& inputs);
 // Writes the page atomically and says so; nothing for an empty path.
 void WriteHtml(const std::string& path, const std::string& html);
 

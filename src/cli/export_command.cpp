@@ -20,13 +20,23 @@ CommandRunner AddExportCommand(CLI::App* app) {
       ->check(InExistingDirectory);
   app->add_option("--node", args->node, "ROS 2 node name")->capture_default_str();
   return [args]() {
+    RefuseOverwritingInputs({args->out_path}, {args->params_path});
     ExportOptions options;
     if (!ParseExportFormat(args->format, &options.format)) {
       throw InputError("--format", 0, 0,
                        "expected ros2, c-header, matlab or json, got '" + args->format + "'");
     }
     options.ros2_node = args->node;
-    const std::string text = ExportParameters(LoadParams(args->params_path), options);
+    const Parameters params = LoadParams(args->params_path);
+    std::string text;
+    try {
+      text = ExportParameters(params, options);
+    } catch (const InputError& error) {
+      // The library names its options' objects; here they are flags.
+      const std::string object = "ros2_node: ";
+      if (error.message().compare(0, object.size(), object) != 0) throw;
+      throw InputError("--node", 0, 0, error.message().substr(object.size()));
+    }
     if (args->out_path.empty()) {
       std::cout << text;
     } else {

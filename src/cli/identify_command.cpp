@@ -47,6 +47,8 @@ std::set<Component> ParseComponents(const std::string& list) {
 }
 
 int RunIdentify(const IdentifyArgs& args) {
+  RefuseOverwritingInputs({args.out_path, args.html_path},
+                          {args.unit_dir, args.prior_path, args.spec_path});
   const Parameters prior = LoadParams(args.prior_path);
   const Unit unit = ReadUnit(args.unit_dir);
   IdentifyOptions options;

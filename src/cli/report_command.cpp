@@ -41,6 +41,8 @@ DiagnoseReportInput ReadDiagnoseOutput(const std::string& dir, const Parameters&
 }
 
 int RunReport(const ReportArgs& args) {
+  RefuseOverwritingInputs({args.out_path},
+                          {args.params_path, args.unit_dir, args.diagnose_dir, args.results_dir});
   std::string html;
   if (!args.results_dir.empty()) {
     if (!args.unit_dir.empty() || !args.params_path.empty() || !args.diagnose_dir.empty())
@@ -80,22 +82,6 @@ void AddHtmlOption(CLI::App* app, std::string* path) {
   // leave the command's other outputs behind.
   app->add_option("--html", *path, "also write a self-contained HTML report here")
       ->check(InExistingDirectory);
-}
-
-std::string InExistingDirectory(const std::string& file) {
-  const std::filesystem::path parent = std::filesystem::path(file).parent_path();
-  std::error_code error;
-  if (std::filesystem::is_directory(file, error)) return file + " is a directory, not a file";
-  if (parent.empty() || std::filesystem::is_directory(parent, error)) return "";
-  return "the directory " + parent.string() + " does not exist";
-}
-
-std::string DirectoryToWrite(const std::string& directory) {
-  std::error_code error;
-  if (std::filesystem::is_directory(directory, error)) return "";
-  if (std::filesystem::exists(directory, error))
-    return directory + " exists and is not a directory";
-  return InExistingDirectory(directory);
 }
 
 void WriteHtml(const std::string& path, const std::string& html) {

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <map>
 #include <string>
@@ -116,6 +117,7 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
 }
 
 int RunSimulate(const SimulateArgs& args) {
+  RefuseOverwritingInputs({args.out_path}, {args.params_path, args.input_path});
   const Parameters params = LoadParams(args.params_path);
   CommandSignal command;
   InitialState initial = RetractedAtRest(params);
@@ -135,6 +137,15 @@ int RunSimulate(const SimulateArgs& args) {
   }
   if (!(until > t0)) throw InputError("--until", 0, 0, "expected a time after the start");
   if (!(args.rate_Hz > 0)) throw InputError("--rate", 0, 0, "expected a positive rate in Hz");
+  // Eight columns of doubles: 1e7 samples are 640 MB of trajectory.
+  constexpr double kMaxSamples = 1e7;
+  if ((until - t0) * args.rate_Hz > kMaxSamples) {
+    char message[160];
+    std::snprintf(message, sizeof(message),
+                  "%.3g samples asked for, expected at most %.0e (a lower --rate or --until)",
+                  (until - t0) * args.rate_Hz, kMaxSamples);
+    throw InputError("--rate", 0, 0, message);
+  }
 
   Trajectory trajectory;
   const SimulationSummary summary =

@@ -39,6 +39,7 @@ std::map<std::string, double> Thresholds(const std::vector<std::string>& items,
 }
 
 int RunValidate(const ValidateArgs& args) {
+  RefuseOverwritingInputs({args.json_path, args.html_path}, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
   const Unit unit = ReadUnit(args.unit_dir);
   ValidationOptions options;

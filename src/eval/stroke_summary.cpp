@@ -28,16 +28,14 @@ StrokeSummary SummarizeStroke(const Trajectory& run, double half_stroke_m, doubl
 
 std::string StrokeSummary::Describe() const {
   std::ostringstream out;
-  out << "mid-stroke crossed at ";
   if (mid_stroke_time_s)
-    out << *mid_stroke_time_s << " s";
+    out << "mid-stroke crossed at " << *mid_stroke_time_s << " s";
   else
-    out << "never";
-  out << ", far end reached at ";
+    out << "mid-stroke never crossed";
   if (end_reached_time_s)
-    out << *end_reached_time_s << " s";
+    out << ", far end reached at " << *end_reached_time_s << " s";
   else
-    out << "never";
+    out << ", far end never reached";
   out << ", peak p1 " << peak_p1_Pa / 1e5 << " bar, peak p2 " << peak_p2_Pa / 1e5
       << " bar (absolute), final x " << final_x_m * 1e3 << " mm";
   return out.str();

@@ -114,7 +114,7 @@ class FitSpecReader : internal::YamlReader {
       p.upper = Number(bounds["max"], where + ".max");
       if (!(p.lower < p.upper)) Fail(bounds, where + ": expected min < max");
       if (!range->Contains(p.lower) || !range->Contains(p.upper)) {
-        Fail(bounds, where + ": bounds must lie " + range->Describe());
+        Fail(bounds, where + ": bounds must each be " + range->Describe());
       }
       if (const YAML::Node scale = bounds["scale"]) {
         const std::string name = Text(scale);
@@ -234,7 +234,7 @@ bool FitSpec::IsValid(std::string* error) const {
     }
     if (!(p.lower < p.upper)) return fail(where + ": expected min < max");
     if (!range->Contains(p.lower) || !range->Contains(p.upper)) {
-      return fail(where + ": bounds must lie " + range->Describe());
+      return fail(where + ": bounds must each be " + range->Describe());
     }
     if (p.scale == ParameterScale::kLog && !(p.lower > 0)) {
       return fail(where + ": a log scale needs min > 0");

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <vector>
 
+#include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/effects.h"
@@ -216,6 +217,19 @@ bool ParseExportFormat(const std::string& name, ExportFormat* format) {
 }
 
 std::string ExportParameters(const Parameters& params, const ExportOptions& options) {
+  // A ROS 2 node name: letters, digits and underscores, not starting with a
+  // digit (any other text made a YAML key that did not parse).
+  const std::string& node = options.ros2_node;
+  const bool node_ok = !node.empty() && !std::isdigit(static_cast<unsigned char>(node[0])) &&
+                       std::all_of(node.begin(), node.end(), [](char c) {
+                         return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+                       });
+  if (options.format == ExportFormat::kRos2 && !node_ok) {
+    throw InputError("export options", 0, 0,
+                     "ros2_node: expected a ROS 2 node name (letters, digits, '_', not starting "
+                     "with a digit), got '" +
+                         node + "'");
+  }
   const std::vector<Entry> entries = Entries(params);
   switch (options.format) {
     case ExportFormat::kRos2:

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <future>
@@ -420,9 +421,11 @@ void CheckCommandRange(const CsvTable& table, const CsvColumn& column, const std
   const double low = bidirectional ? -1.0 : 0.0;
   for (std::size_t i = 0; i < u.size(); ++i) {
     if (u[i] < low - 1e-9 || u[i] > 1.0 + 1e-9) {
+      char got[32];
+      std::snprintf(got, sizeof(got), "%.6g", u[i]);
       throw InputError(table.file, table.row_lines[i], column.column,
                        std::string("column 'u': expected a command in [") +
-                           (bidirectional ? "-1" : "0") + ", 1] V, got " + std::to_string(u[i]));
+                           (bidirectional ? "-1" : "0") + ", 1] V, got " + got);
     }
   }
 }

@@ -1,5 +1,7 @@
 #include "pneumaid/model/parameters.h"
 
+#include <cstdio>
+
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -10,8 +12,10 @@ void CheckScalarRanges(const Parameters& params, std::vector<ParameterProblem>* 
   for (const auto& info : ScalarParameterTable()) {
     const double value = info.get(params);
     if (!info.range.Contains(value)) {
-      problems->push_back({info.path, "expected " + info.range.Describe() + " " + info.unit +
-                                          ", got " + std::to_string(value)});
+      char got[32];
+      std::snprintf(got, sizeof(got), "%.6g", value);  // -1e-09, not -0.000000
+      problems->push_back(
+          {info.path, "expected " + info.range.Describe() + " " + info.unit + ", got " + got});
     }
   }
 }

@@ -31,7 +31,16 @@ std::vector<std::string> MissedThresholds(const std::map<std::string, ChannelMet
   char line[160];
   for (const auto& [channel, minimum] : options.min_fit_percent) {
     const auto found = channels.find(channel);
-    if (found == channels.end() || !found->second.nrmse_fit_percent) continue;
+    if (found == channels.end()) continue;
+    if (!found->second.nrmse_fit_percent) {
+      // Not evaluated is not met (a run of one sample, a channel that never
+      // changes: it "passed" every threshold before).
+      std::snprintf(line, sizeof(line),
+                    "%s fit n/a (the logged %s does not vary beyond its noise), < %.2f %%",
+                    channel.c_str(), channel.c_str(), minimum);
+      missed.push_back(line);
+      continue;
+    }
     if (*found->second.nrmse_fit_percent < minimum) {
       std::snprintf(line, sizeof(line), "%s fit %.2f %% < %.2f %%", channel.c_str(),
                     *found->second.nrmse_fit_percent, minimum);
@@ -117,11 +126,11 @@ std::string ValidationReport::BriefReport() const {
       const bool position = channel == "x";
       const double scale = pressure ? 1e-5 : position ? 1e3 : 1.0;
       const char* unit_name = pressure ? "bar" : position ? "mm" : "kg/s";
+      char fit[32] = "n/a";  // rounded as the JSON's reader and the page round it
+      if (metrics.nrmse_fit_percent)
+        std::snprintf(fit, sizeof(fit), "%.2f %%", *metrics.nrmse_fit_percent);
       std::snprintf(line, sizeof(line), "  %s rmse %.4g %s, max %.4g %s, fit %s", channel.c_str(),
-                    metrics.rmse * scale, unit_name, metrics.max_abs * scale, unit_name,
-                    metrics.nrmse_fit_percent
-                        ? (std::to_string(*metrics.nrmse_fit_percent).substr(0, 5) + " %").c_str()
-                        : "n/a");
+                    metrics.rmse * scale, unit_name, metrics.max_abs * scale, unit_name, fit);
       out << line << ";";
     }
     out << "\n";

@@ -70,7 +70,14 @@ TEST(BatchTest, AFleetGetsItsSetsItsFailureAndItsOutlier) {
     EXPECT_TRUE(static_friction) << "the outlier must be flagged for its static friction";
   }
   EXPECT_NE(fleet.Markdown().find("**PVQ13-0013**"), std::string::npos);
-  EXPECT_NE(fleet.Csv().find("FAILED: "), std::string::npos);
+  const std::string table = fleet.Csv();
+  EXPECT_NE(table.find("FAILED: "), std::string::npos);
+  // The units' rows, then the failures', then the median and spread; every
+  // value with every digit of its set (it was rounded to 6).
+  EXPECT_LT(table.find("FAILED: "), table.find("\nmedian,"));
+  const Parameters first = LoadParams((results / "PVQ13-0001" / "params.yaml").string());
+  EXPECT_NE(table.find("," + FormatDouble(first.valve.increasing.q_max_kg_per_s) + ","),
+            std::string::npos);
 }
 
 TEST(BatchTest, ShardsAreDisjointAndCoverTheFleet) {

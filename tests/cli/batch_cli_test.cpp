@@ -153,7 +153,16 @@ TEST_F(BatchCliTest, ExportsEveryFormatAndRefusesAnUnknownOne) {
   EXPECT_EQ(
       Run("export --params " + params + " --format fortran --out " + (dir_ / "x.f90").string()), 2);
   EXPECT_NE(Stderr().find("expected ros2, c-header, matlab or json"), std::string::npos);
+  // A node name that would not parse as the ROS 2 file's key.
+  EXPECT_EQ(Run("export --params " + params + " --format ros2 --node 'bad node: x' --out " +
+                (dir_ / "x.yaml").string()),
+            2);
+  EXPECT_NE(Stderr().find("--node: expected a ROS 2 node name"), std::string::npos) << Stderr();
   EXPECT_EQ(Listing(dir_), before);
+  // The set exported over itself.
+  const std::string set = Write("set.yaml", Read(params));
+  EXPECT_EQ(Run("export --params " + set + " --format json --out " + set), 2);
+  EXPECT_EQ(Read(set), Read(params));
 }
 
 }  // namespace

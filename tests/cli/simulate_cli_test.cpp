@@ -69,6 +69,8 @@ TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
       {"--params " + kPaper + " --input " + ragged, "ragged.csv:3: ragged row"},
       {"--params " + kPaper + " --input " + (dir_ / "missing.csv").string(), "cannot open"},
       {"--params " + (dir_ / "none.yaml").string() + " --step 1@0 --until 1", "cannot open"},
+      {"--params " + kPaper + " --step 1@0.1 --until 1e6 --rate 1e6",
+       "1e+12 samples asked for, expected at most 1e+07"},
   };
   for (const auto& c : cases) {
     EXPECT_EQ(Run("simulate " + c.arguments + " --out " + out), 2) << c.arguments;

@@ -63,6 +63,15 @@ TEST_F(ValidateCliTest, BadInputExitsTwoAndWritesNothing) {
             2);
   EXPECT_NE(Stderr().find("is a directory, not a file"), std::string::npos) << Stderr();
   EXPECT_EQ(Listing(dir_), with_file);
+  // An output that is one of the inputs (the unit's manifest): refused, the
+  // manifest intact (it was replaced by the report, and the unit unreadable).
+  std::filesystem::copy(testing::Source("datasets/paper-rig"), dir_ / "unit");
+  const std::string manifest = Read(dir_ / "unit" / "unit.yaml");
+  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
+                (dir_ / "unit").string() + " --json " + (dir_ / "unit" / "unit.yaml").string()),
+            2);
+  EXPECT_NE(Stderr().find("would replace an input of this command"), std::string::npos) << Stderr();
+  EXPECT_EQ(Read(dir_ / "unit" / "unit.yaml"), manifest);
 }
 
 }  // namespace

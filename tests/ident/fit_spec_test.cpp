@@ -104,7 +104,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "min < max"},
         BadSpec{"bound outside the physical range",
                 "format: pneumaid-fit/1\nparameters:\n  friction.positive.Fs: {min: -1, max: 9}\n",
-                3, "bounds must lie"},
+                3, "bounds must each be a finite number"},
         BadSpec{"log scale through zero",
                 "format: pneumaid-fit/1\nparameters:\n"
                 "  friction.positive.Fd: {min: 0, max: 9, scale: log}\n",
@@ -112,7 +112,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadSpec{"an effect's bound outside what the model accepts",  // v = 0: no creep width
                 "format: pneumaid-fit/1\nparameters:\n"
                 "  effects.stick_creep.v: {min: 0, max: 1.0e-3}\n",
-                3, "parameters.effects.stick_creep.v: bounds must lie"},
+                3, "parameters.effects.stick_creep.v: bounds must each be a finite number"},
         BadSpec{"an effect the catalog does not have",
                 "format: pneumaid-fit/1\nparameters:\n"
                 "  effects.stick_creap.v: {min: 1.0e-5, max: 1.0e-3}\n",
@@ -184,7 +184,7 @@ TEST(FitSpecTest, IsValidNamesTheBadFieldOfASpecBuiltInCode) {
        [](FitSpec* s) { s->parameters[2].scale = ParameterScale::kLog; },  // Fs from 0
        "parameters.friction.positive.Fs: a log scale needs min > 0"},
       {"outside the physical range", [](FitSpec* s) { s->parameters[2].lower = -1; },
-       "parameters.friction.positive.Fs: bounds must lie"},
+       "parameters.friction.positive.Fs: bounds must each be a finite number"},
       {"an effect's parameter the catalog does not have",
        [](FitSpec* s) { s->parameters[0].path = "effects.valve_lag.delay"; },
        "unknown parameter 'effects.valve_lag.delay'"},
@@ -192,7 +192,7 @@ TEST(FitSpecTest, IsValidNamesTheBadFieldOfASpecBuiltInCode) {
        [](FitSpec* s) {
          s->parameters[0] = {"effects.valve_lag.tau", 0, 0.1};
        },
-       "parameters.effects.valve_lag.tau: bounds must lie"},
+       "parameters.effects.valve_lag.tau: bounds must each be a finite number"},
       {"too many",
        [](FitSpec* s) {
          for (const char* p : {"friction.positive.Fs", "valve.decreasing.q_max",

@@ -41,6 +41,22 @@ TEST(ValidateTest, AWrongParameterSetMissesTheThresholds) {
   EXPECT_FALSE(report.experiments[0].missed.empty());
 }
 
+// A run too short to evaluate (its first samples only: the rod has not moved
+// yet) misses the fit threshold it cannot evaluate; it passed vacuously.
+TEST(ValidateTest, AFitThatCannotBeEvaluatedIsNotMet) {
+  Unit unit = ReadUnit(kUnit);
+  const Parameters truth = LoadParams(kUnit + "/truth.yaml");
+  for (Experiment& e : unit.experiments) {
+    for (auto& [name, column] : e.columns) column.resize(std::min<std::size_t>(column.size(), 3));
+  }
+  const ValidationReport report = ValidateUnit(truth, unit, ValidationOptions{});
+  EXPECT_FALSE(report.thresholds_met()) << report.BriefReport();
+  ASSERT_FALSE(report.experiments.empty());
+  ASSERT_FALSE(report.experiments[0].missed.empty());
+  EXPECT_NE(report.experiments[0].missed[0].find("x fit n/a"), std::string::npos)
+      << report.experiments[0].missed[0];
+}
+
 TEST(ValidateTest, ConditionsComeFromTheManifestAndGeometryMustAgree) {
   Unit unit = ReadUnit(kUnit);
   Parameters params;  // the paper's
