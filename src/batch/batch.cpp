@@ -322,9 +322,9 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
   // every unit's logs).
   for (const std::string& unit : units) {
     const fs::path target = fs::path(results_dir) / unit;
-    std::error_code same;
-    if (fs::exists(target / "unit.yaml") ||
-        fs::equivalent(target, fs::path(fleet_dir) / unit, same)) {
+    std::error_code error;
+    if (fs::exists(target / "unit.yaml", error) ||
+        fs::equivalent(target, fs::path(fleet_dir) / unit, error)) {
       throw InputError(results_dir, 0, 0,
                        "results directory: '" + target.string() +
                            "' holds a unit (unit.yaml), not an earlier batch result; batch "

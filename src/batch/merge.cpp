@@ -111,11 +111,10 @@ FleetSummary MergeResults(const std::vector<std::string>& results_dirs, double o
           !fs::exists(entry.path() / "stamp.txt"))
         continue;
       any = true;
-      // An older result whose unit failed in the latest run is not current,
-      // nor one the directory's runs no longer list (a unit since removed
-      // from the fleet).
+      // An older result whose unit failed in the latest run is not current.
+      // (One its summaries do not list stays: a run killed before it wrote
+      // its summary, or a shard still running, has finished units too.)
       if (statuses.count(name) && statuses[name] == "failed") continue;
-      if (!statuses.empty() && !statuses.count(name)) continue;
       const auto other = std::find_if(summary.units.begin(), summary.units.end(),
                                       [&name](const FleetUnit& u) { return u.unit == name; });
       if (other != summary.units.end()) {

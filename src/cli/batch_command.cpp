@@ -122,7 +122,8 @@ CommandRunner AddMergeCommand(CLI::App* app) {
   auto out = std::make_shared<std::string>();
   auto html = std::make_shared<std::string>();
   app->add_option("results", *dirs, "results directories (of batch runs or shards)")->required();
-  app->add_option("--out", *out, "write fleet-summary.csv and fleet-summary.md here");
+  app->add_option("--out", *out, "write fleet-summary.csv and fleet-summary.md here")
+      ->check(DirectoryToWrite);
   AddHtmlOption(app, html.get());
   return [dirs, out, html]() {
     const FleetSummary summary = MergeResults(*dirs);

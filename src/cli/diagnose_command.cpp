@@ -45,6 +45,10 @@ void CheckOutDirectory(const std::string& out) {
 
 int RunDiagnose(const DiagnoseArgs& args) {
   CheckOutDirectory(args.out_dir);
+  std::vector<std::string> outputs = {args.json_path, args.html_path};
+  for (const char* name : {"report.md", "params.yaml", "report.json"})
+    outputs.push_back(args.out_dir + "/" + name);  // the directory is replaced whole
+  RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
   const Unit unit = ReadUnit(args.unit_dir);
   DiagnoseOptions options;
@@ -97,7 +101,8 @@ CommandRunner AddDiagnoseCommand(CLI::App* app) {
                   "directory for report.md, params.yaml (augmented), report.json and the "
                   "before/after CSVs")
       ->required();
-  app->add_option("--json", args->json_path, "also write the report (pneumaid-report/1) here");
+  app->add_option("--json", args->json_path, "also write the report (pneumaid-report/1) here")
+      ->check(InExistingDirectory);
   app->add_option("--max-effects", args->max_effects, "add at most this many effects")
       ->check(CLI::Range(0, static_cast<int>(EffectCatalog().size())))
       ->capture_default_str();

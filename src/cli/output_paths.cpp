@@ -23,27 +23,31 @@ std::string DirectoryToWrite(const std::string& directory) {
   if (std::filesystem::is_directory(directory, error)) return "";
   if (std::filesystem::exists(directory, error))
     return directory + " exists and is not a directory";
-  return InExistingDirectory(directory);
+  std::filesystem::path named(directory);
+  if (!named.has_filename()) named = named.parent_path();  // "new/" names "new"
+  return InExistingDirectory(named.string());
 }
 
 void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
                              const std::vector<std::string>& inputs) {
   namespace fs = std::filesystem;
-  // Every input file: a unit directory's manifest and logs (not a set written
-  // beside them, which a rerun replaces), any other directory's files.
+  // Every input file: a unit directory's manifest and logs (in its
+  // subdirectories too; not a set written beside them, which a rerun
+  // replaces). Other directories are named by their files.
   std::vector<fs::path> files;
   for (const std::string& input : inputs) {
     std::error_code error;
     if (input.empty()) continue;
-    if (fs::is_directory(input, error)) {
-      const bool unit = fs::exists(fs::path(input) / "unit.yaml", error);
-      for (const auto& entry : fs::directory_iterator(input, error)) {
-        const bool read =
-            !unit || entry.path().filename() == "unit.yaml" || entry.path().extension() == ".csv";
-        if (entry.is_regular_file(error) && read) files.push_back(entry.path());
-      }
-    } else if (fs::exists(input, error)) {
-      files.push_back(input);
+    if (!fs::is_directory(input, error)) {
+      if (fs::exists(input, error)) files.push_back(input);
+      continue;
+    }
+    if (!fs::exists(fs::path(input) / "unit.yaml", error)) continue;
+    files.push_back(fs::path(input) / "unit.yaml");
+    for (fs::recursive_directory_iterator it(input, error), end; !error && it != end;
+         it.increment(error)) {
+      if (it->path().extension() == ".csv" && it->is_regular_file(error))
+        files.push_back(it->path());
     }
   }
   for (const std::string& output : outputs) {

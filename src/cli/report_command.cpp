@@ -41,8 +41,12 @@ DiagnoseReportInput ReadDiagnoseOutput(const std::string& dir, const Parameters&
 }
 
 int RunReport(const ReportArgs& args) {
-  RefuseOverwritingInputs({args.out_path},
-                          {args.params_path, args.unit_dir, args.diagnose_dir, args.results_dir});
+  std::vector<std::string> inputs = {args.params_path, args.unit_dir};
+  if (!args.diagnose_dir.empty()) {
+    for (const char* name : {"report.md", "params.yaml", "report.json"})
+      inputs.push_back(args.diagnose_dir + "/" + name);
+  }
+  RefuseOverwritingInputs({args.out_path}, inputs);
   std::string html;
   if (!args.results_dir.empty()) {
     if (!args.unit_dir.empty() || !args.params_path.empty() || !args.diagnose_dir.empty())

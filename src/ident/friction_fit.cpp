@@ -155,13 +155,17 @@ bool HuberScales(const FrictionFitOptions& options, SegmentProblem* problem,
                  std::vector<double>* scale, int* outliers) {
   std::vector<double> mean_squares;
   if (!SegmentMeanSquares(problem, &mean_squares)) return false;
-  const double typical = internal::Median(mean_squares);
-  *outliers =
-      static_cast<int>(std::count_if(mean_squares.begin(), mean_squares.end(), [&](double m) {
-        return m > options.outlier_ratio * typical;
-      }));
+  std::vector<double> weighted;  // blocks with a weighted row (not all in a gap)
+  for (double m : mean_squares)
+    if (!std::isnan(m)) weighted.push_back(m);
+  if (weighted.empty()) return true;
+  const double typical = internal::Median(weighted);
+  *outliers = static_cast<int>(std::count_if(weighted.begin(), weighted.end(), [&](double m) {
+    return m > options.outlier_ratio * typical;
+  }));
   if (*outliers > 0) {
-    for (int n : problem->rows) scale->push_back(std::sqrt(options.outlier_ratio * typical * n));
+    for (int n : problem->weighted_rows)
+      scale->push_back(std::sqrt(options.outlier_ratio * typical * std::max(n, 1)));
   }
   return true;
 }

@@ -28,6 +28,8 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
       p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data());
     }
     p->rows.push_back(rows);
+    p->weighted_rows.push_back(static_cast<int>(std::count_if(
+        s.weight.begin() + 1, s.weight.begin() + 1 + rows, [](double w) { return w != 0; })));
   }
   for (std::size_t c = 0; c < data.clusters.size(); ++c) {
     const int rows = static_cast<int>(data.clusters[c].speed_m_per_s.size());
@@ -39,6 +41,7 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
         huber_scale.empty() ? nullptr : new ceres::HuberLoss(huber_scale[k]);
     p->problem.AddResidualBlock(cost, loss, positive->data(), negative->data());
     p->rows.push_back(rows);
+    p->weighted_rows.push_back(rows);
   }
   for (Block* block : {positive, negative}) {
     for (int i = 0; i < kDirectionParameters; ++i) {
@@ -77,10 +80,10 @@ bool SegmentMeanSquares(SegmentProblem* p, std::vector<double>* out) {
   }
   out->clear();
   std::size_t row = 0;
-  for (const int n : p->rows) {
+  for (std::size_t k = 0; k < p->rows.size(); ++k) {
     double squares = 0;
-    for (int i = 0; i < n; ++i, ++row) squares += r[row] * r[row];
-    out->push_back(squares / n);
+    for (int i = 0; i < p->rows[k]; ++i, ++row) squares += r[row] * r[row];
+    out->push_back(p->weighted_rows[k] > 0 ? squares / p->weighted_rows[k] : NAN);
   }
   return true;
 }
@@ -94,7 +97,10 @@ bool DirectionMisfits(const StrokeData& data, SegmentProblem* p, double misfit[3
     const int direction = k < data.segments.size()
                               ? data.segments[k].direction
                               : data.clusters[k - data.segments.size()].direction;
-    misfit[direction > 0 ? 0 : direction < 0 ? 1 : 2] += p->rows[k] * std::log1p(mean_squares[k]);
+    if (p->weighted_rows[k] == 0) continue;  // all of it in or after a gap
+    misfit[direction > 0   ? 0
+           : direction < 0 ? 1
+                           : 2] += p->weighted_rows[k] * std::log1p(mean_squares[k]);
   }
   return true;
 }

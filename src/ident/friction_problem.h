@@ -19,6 +19,9 @@ namespace pneumaid::friction_internal {
 struct SegmentProblem {
   ceres::Problem problem;
   std::vector<int> rows;  // residuals per segment, then per force-balance slide
+  // Of `rows`, those with a weight (a replay's samples in or after a gap of
+  // its log weigh nothing: friction_segments.h).
+  std::vector<int> weighted_rows;
   // Per segment (unused when one-sided); kept from one pass to the next.
   std::vector<double>* stop_time_s = nullptr;
 };
@@ -34,7 +37,8 @@ void BuildProblem(const StrokeData& data, double mass_kg, const FrictionFitOptio
 ceres::Solver::Summary Solve(const FrictionFitOptions& options, ceres::Problem* problem);
 
 // Mean squared residual of each block (segments, then slides; residuals
-// only: cheap), no loss applied.
+// only: cheap) over its weighted rows, no loss applied; NaN for a block
+// with none.
 bool SegmentMeanSquares(SegmentProblem* p, std::vector<double>* out);
 
 // The misfit of the blocks' current values: sum over blocks of rows x

@@ -182,8 +182,11 @@ std::string Matlab(const Parameters& params, const std::vector<Entry>& entries) 
       << "pneumaid_params = struct();\npneumaid_params.unit = " << MatlabString(params.unit)
       << ";\npneumaid_params.provenance = " << MatlabString(OneLine(params.provenance_yaml))
       << ";\n";
+  // The model's choices in a struct of their own: pneumaid_params stays
+  // numbers, as a Simulink parameter struct must be.
+  out << "pneumaid_model = struct();\n";
   for (const Entry& e : entries) {
-    out << "pneumaid_params." << e.path << " = "
+    out << (e.choice.empty() ? "pneumaid_params." : "pneumaid_model.") << e.path << " = "
         << (e.choice.empty() ? Number(e.value) : MatlabString(e.choice)) << ";  % "
         << OneLine(Comment(e)) << "\n";
   }
@@ -194,15 +197,21 @@ std::string Json(const Parameters& params, const std::vector<Entry>& entries) {
   std::ostringstream out;
   out << "{\"format\": \"pneumaid-export/1\", \"unit\": " << JsonString(params.unit)
       << ", \"provenance\": " << JsonString(params.provenance_yaml) << ",\n \"parameters\": {";
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    const Entry& e = entries[i];
-    out << (i ? ",\n  " : "\n  ") << JsonString(e.path)
-        << ": {\"value\": " << (e.choice.empty() ? Number(e.value) : JsonString(e.choice))
+  // "parameters" holds numbers only; the model's choices are "model"'s.
+  std::string model;
+  bool first = true;
+  for (const Entry& e : entries) {
+    if (!e.choice.empty()) {
+      model += (model.empty() ? "" : ", ") + JsonString(e.path) + ": " + JsonString(e.choice);
+      continue;
+    }
+    out << (first ? "\n  " : ",\n  ") << JsonString(e.path) << ": {\"value\": " << Number(e.value)
         << ", \"unit\": " << JsonString(e.unit)
         << ", \"standard_error\": " << (e.standard_error > 0 ? Number(e.standard_error) : "null")
         << "}";
+    first = false;
   }
-  out << "}}\n";
+  out << "},\n \"model\": {" << model << "}}\n";
   return out.str();
 }
 
@@ -217,17 +226,19 @@ bool ParseExportFormat(const std::string& name, ExportFormat* format) {
 }
 
 std::string ExportParameters(const Parameters& params, const ExportOptions& options) {
-  // A ROS 2 node name: letters, digits and underscores, not starting with a
-  // digit (any other text made a YAML key that did not parse).
+  // A ROS 2 params file's node key: a node name, a namespaced one (/ns/node)
+  // or a wildcard (/**): letters, digits, '_', '/' and '*' (any other text
+  // made a YAML key that did not parse).
   const std::string& node = options.ros2_node;
-  const bool node_ok = !node.empty() && !std::isdigit(static_cast<unsigned char>(node[0])) &&
-                       std::all_of(node.begin(), node.end(), [](char c) {
-                         return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
-                       });
+  const bool node_ok =
+      !node.empty() && !std::isdigit(static_cast<unsigned char>(node[0])) &&
+      std::all_of(node.begin(), node.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/' || c == '*';
+      });
   if (options.format == ExportFormat::kRos2 && !node_ok) {
     throw InputError("export options", 0, 0,
-                     "ros2_node: expected a ROS 2 node name (letters, digits, '_', not starting "
-                     "with a digit), got '" +
+                     "ros2_node: expected a ROS 2 node name, namespaced or a wildcard (letters, "
+                     "digits, '_', '/', '*'; not starting with a digit), got '" +
                          node + "'");
   }
   const std::vector<Entry> entries = Entries(params);

@@ -422,7 +422,7 @@ void CheckCommandRange(const CsvTable& table, const CsvColumn& column, const std
   for (std::size_t i = 0; i < u.size(); ++i) {
     if (u[i] < low - 1e-9 || u[i] > 1.0 + 1e-9) {
       char got[32];
-      std::snprintf(got, sizeof(got), "%.6g", u[i]);
+      std::snprintf(got, sizeof(got), "%.9g", u[i]);
       throw InputError(table.file, table.row_lines[i], column.column,
                        std::string("column 'u': expected a command in [") +
                            (bidirectional ? "-1" : "0") + ", 1] V, got " + got);

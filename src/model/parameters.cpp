@@ -13,7 +13,7 @@ void CheckScalarRanges(const Parameters& params, std::vector<ParameterProblem>* 
     const double value = info.get(params);
     if (!info.range.Contains(value)) {
       char got[32];
-      std::snprintf(got, sizeof(got), "%.6g", value);  // -1e-09, not -0.000000
+      std::snprintf(got, sizeof(got), "%.9g", value);  // -1e-09, not -0.000000
       problems->push_back(
           {info.path, "expected " + info.range.Describe() + " " + info.unit + ", got " + got});
     }

@@ -158,6 +158,9 @@ TEST_F(BatchCliTest, ExportsEveryFormatAndRefusesAnUnknownOne) {
                 (dir_ / "x.yaml").string()),
             2);
   EXPECT_NE(Stderr().find("--node: expected a ROS 2 node name"), std::string::npos) << Stderr();
+  // A namespaced node and the wildcard are params files' keys too.
+  EXPECT_EQ(Run("export --params " + params + " --format ros2 --node '/**'"), 0) << Stderr();
+  EXPECT_EQ(Run("export --params " + params + " --format ros2 --node /arm/actuator"), 0);
   EXPECT_EQ(Listing(dir_), before);
   // The set exported over itself.
   const std::string set = Write("set.yaml", Read(params));

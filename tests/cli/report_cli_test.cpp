@@ -79,6 +79,11 @@ TEST_F(ReportCliTest, BatchMergeAndReportWriteTheFleetsPage) {
   ASSERT_EQ(Run("merge " + results + " --html " + (dir_ / "m.html").string()), 0) << Stderr();
   ASSERT_EQ(Run("report --results " + results + " --out " + (dir_ / "r.html").string()), 0);
   EXPECT_EQ(Read(dir_ / "m.html"), Read(dir_ / "r.html"));
+  // The page written into the results directory, and again: an earlier page
+  // there is no input of the report.
+  for (int run = 0; run < 2; ++run)
+    EXPECT_EQ(Run("report --results " + results + " --out " + results + "/fleet.html"), 0)
+        << Stderr();
 }
 
 TEST_F(ReportCliTest, BadInputExitsTwoAndWritesNothing) {

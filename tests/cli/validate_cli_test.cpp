@@ -12,7 +12,7 @@ using ValidateCliTest = testing::CliTest;
 
 TEST_F(ValidateCliTest, PassesOnTheTruthAndWritesReports) {
   const std::string json = (dir_ / "report.json").string();
-  const std::string csv_dir = (dir_ / "csv").string();
+  const std::string csv_dir = (dir_ / "csv").string() + "/";  // a new directory, named with '/'
   ASSERT_EQ(
       Run("validate --params " + testing::Source("datasets/paper-rig/truth.yaml") + " " +
           testing::Source("datasets/paper-rig") + " --json " + json + " --csv-out " + csv_dir),

@@ -103,11 +103,11 @@ TEST(ExportTest, MatlabScriptIsAssignmentsOfEveryParameter) {
   const Parameters p = Identified();
   const std::string script = Export(p, ExportFormat::kMatlab);
   const std::regex comment("^%.*$");
-  const std::regex create("^pneumaid_params = struct\\(\\);$");
+  const std::regex create("^pneumaid_(params|model) = struct\\(\\);$");
   const std::regex number(
       "^pneumaid_params\\.([A-Za-z][A-Za-z0-9_]*(?:\\.[A-Za-z][A-Za-z0-9_]*)*) = "
       "(-?[0-9][0-9.eE+-]*|-?inf|nan);  % .*$");
-  const std::regex text("^pneumaid_params\\.[a-z]+(\\.[a-z_]+)* = '([^']|'')*';(  % .*)?$");
+  const std::regex text("^pneumaid_(params|model)\\.[a-z]+(\\.[a-z_]+)* = '([^']|'')*';(  % .*)?$");
   std::map<std::string, double> values;
   std::stringstream lines(script);
   for (std::string line; std::getline(lines, line);) {
@@ -138,14 +138,18 @@ TEST(ExportTest, EveryFormatStatesTheModelsChoices) {
   EXPECT_EQ(ros2["pipeline"]["model"].as<std::string>(), "none");
   EXPECT_EQ(ros2["valve"]["branch"].as<std::string>(), ToString(p.valve.branch));
   EXPECT_EQ(ros2["cylinder"]["stroke"].as<double>(), p.cylinder.stroke_m);  // the numbers beside
-  const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson))["parameters"];
-  EXPECT_EQ(json["cylinder.orientation"]["value"].as<std::string>(), "horizontal");
-  EXPECT_EQ(json["friction.model"]["value"].as<std::string>(), "stribeck");
+  // JSON's and MATLAB's parameters stay numbers (a Simulink parameter struct
+  // must be); the choices have their own object and struct.
+  const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson));
+  EXPECT_EQ(json["model"]["cylinder.orientation"].as<std::string>(), "horizontal");
+  EXPECT_EQ(json["model"]["friction.model"].as<std::string>(), "stribeck");
+  EXPECT_FALSE(json["parameters"]["cylinder.orientation"]);
   EXPECT_NE(Export(p, ExportFormat::kCHeader)
                 .find("#define PNEUMAID_CYLINDER_ORIENTATION \"horizontal\" /* vertical: gravity"),
             std::string::npos);
-  EXPECT_NE(Export(p, ExportFormat::kMatlab).find("pneumaid_params.pipeline.model = 'none';"),
-            std::string::npos);
+  const std::string script = Export(p, ExportFormat::kMatlab);
+  EXPECT_NE(script.find("pneumaid_model.pipeline.model = 'none';"), std::string::npos);
+  EXPECT_EQ(script.find("pneumaid_params.pipeline.model"), std::string::npos);
 }
 
 TEST(ExportTest, JsonAndEveryFormatStateTheUnitAndProvenance) {
