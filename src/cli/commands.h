@@ -67,6 +67,9 @@ std::string DirectoryToWrite(const std::string& directory);
 // logs), before the command writes anything.
 void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
                              const std::vector<std::string>& inputs);
+// The files of a diagnose output directory that `report --diagnose` reads
+// back (diagnose writes them, with its CSVs).
+inline constexpr const char* kDiagnoseOutputFiles[] = {"report.md", "params.yaml", "report.json"};
 // Writes the page atomically and says so; nothing for an empty path.
 void WriteHtml(const std::string& path, const std::string& html);
 

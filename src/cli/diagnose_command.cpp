@@ -1,5 +1,7 @@
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <iterator>
 #include <map>
 #include <string>
 #include <vector>
@@ -34,9 +36,9 @@ void CheckOutDirectory(const std::string& out) {
   namespace fs = std::filesystem;
   std::error_code error;
   if (!fs::exists(out, error)) return;
-  const bool earlier = fs::exists(fs::path(out) / "report.md") &&
-                       fs::exists(fs::path(out) / "report.json") &&
-                       fs::exists(fs::path(out) / "params.yaml");
+  const bool earlier =
+      std::all_of(std::begin(kDiagnoseOutputFiles), std::end(kDiagnoseOutputFiles),
+                  [&out](const char* name) { return fs::exists(fs::path(out) / name); });
   if (!fs::is_directory(out, error) || !(fs::is_empty(out, error) || earlier)) {
     throw InputError("--out", 0, 0,
                      out + " exists and is not an earlier diagnose output; not replacing it");
@@ -46,7 +48,7 @@ void CheckOutDirectory(const std::string& out) {
 int RunDiagnose(const DiagnoseArgs& args) {
   CheckOutDirectory(args.out_dir);
   std::vector<std::string> outputs = {args.json_path, args.html_path};
-  for (const char* name : {"report.md", "params.yaml", "report.json"})
+  for (const char* name : kDiagnoseOutputFiles)
     outputs.push_back(args.out_dir + "/" + name);  // the directory is replaced whole
   RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);

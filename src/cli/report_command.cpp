@@ -23,7 +23,7 @@ struct ReportArgs {
 DiagnoseReportInput ReadDiagnoseOutput(const std::string& dir, const Parameters& before,
                                        const Unit& unit) {
   namespace fs = std::filesystem;
-  for (const char* name : {"report.md", "params.yaml", "report.json"}) {
+  for (const char* name : kDiagnoseOutputFiles) {
     if (!fs::exists(fs::path(dir) / name)) {
       throw InputError(dir, 0, 0, std::string("not a diagnose output directory: no ") + name);
     }
@@ -43,8 +43,7 @@ DiagnoseReportInput ReadDiagnoseOutput(const std::string& dir, const Parameters&
 int RunReport(const ReportArgs& args) {
   std::vector<std::string> inputs = {args.params_path, args.unit_dir};
   if (!args.diagnose_dir.empty()) {
-    for (const char* name : {"report.md", "params.yaml", "report.json"})
-      inputs.push_back(args.diagnose_dir + "/" + name);
+    for (const char* name : kDiagnoseOutputFiles) inputs.push_back(args.diagnose_dir + "/" + name);
   }
   RefuseOverwritingInputs({args.out_path}, inputs);
   std::string html;

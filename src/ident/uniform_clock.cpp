@@ -38,12 +38,18 @@ std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
       static_cast<std::size_t>(std::floor((t.back() - t.front()) / period + 1e-9)) + 1;
   std::vector<double> clock(samples);
   for (std::size_t k = 0; k < samples; ++k) clock[k] = t.front() + static_cast<double>(k) * period;
+  // The logged interval each clock sample lies in: t[left[k]] <= clock[k] <
+  // t[left[k] + 1] (the last interval for the last sample).
+  std::vector<std::size_t> left(samples);
+  for (std::size_t k = 0, j = 0; k < samples; ++k) {
+    while (j + 2 < t.size() && t[j + 1] <= clock[k]) ++j;
+    left[k] = j;
+  }
   if (in_gap != nullptr) {
     in_gap->assign(samples, false);
     const double round_off_s = 1e-9 * period;
-    std::size_t j = 0;  // t[j] <= clock[k] < t[j + 1]
     for (std::size_t k = 0; k < samples; ++k) {
-      while (j + 2 < t.size() && t[j + 1] <= clock[k]) ++j;
+      const std::size_t j = left[k];
       (*in_gap)[k] = t[j + 1] - t[j] > kSamplingGapIntervals * period &&
                      clock[k] > t[j] + round_off_s && clock[k] < t[j + 1] - round_off_s;
     }
@@ -55,9 +61,8 @@ std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
       continue;
     }
     column.resize(samples);
-    std::size_t j = 0;  // t[j] <= clock[k] < t[j + 1]
     for (std::size_t k = 0; k < samples; ++k) {
-      while (j + 2 < t.size() && t[j + 1] <= clock[k]) ++j;
+      const std::size_t j = left[k];
       const double w = std::clamp((clock[k] - t[j]) / (t[j + 1] - t[j]), 0.0, 1.0);
       column[k] = name == "u" ? (w < 1 ? values[j] : values[j + 1])
                               : (1 - w) * values[j] + w * values[j + 1];

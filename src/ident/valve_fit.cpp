@@ -45,9 +45,9 @@ struct ContinuityResidual {
 
   template <typename T>
   bool operator()(const T* theta, T* residual) const {
-    const T u(u_sat_V);
-    residual[0] = ((((theta[1] * u + theta[2]) * u + theta[3]) * u + theta[4]) * u - T(1.0)) /
-                  T(kContinuitySigma);
+    // poly(u_sat): the polynomial of K_vp with q_max 1.
+    const KvpCoefficients<T> c{theta[1], theta[2], theta[3], theta[4], T(1.0), T(u_sat_V)};
+    residual[0] = (KvpPolynomial(T(u_sat_V), c) - T(1.0)) / T(kContinuitySigma);
     return true;
   }
 };

@@ -84,7 +84,7 @@ struct Experiment {
   std::map<std::string, std::string> units_as_written;  // column -> unit in the header ("" = SI)
   std::vector<std::string> ignored_columns;
   bool unterminated_last_row = false;  // CsvTable::unterminated_last_row
-  double time_origin_s = 0;  // the logged time of the first sample (t = 0 here)
+  double time_origin_s = 0;            // the logged time of the first sample (t = 0 here)
 
   std::size_t samples() const;
   const std::vector<double>& column(const std::string& name) const;  // empty when absent
