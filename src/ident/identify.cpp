@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <initializer_list>
 #include <sstream>
 
@@ -78,7 +79,10 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
   YAML::Node root(YAML::NodeType::Map);
   root["tool"] = "pneumaid " + options.tool_version;
   root["date"] = options.date;
-  root["unit_directory"] = unit.directory;
+  // Absolute: a set outlives the shell it was identified in ("." names
+  // nothing once it is handed on).
+  root["unit"] = unit.manifest.unit;
+  root["unit_directory"] = std::filesystem::absolute(unit.directory).lexically_normal().string();
   YAML::Node inputs(YAML::NodeType::Sequence);
   for (const auto& e : unit.experiments) {
     YAML::Node input(YAML::NodeType::Map);
@@ -223,6 +227,8 @@ Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOpt
                     IdentifyReport* report) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("identify options", 0, 0, error);
+  IdentifyReport unread;  // for a caller that wants the set alone
+  if (report == nullptr) report = &unread;
   Parameters params = WithUnitConstants(prior, unit);
   params.uncertainty.clear();
   *report = IdentifyReport{};

@@ -9,6 +9,7 @@
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
 #include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/provenance.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -196,7 +197,7 @@ std::string Matlab(const Parameters& params, const std::vector<Entry>& entries) 
 std::string Json(const Parameters& params, const std::vector<Entry>& entries) {
   std::ostringstream out;
   out << "{\"format\": \"pneumaid-export/1\", \"unit\": " << JsonString(params.unit)
-      << ", \"provenance\": " << JsonString(params.provenance_yaml) << ",\n \"parameters\": {";
+      << ", \"provenance\": " << ProvenanceJson(params.provenance_yaml) << ",\n \"parameters\": {";
   // "parameters" holds numbers only; the model's choices are "model"'s.
   std::string model;
   bool first = true;

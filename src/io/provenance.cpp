@@ -1,7 +1,9 @@
 #include "pneumaid/io/provenance.h"
 
+#include <regex>
 #include <stdexcept>
 
+#include "pneumaid/io/json.h"
 #include "provenance_map.h"
 
 namespace pneumaid {
@@ -59,7 +61,50 @@ YAML::Node Field(const std::string& provenance, const std::string& key, const st
   return entry[field];
 }
 
+// A node as JSON: mappings as objects, sequences as arrays; a plain scalar
+// that YAML's core schema reads as a number, a boolean or null as that
+// (JSON's own spelling of a number only); every other scalar as a string.
+void AppendJson(const YAML::Node& node, std::string* out) {
+  if (node.IsMap()) {
+    *out += '{';
+    bool first = true;
+    for (const auto& item : node) {
+      *out += first ? "" : ", ";
+      *out += JsonString(item.first.Scalar()) + ": ";
+      AppendJson(item.second, out);
+      first = false;
+    }
+    *out += '}';
+  } else if (node.IsSequence()) {
+    *out += '[';
+    for (size_t i = 0; i < node.size(); ++i) {
+      *out += i == 0 ? "" : ", ";
+      AppendJson(node[i], out);
+    }
+    *out += ']';
+  } else if (node.IsScalar()) {
+    static const std::regex number(R"(-?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][-+]?[0-9]+)?)");
+    const std::string& text = node.Scalar();
+    const bool plain = node.Tag() == "?";
+    if (plain && (text == "true" || text == "false" || text == "null")) {
+      *out += text;
+    } else if (plain && std::regex_match(text, number)) {
+      *out += text;
+    } else {
+      *out += JsonString(text);
+    }
+  } else {
+    *out += "null";
+  }
+}
+
 }  // namespace
+
+std::string ProvenanceJson(const std::string& provenance) {
+  std::string out;
+  AppendJson(ProvenanceMap(provenance), &out);
+  return out;
+}
 
 std::vector<std::string> ProvenanceList(const std::string& provenance, const std::string& key,
                                         const std::string& field) {

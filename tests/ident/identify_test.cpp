@@ -94,6 +94,24 @@ TEST(IdentifyTest, TheProvenanceNamesTheHeldCoefficientsWithWhy) {
   EXPECT_EQ(held.count("friction.positive.Fs"), 0u);  // not requested: no fit ran
 }
 
+// The provenance names the unit and its directory as an absolute path (a
+// relative one names nothing once the set leaves the shell it was made in).
+TEST(IdentifyTest, TheProvenanceNamesTheUnitAndItsAbsoluteDirectory) {
+  const Unit unit = ReadUnit(kUnit);
+  IdentifyOptions options;
+  options.components = {Component::kValve};
+  const Parameters p = Identify(unit, Parameters{}, options, nullptr);
+  const std::string& text = p.provenance_yaml;  // a flow mapping (no comma in the path)
+  EXPECT_NE(text.find("unit: " + unit.manifest.unit + ","), std::string::npos) << text;
+  const std::string key = "unit_directory: ";
+  const size_t at = text.find(key);
+  ASSERT_NE(at, std::string::npos) << text;
+  const size_t from = at + key.size();
+  const std::filesystem::path directory(text.substr(from, text.find(',', from) - from));
+  EXPECT_TRUE(directory.is_absolute()) << directory;
+  EXPECT_TRUE(std::filesystem::equivalent(directory, unit.directory)) << directory;
+}
+
 // A fit that ran out of iterations still gives its best point, and says so:
 // in the report's list of fits not converged (the CLI's exit 3) and in the
 // provenance's status of that fit; the fits that converged say that too.

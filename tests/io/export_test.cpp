@@ -158,7 +158,10 @@ TEST(ExportTest, JsonAndEveryFormatStateTheUnitAndProvenance) {
        {ExportFormat::kRos2, ExportFormat::kCHeader, ExportFormat::kMatlab, ExportFormat::kJson}) {
     const std::string text = Export(p, format);
     EXPECT_NE(text.find("PVQ13-0007"), std::string::npos);
-    EXPECT_NE(text.find("tool: pneumaid test"), std::string::npos);
+    EXPECT_NE(text.find(format == ExportFormat::kJson ? "\"tool\": \"pneumaid test\""
+                                                      : "tool: pneumaid test"),
+              std::string::npos)
+        << text;
   }
   const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson));  // JSON is YAML
   EXPECT_EQ(json["parameters"]["friction.positive.Fs"]["value"].as<double>(),
@@ -169,6 +172,31 @@ TEST(ExportTest, JsonAndEveryFormatStateTheUnitAndProvenance) {
   EXPECT_TRUE(ParseExportFormat("c-header", &format));
   EXPECT_EQ(format, ExportFormat::kCHeader);
   EXPECT_FALSE(ParseExportFormat("fortran", &format));
+}
+
+// JSON's provenance is an object a program reads field by field: plain YAML
+// numbers as numbers, quoted ones and other text as strings; text that is not
+// a mapping under "given".
+TEST(ExportTest, JsonCarriesTheProvenanceAsAnObject) {
+  Parameters p = Identified();
+  p.provenance_yaml =
+      "{tool: pneumaid test, inputs: [{file: a.csv, sha256: 0e5f}], friction: {final_cost: "
+      "22547.45, iterations: 93, status: converged}, code: '007', ok: true}";
+  const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson));
+  const YAML::Node provenance = json["provenance"];
+  ASSERT_TRUE(provenance.IsMap()) << Export(p, ExportFormat::kJson);
+  EXPECT_EQ(provenance["tool"].as<std::string>(), "pneumaid test");
+  EXPECT_EQ(provenance["inputs"][0]["sha256"].as<std::string>(), "0e5f");
+  EXPECT_EQ(provenance["friction"]["final_cost"].as<double>(), 22547.45);
+  const std::string text = Export(p, ExportFormat::kJson);
+  EXPECT_NE(text.find("\"final_cost\": 22547.45,"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"iterations\": 93,"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"code\": \"007\""), std::string::npos) << text;
+  EXPECT_NE(text.find("\"ok\": true"), std::string::npos) << text;
+  p.provenance_yaml = "made by hand";
+  EXPECT_NE(Export(p, ExportFormat::kJson).find("\"provenance\": {\"given\": \"made by hand\"}"),
+            std::string::npos)
+      << Export(p, ExportFormat::kJson);
 }
 
 }  // namespace

@@ -55,7 +55,7 @@ struct IdentifyReport {
 // The unit's conditions and geometry (manifest), fitted components, priors
 // for the rest, uncertainty and provenance. Throws InputError when the
 // options are not valid or a component named explicitly has no log to fit,
-// FitError when the identified set is not physical.
+// FitError when the identified set is not physical. `report` may be null.
 Parameters Identify(const Unit& unit, const Parameters& prior, const IdentifyOptions& options,
                     IdentifyReport* report);
 

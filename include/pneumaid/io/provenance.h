@@ -26,4 +26,9 @@ std::map<std::string, std::string> ProvenanceStrings(const std::string& provenan
                                                      const std::string& key,
                                                      const std::string& field);
 
+// The provenance as one JSON object (text that is not a mapping as
+// {"given": text}); plain YAML numbers, booleans and null as JSON's own, every
+// other scalar a string.
+std::string ProvenanceJson(const std::string& provenance);
+
 }  // namespace pneumaid
