@@ -69,8 +69,10 @@ std::string DiagnoseResult::MarkdownReport() const {
     out << "\nWorst windows (RMSE relative to the channel's whole-run RMSE):\n\n";
     for (const ResidualWindow& w : it.where.worst) {
       out << "- " << w.run << " " << w.channel << " "
-          << Format("%.2f-%.2f s: RMSE %.4g", w.from_s, w.to_s, Display(w.channel, w.rmse)) << " "
-          << DisplayUnit(w.channel) << Format(", mean %+.4g", Display(w.channel, w.mean)) << "\n";
+          << (w.to_s > w.from_s ? Format("%.2f-%.2f s", w.from_s, w.to_s)
+                                : Format("at %.2f s", w.from_s))  // a run of one sample
+          << Format(": RMSE %.4g", Display(w.channel, w.rmse)) << " " << DisplayUnit(w.channel)
+          << Format(", mean %+.4g", Display(w.channel, w.mean)) << "\n";
     }
     if (it.ranking.empty()) {
       out << "\nNo candidates were fitted in this iteration.\n\n";
