@@ -77,6 +77,11 @@ void WriteHtml(const std::string& path, const std::string& html);
 // the binary (<prefix>/share/pneumaid/configs), else this source tree's.
 std::string DefaultConfig(const std::string& name);
 
+// ReadUnit, then on stderr the rig defaults the manifest left to the format
+// and the columns of each log that are ignored (the format's promise that
+// the tool says so; `check` lists them with the rest).
+Unit ReadUnitSayingWhatItAssumed(const std::string& directory);
+
 // The current time, UTC, ISO 8601 (for provenance).
 std::string UtcNow();
 

@@ -52,7 +52,7 @@ int RunDiagnose(const DiagnoseArgs& args) {
     outputs.push_back(args.out_dir + "/" + name);  // the directory is replaced whole
   RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
-  const Unit unit = ReadUnit(args.unit_dir);
+  const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
   DiagnoseOptions options;
   options.max_effects = args.max_effects;
   options.effects = SplitList(args.effects);

@@ -50,7 +50,7 @@ int RunIdentify(const IdentifyArgs& args) {
   RefuseOverwritingInputs({args.out_path, args.html_path},
                           {args.unit_dir, args.prior_path, args.spec_path});
   const Parameters prior = LoadParams(args.prior_path);
-  const Unit unit = ReadUnit(args.unit_dir);
+  const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
   IdentifyOptions options;
   if (!args.only.empty()) {
     options.components = ParseComponents(args.only);

@@ -25,7 +25,7 @@ int RunRefine(const RefineArgs& args) {
   RefuseOverwritingInputs({args.out_path, args.html_path},
                           {args.unit_dir, args.params_path, args.spec_path});
   const Parameters start = LoadParams(args.params_path);
-  const Unit unit = ReadUnit(args.unit_dir);
+  const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
   const FitSpec spec = LoadFitSpec(args.spec_path);
   RefineOptions options = RefineOptions::ForIdentify();
   options.fit_stick_creep = !args.no_stick_creep;

@@ -41,7 +41,7 @@ std::map<std::string, double> Thresholds(const std::vector<std::string>& items,
 int RunValidate(const ValidateArgs& args) {
   RefuseOverwritingInputs({args.json_path, args.html_path}, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
-  const Unit unit = ReadUnit(args.unit_dir);
+  const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
   ValidationOptions options;
   if (!args.min_fit.empty()) options.min_fit_percent = Thresholds(args.min_fit, "--min-fit");
   if (!args.max_rmse.empty()) options.max_rmse = Thresholds(args.max_rmse, "--max-rmse");

@@ -83,6 +83,11 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
   // nothing once it is handed on).
   root["unit"] = unit.manifest.unit;
   root["unit_directory"] = std::filesystem::absolute(unit.directory).lexically_normal().string();
+  if (!unit.manifest.defaults_used.empty()) {
+    YAML::Node defaults(YAML::NodeType::Sequence);  // the rig constants the manifest left out
+    for (const std::string& path : unit.manifest.defaults_used) defaults.push_back(path);
+    root["rig_defaults_used"] = defaults;
+  }
   YAML::Node inputs(YAML::NodeType::Sequence);
   for (const auto& e : unit.experiments) {
     YAML::Node input(YAML::NodeType::Map);

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "cli_test_util.h"
 
@@ -108,6 +109,37 @@ TEST_F(IdentifyCliTest, AUnitWithNothingToRefineIsRefusedBeforeTheComponentFits)
   EXPECT_FALSE(std::filesystem::exists(out));
   // Without --refine the same unit is identified.
   EXPECT_EQ(Run("identify " + unit.string() + " --out " + out), 0) << Stderr();
+}
+
+// The format's promise: the tool says which rig defaults it used and which
+// columns it ignores (check was the only command that did); the identified
+// set's provenance records the defaults.
+TEST_F(IdentifyCliTest, SaysWhichRigDefaultsItUsedAndWhichColumnsItIgnores) {
+  const std::filesystem::path unit = dir_ / "unit";
+  std::filesystem::copy(testing::Source("datasets/paper-rig"), unit);
+  std::string manifest = Read(unit / "unit.yaml");
+  const std::string density = "  air_density: 1.178\n";
+  ASSERT_NE(manifest.find(density), std::string::npos);
+  manifest.erase(manifest.find(density), density.size());
+  std::ofstream(unit / "unit.yaml", std::ios::binary) << manifest;
+  std::string log = Read(unit / "pipe-009.csv");
+  std::string with_column;
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    with_column += line;
+    if (!line.empty() && line[0] != '#') with_column += line[0] == 't' ? ",temp [degC]" : ",21.5";
+    with_column += "\n";
+  }
+  std::ofstream(unit / "pipe-009.csv", std::ios::binary) << with_column;
+  const std::string out = (dir_ / "set.yaml").string();
+  ASSERT_EQ(Run("identify " + unit.string() + " --only pipeline --out " + out), 0) << Stderr();
+  EXPECT_NE(Stderr().find((unit / "unit.yaml").string() + ": rig defaults used: rig.air_density"),
+            std::string::npos)
+      << Stderr();
+  EXPECT_NE(Stderr().find((unit / "pipe-009.csv").string() + ": ignored columns: temp"),
+            std::string::npos)
+      << Stderr();
+  EXPECT_NE(Read(out).find("rig_defaults_used: [rig.air_density]"), std::string::npos) << Read(out);
 }
 
 }  // namespace
