@@ -67,7 +67,8 @@ int RunDiagnose(const DiagnoseArgs& args) {
   for (const auto& [report, folder] :
        {std::make_pair(&result.before, "before"), std::make_pair(&result.after, "after")}) {
     for (const auto& e : report->experiments) {
-      if (e.simulation.ok()) files[std::string(folder) + "/" + e.id + ".csv"] = ComparisonToCsv(e);
+      if (e.simulation.ok())
+        files[std::string(folder) + "/" + FileNameOfId(e.id) + ".csv"] = ComparisonToCsv(e);
     }
   }
   files["params.yaml"] = ParamsToYaml(result.params);

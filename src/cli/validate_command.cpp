@@ -62,7 +62,8 @@ int RunValidate(const ValidateArgs& args) {
   if (!args.csv_dir.empty()) {
     for (const auto& e : report.experiments) {
       if (!e.simulation.ok()) continue;
-      WriteFileAtomically(args.csv_dir + "/" + e.id + "-validation.csv", ComparisonToCsv(e));
+      WriteFileAtomically(args.csv_dir + "/" + FileNameOfId(e.id) + "-validation.csv",
+                          ComparisonToCsv(e));
     }
   }
   WriteHtml(args.html_path, html);

@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdint>
 #include <cstdio>
@@ -10,6 +12,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 
 #include "pneumaid/io/input_error.h"
 
@@ -47,9 +50,34 @@ void WriteFileAtomically(const std::string& path, const std::string& contents) {
   }
 }
 
+std::string FileNameOfId(const std::string& id) {
+  std::string name;
+  for (size_t i = 0; i < id.size(); ++i) {
+    const unsigned char c = static_cast<unsigned char>(id[i]);
+    if (std::isalnum(c) || c == '_' || c == '-' || (c == '.' && i > 0)) {
+      name += static_cast<char>(c);
+    } else {
+      char escaped[4];
+      std::snprintf(escaped, sizeof(escaped), "%%%02X", c);
+      name += escaped;
+    }
+  }
+  return name;
+}
+
 void ReplaceDirectoryAtomically(const std::string& directory,
                                 const std::map<std::string, std::string>& files) {
   namespace fs = std::filesystem;
+  for (const auto& [name, contents] : files) {
+    const fs::path relative(name);
+    const bool inside = !relative.empty() && relative.is_relative() &&
+                        std::none_of(relative.begin(), relative.end(),
+                                     [](const fs::path& part) { return part == ".."; });
+    if (!inside) {
+      throw std::logic_error("ReplaceDirectoryAtomically: '" + name + "' is not a path inside " +
+                             directory);
+    }
+  }
   const fs::path target(directory);
   const fs::path temporary = UniqueTemporaryName(directory);
   std::error_code error;

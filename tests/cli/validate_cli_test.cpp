@@ -2,8 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <set>
 
 #include "cli_test_util.h"
+#include "pneumaid/io/files.h"
 
 namespace pneumaid {
 namespace {
@@ -21,6 +24,28 @@ TEST_F(ValidateCliTest, PassesOnTheTruthAndWritesReports) {
   EXPECT_NE(Stdout().find("all thresholds met"), std::string::npos);
   EXPECT_NE(Read(json).find("\"thresholds_met\": true"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir_ / "csv" / "step-1-validation.csv"));
+}
+
+// A run's id names its CSV: an id that is a path ("../x", "a/b") names a
+// file inside --csv-out all the same (the id "../../pwned" wrote above it).
+TEST_F(ValidateCliTest, ARunsIdNamesAFileInsideTheCsvDirectory) {
+  const std::filesystem::path unit = dir_ / "unit";
+  std::filesystem::copy(testing::Source("datasets/paper-rig"), unit);
+  std::string manifest = Read(unit / "unit.yaml");
+  const std::string id = "id: step-1,";
+  ASSERT_NE(manifest.find(id), std::string::npos) << manifest;
+  manifest.replace(manifest.find(id), id.size(), "id: \"../../a/b c\",");
+  std::ofstream(unit / "unit.yaml", std::ios::binary) << manifest;
+  const std::filesystem::path csv_dir = dir_ / "out" / "csv";
+  std::filesystem::create_directories(csv_dir);
+  ASSERT_EQ(Run("validate --params " + testing::Source("datasets/paper-rig/truth.yaml") + " " +
+                unit.string() + " --experiment ../../a/b\\ c --csv-out " + csv_dir.string()),
+            0)
+      << Stderr() << Stdout();
+  EXPECT_EQ(Listing(dir_ / "out"),
+            (std::set<std::string>{csv_dir.string(),
+                                   (csv_dir / "%2E.%2F..%2Fa%2Fb%20c-validation.csv").string()}));
+  EXPECT_EQ(FileNameOfId("step-1.b_2"), "step-1.b_2");
 }
 
 TEST_F(ValidateCliTest, MissedThresholdExitsFourAndStillReports) {

@@ -24,6 +24,13 @@ void WriteFileAtomically(const std::string& path, const std::string& contents);
 void ReplaceDirectoryAtomically(const std::string& directory,
                                 const std::map<std::string, std::string>& files);
 
+// A log's experiment id as one file-name component for the files written
+// per run (`<id>-validation.csv`): letters, digits, '_', '-' and '.' as they
+// are, every other byte (and a leading '.') as %XX, so that an id such as
+// "../x" or "a/b" names a file inside the output directory and two ids never
+// share one (the format puts no rule on ids but their uniqueness).
+std::string FileNameOfId(const std::string& id);
+
 // The whole contents of `path`; throws InputError "cannot open <what>" when it
 // cannot be read.
 std::string ReadTextFile(const std::string& path, const std::string& what);
