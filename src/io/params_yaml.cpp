@@ -30,6 +30,18 @@ const std::set<std::string> kRequiredTopLevelKeys = {"format",   "unit",  "gas",
 const std::set<std::string> kSubsections = {"valve.increasing", "valve.decreasing",
                                             "friction.positive", "friction.negative"};
 
+// The model's choices a set must state (pipeline.model may be left out: the
+// format's default, conductance_lag), with what each accepts (ReadSpecial).
+struct RequiredChoice {
+  const char* path;
+  const char* accepted;
+};
+constexpr RequiredChoice kRequiredChoices[] = {
+    {"cylinder.orientation", "vertical | horizontal"},
+    {"valve.model", "kvp_poly4"},
+    {"valve.branch", "increasing | decreasing | hysteresis"},
+    {"friction.model", "stribeck"}};
+
 // Reads one document, remembering where each path was written for messages.
 class ParamsReader : internal::YamlReader {
  public:
@@ -45,7 +57,7 @@ class ParamsReader : internal::YamlReader {
         LoadMapping(text, "expected a params-v1 mapping (format: pneumaid-params/1, ...)");
     Parameters params;
     ReadTopLevel(root, &params);
-    CheckAllScalarsPresent(root);
+    CheckAllRequiredPresent(root);
     CheckValid(params, root);
     return params;
   }
@@ -155,6 +167,9 @@ class ParamsReader : internal::YamlReader {
     if (!node.IsSequence()) Fail(node, "pipeline.delta_by_length: expected a list");
     for (const auto& item : node) {
       if (!item.IsMap()) Fail(item, "pipeline.delta_by_length: expected {tube_length, delta}");
+      // Validate names an entry "pipeline.delta_by_length[i]": its line.
+      where_["pipeline.delta_by_length[" + std::to_string(params->pipeline.delta_by_length.size()) +
+             "]"] = static_cast<const YAML::Node&>(item);
       DeltaAtLength entry;
       for (const auto& field : item) {
         const std::string key = Key(field.first);
@@ -207,14 +222,20 @@ class ParamsReader : internal::YamlReader {
     }
   }
 
-  void CheckAllScalarsPresent(const YAML::Node& root) const {
+  // Every number of the table and the model's choices (the format requires
+  // them; only pipeline.model has a default, conductance_lag), each missing
+  // one named at the nearest mapping written.
+  void CheckAllRequiredPresent(const YAML::Node& root) const {
+    const auto missing = [&](const std::string& path, const std::string& what) {
+      if (where_.count(path)) return;
+      Fail(WhereWritten(path.substr(0, path.rfind('.')), root),
+           "missing required key '" + path + "'" + what);
+    };
     for (const auto& info : ScalarParameterTable()) {
-      if (where_.count(info.path)) continue;
-      const std::string path = info.path;
-      const std::string section = path.substr(0, path.rfind('.'));
-      const auto parent = where_.find(section);
-      Fail(parent != where_.end() ? parent->second : root,
-           "missing required key '" + path + "' [" + info.unit + "]: " + info.doc);
+      missing(info.path, std::string(" [") + info.unit + "]: " + info.doc);
+    }
+    for (const RequiredChoice& choice : kRequiredChoices) {
+      missing(choice.path, std::string(" (") + choice.accepted + ")");
     }
   }
 

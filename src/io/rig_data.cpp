@@ -258,6 +258,7 @@ class ManifestReader : internal::YamlReader {
       manifest->defaults_used.push_back(path);
       return;
     }
+    manifest->lines[path] = node.Mark().line + 1;
     if (absolute_only) {
       const std::string text = Text(node, path);
       if (text.find("_g") != std::string::npos)
@@ -274,6 +275,7 @@ class ManifestReader : internal::YamlReader {
       manifest->defaults_used.push_back(path);
       return;
     }
+    manifest->lines[path] = node.Mark().line + 1;
     const std::string text = Text(node, path);
     std::vector<std::string> names;
     for (const auto& [name, choice] : choices) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <numeric>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "../util/median.h"
@@ -24,15 +25,18 @@ bool Stated(const Manifest& manifest, const std::string& path) {
   return true;
 }
 
-void CheckGeometry(const Unit& unit, const std::string& what, double from_manifest,
-                   double from_params, bool stated) {
+// `key`: the manifest's rig key the message points at (its line).
+void CheckGeometry(const Unit& unit, const std::string& what, const std::string& key,
+                   double from_manifest, double from_params, bool stated) {
   if (!stated || std::fabs(from_manifest / from_params - 1.0) <= kGeometryTolerance) return;
   char message[256];
   std::snprintf(message, sizeof(message),
                 "geometry disagrees with the parameter set by more than 1 %%: %s is %.6g here, "
                 "%.6g in the parameter set",
                 what.c_str(), from_manifest, from_params);
-  throw InputError(unit.manifest_path(), 0, 0, message);
+  const auto line = unit.manifest.lines.find(key);
+  throw InputError(unit.manifest_path(), line != unit.manifest.lines.end() ? line->second : 0, 0,
+                   message);
 }
 
 // The log's conditions: supply and atmospheric pressure, gas temperature,
@@ -154,17 +158,20 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
 Parameters WithRigConditions(const Parameters& params, const Unit& unit) {
   const Manifest& m = unit.manifest;
   const RigConstants& rig = m.rig;
-  CheckGeometry(unit, "area_1 from rig.cylinder.bore", rig.area_1_m2(), params.cylinder.area_1_m2,
-                Stated(m, "rig.cylinder.bore"));
-  CheckGeometry(unit, "area_2 from rig.cylinder.bore and rod", rig.area_2_m2(),
-                params.cylinder.area_2_m2,
-                Stated(m, "rig.cylinder.bore") || Stated(m, "rig.cylinder.rod"));
-  CheckGeometry(unit, "rig.cylinder.stroke", rig.stroke_m, params.cylinder.stroke_m,
-                Stated(m, "rig.cylinder.stroke"));
-  CheckGeometry(unit, "rig.cylinder.dead_volume_1", rig.dead_volume_1_m3,
-                params.cylinder.dead_volume_1_m3, Stated(m, "rig.cylinder.dead_volume_1"));
-  CheckGeometry(unit, "rig.cylinder.dead_volume_2", rig.dead_volume_2_m3,
-                params.cylinder.dead_volume_2_m3, Stated(m, "rig.cylinder.dead_volume_2"));
+  const bool rod_stated = Stated(m, "rig.cylinder.rod");
+  CheckGeometry(unit, "area_1 from rig.cylinder.bore", "rig.cylinder.bore", rig.area_1_m2(),
+                params.cylinder.area_1_m2, Stated(m, "rig.cylinder.bore"));
+  CheckGeometry(unit, "area_2 from rig.cylinder.bore and rod",
+                rod_stated ? "rig.cylinder.rod" : "rig.cylinder.bore", rig.area_2_m2(),
+                params.cylinder.area_2_m2, Stated(m, "rig.cylinder.bore") || rod_stated);
+  for (const auto& [key, from_manifest, from_params] :
+       {std::make_tuple("rig.cylinder.stroke", rig.stroke_m, params.cylinder.stroke_m),
+        std::make_tuple("rig.cylinder.dead_volume_1", rig.dead_volume_1_m3,
+                        params.cylinder.dead_volume_1_m3),
+        std::make_tuple("rig.cylinder.dead_volume_2", rig.dead_volume_2_m3,
+                        params.cylinder.dead_volume_2_m3)}) {
+    CheckGeometry(unit, key, key, from_manifest, from_params, Stated(m, key));
+  }
   Parameters out = params;
   ApplyRigConditions(rig, &out);
   return out;

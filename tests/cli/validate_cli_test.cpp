@@ -66,7 +66,9 @@ TEST_F(ValidateCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_EQ(Run("validate --params " + other_geometry + " " +
                 testing::Source("datasets/paper-rig") + " --json " + json),
             2);
-  EXPECT_NE(Stderr().find("geometry disagrees"), std::string::npos) << Stderr();
+  // At the manifest's line of the stroke.
+  EXPECT_NE(Stderr().find("datasets/paper-rig/unit.yaml:12: geometry disagrees"), std::string::npos)
+      << Stderr();
   EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
                 testing::Source("datasets/fleet/PVQ13-0014") + " --json " + json),
             2);

@@ -72,6 +72,19 @@ TEST(ParamsYamlTest, ProvenanceThatIsNotAMappingIsWrittenUnderGiven) {
   }
 }
 
+// pipeline.model is the one choice with a default (the format's:
+// conductance_lag).
+TEST(ParamsYamlTest, APipelineModelLeftOutIsTheConductanceLag) {
+  std::string text = ReadText(kConfigs + "paper.yaml");
+  const std::string model = "  model: conductance_lag\n";
+  ASSERT_NE(text.find(model), std::string::npos);
+  text.erase(text.find(model), model.size());
+  Parameters p = LoadParams(kConfigs + "paper.yaml");
+  p.pipeline.model = PipelineModel::kFlowLag;
+  p = ParamsFromYaml(text, "no-model.yaml");
+  EXPECT_EQ(p.pipeline.model, PipelineModel::kConductanceLag);
+}
+
 struct BadCase {
   const char* name;
   const char* find;     // text in paper.yaml to replace
@@ -107,6 +120,23 @@ INSTANTIATE_TEST_SUITE_P(
                 "cylinder.strok"},
         BadCase{"missing_key", "  load_mass: 0.15\n", "", 9,
                 "missing required key 'cylinder.load_mass'"},
+        // The model's choices are required too (a missing orientation was
+        // taken as vertical: a horizontal unit simulated with gravity).
+        BadCase{"missing_orientation", "  orientation: vertical\n", "", 9,
+                "missing required key 'cylinder.orientation' (vertical | horizontal)"},
+        BadCase{"missing_branch", "  branch: increasing\n", "", 17,
+                "missing required key 'valve.branch'"},
+        BadCase{"missing_friction_model", "  model: stribeck\n", "", 28,
+                "missing required key 'friction.model' (stribeck)"},
+        BadCase{"negative_length_by_length", "  delta_by_length: []",
+                "  delta_by_length:\n    - {tube_length: 0.09, delta: 8.1}\n    - {tube_length: "
+                "-0.09, delta: 8.1}",
+                28, "pipeline.delta_by_length[1]"},
+        // A missing subsection is named at its section's line, not the file's first.
+        BadCase{"missing_subsection",
+                "  decreasing: {a: 9.86, b: -19.30, c: 10.95, d: -0.21, q_max: 9.15e-5, u_sat: "
+                "0.75}\n",
+                "", 17, "missing required key 'valve.decreasing.a'"},
         BadCase{"negative_volume", "dead_volume_1: 1.01e-7", "dead_volume_1: -1.01e-7", 12,
                 "cylinder.dead_volume_1"},
         BadCase{"u_sat_above_one", "q_max: 9.25e-5, u_sat: 0.75", "q_max: 9.25e-5, u_sat: 1.5", 19,

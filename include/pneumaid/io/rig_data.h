@@ -67,6 +67,7 @@ struct Manifest {
   std::map<std::string, SensorInfo> sensors;
   std::vector<ExperimentEntry> experiments;
   std::vector<std::string> defaults_used;  // rig keys that took their default
+  std::map<std::string, int> lines;        // rig keys written -> their line in unit.yaml
 
   // What the sensors block declares for a column's instrument, or `fallback`.
   double DeclaredSigma(const std::string& column, double fallback) const;
