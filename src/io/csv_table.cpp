@@ -1,5 +1,6 @@
 #include "pneumaid/io/csv_table.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <set>
@@ -57,6 +58,7 @@ class CsvParser {
 
   CsvTable Parse(std::string_view text) {
     if (text.empty()) Fail(0, 0, "empty file: expected a header line and data rows");
+    CheckEncoding(text);
     LineCursor cursor(text);
     std::string_view line;
     bool last_line_is_row = false;
@@ -78,6 +80,23 @@ class CsvParser {
   }
 
  private:
+  // What the dialect is not, said as such: UTF-16 (a spreadsheet's "Unicode
+  // text") and old Mac line ends (CR alone) otherwise fail later, in their
+  // first cell or as "no header line".
+  void CheckEncoding(std::string_view text) const {
+    if (text.substr(0, 2) == "\xFF\xFE" || text.substr(0, 2) == "\xFE\xFF") {
+      Fail(1, 0, "a UTF-16 byte-order mark: expected UTF-8 text (save the log as UTF-8 CSV)");
+    }
+    const std::size_t nul = text.find('\0');
+    if (nul != std::string_view::npos) {
+      const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + nul, '\n'));
+      Fail(line, 0, "a NUL byte: expected UTF-8 text (is the log UTF-16?)");
+    }
+    if (text.find('\n') == std::string_view::npos && text.find('\r') != std::string_view::npos) {
+      Fail(1, 0, "lines end in CR alone: expected LF or CRLF line ends");
+    }
+  }
+
   [[noreturn]] void Fail(int line, int column, const std::string& message) const {
     throw InputError(table_.file, line, column, message);
   }

@@ -4,6 +4,7 @@
 // leading '+' is accepted, as in strtod.
 #pragma once
 
+#include <algorithm>
 #include <charconv>
 #include <system_error>
 
@@ -17,6 +18,16 @@ inline const char* ParseNumber(const char* begin, const char* end, double* value
     if (begin != end && (*begin == '+' || *begin == '-')) return nullptr;
   }
   const auto [stop, status] = std::from_chars(begin, end, *value);
+  if (status == std::errc::result_out_of_range) {
+    // A finite number below the smallest double ("1e-400") is read as zero,
+    // as strtod reads it; one above the largest is no finite number.
+    const char* exponent = std::find_if(begin, stop, [](char c) { return c == 'e' || c == 'E'; });
+    if (exponent + 1 < stop && exponent[1] == '-') {
+      *value = *begin == '-' ? -0.0 : 0.0;
+      return stop;
+    }
+    return nullptr;
+  }
   return status == std::errc() ? stop : nullptr;
 }
 

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "pneumaid/io/input_error.h"
 
 namespace pneumaid {
@@ -32,6 +34,27 @@ TEST(CsvTableTest, SaysWhenTheLastRowHasNoLineEnd) {
   EXPECT_FALSE(ParseCsv("t,u\n0,1\n1,2.65\n# end", "comment.csv").unterminated_last_row);
   // A single-column log has no separator to look for.
   EXPECT_EQ(ParseCsv("t\n0\n1\n", "one.csv").rows(), 2u);
+}
+
+// A finite number below the smallest double reads as zero (strtod's
+// reading); one above the largest is no finite number (CsvBadInputTest).
+TEST(CsvTableTest, ANumberBelowTheSmallestDoubleIsZero) {
+  const CsvTable table = ParseCsv("t,q\n0,1e-400\n1,-2.5E-999\n", "tiny.csv");
+  EXPECT_EQ(table.Find("q")->values[0], 0.0);
+  EXPECT_EQ(table.Find("q")->values[1], 0.0);
+  EXPECT_TRUE(std::signbit(table.Find("q")->values[1]));
+}
+
+// A NUL byte (UTF-16 text without its mark) is named at its line.
+TEST(CsvTableTest, ANulByteIsNotUtf8Text) {
+  try {
+    ParseCsv(std::string("t,u\n0,1\n1,\0\n", 11), "nul.csv");
+    FAIL() << "accepted a NUL byte";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.line(), 3) << error.what();
+    EXPECT_NE(std::string(error.what()).find("a NUL byte: expected UTF-8 text"), std::string::npos)
+        << error.what();
+  }
 }
 
 struct BadCsv {
@@ -72,7 +95,10 @@ INSTANTIATE_TEST_SUITE_P(
                       // A spreadsheet's export in a comma-decimal locale.
                       BadCsv{"semicolons", "t [s];u [V]\n0;0,5\n", 1, 0,
                              "header separated by ';': expected comma-separated cells"},
-                      BadCsv{"tabs", "t\tu\n0\t1\n", 1, 0, "header separated by tabs"}),
+                      BadCsv{"tabs", "t\tu\n0\t1\n", 1, 0, "header separated by tabs"},
+                      BadCsv{"overflow", "t,u\n0,1e400\n", 2, 2, "expected a finite number"},
+                      BadCsv{"utf16_bom", "\xFF\xFEt\0,\0u\0", 1, 0, "UTF-16 byte-order mark"},
+                      BadCsv{"cr_only", "t,u\r0,1\r1,2\r", 1, 0, "CR alone"}),
     [](const ::testing::TestParamInfo<BadCsv>& info) { return std::string(info.param.name); });
 
 }  // namespace
