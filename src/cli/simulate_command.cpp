@@ -91,6 +91,17 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
     columns["x"] = ColumnInSI(table, "x", Quantity::kLength, p_atm, false);
     columns["p1"] = ColumnInSI(table, "p1", Quantity::kPressure, p_atm, false);
     columns["p2"] = ColumnInSI(table, "p2", Quantity::kPressure, p_atm, false);
+    // The format's check of a wrong origin: with no manifest to say it, x is
+    // from mid-stroke, and the set's stroke is the stroke.
+    const double half_m = 0.5 * params.cylinder.stroke_m;
+    for (std::size_t i = 0; i < columns["x"].size(); ++i) {
+      if (std::fabs(columns["x"][i]) > half_m + 1e-3) {
+        throw InputError(path, table.row_lines[i], table.Find("x")->column,
+                         "column 'x': position " + std::to_string(columns["x"][i] * 1e3) +
+                             " mm is more than 1 mm outside the stroke; a log outside a unit "
+                             "directory is read with x from mid-stroke (as pneumaid writes logs)");
+      }
+    }
     for (std::size_t i = 1; i < columns["t"].size(); ++i) {
       if (!(columns["t"][i] > columns["t"][i - 1])) {
         throw InputError(path, table.row_lines[i], 1,

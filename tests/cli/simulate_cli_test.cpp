@@ -57,6 +57,10 @@ TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
   text.replace(text.find("effects: {}"), 11, "effects: {heat_transfer: {h: -0.1}}");
   const std::string negative = Write("heat.yaml", text);
   const std::string ragged = Write("ragged.csv", "t [s],u [V]\n0,0\n0.1\n");
+  // x from the retracted stop in a log outside a unit directory (read from
+  // mid-stroke): the format's check of a wrong origin.
+  const std::string retracted = Write(
+      "retracted.csv", "t [s],u [V],x [mm],p1 [Pa],p2 [Pa]\n0,0,0,1e5,5e5\n0.1,1,51,5e5,1e5\n");
   struct Case {
     std::string arguments;
     std::string message;
@@ -67,6 +71,8 @@ TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
       {"--params " + kPaper + " --step 2@0 --until 1", "expected U@T0"},
       {"--params " + kPaper + " --step 1@0", "--until"},
       {"--params " + kPaper + " --input " + ragged, "ragged.csv:3: ragged row"},
+      {"--params " + kPaper + " --input " + retracted,
+       "retracted.csv:3:3: column 'x': position 51.000000 mm is more than 1 mm outside the stroke"},
       {"--params " + kPaper + " --input " + (dir_ / "missing.csv").string(), "cannot open"},
       {"--params " + (dir_ / "none.yaml").string() + " --step 1@0 --until 1", "cannot open"},
       {"--params " + kPaper + " --step 1@0.1 --until 1e6 --rate 1e6",
