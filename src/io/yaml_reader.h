@@ -25,13 +25,19 @@ class YamlReader {
 
   // Parses `text`; a document that is not a mapping fails with `expected`.
   YAML::Node LoadMapping(const std::string& text, const std::string& expected) const {
-    YAML::Node root;
+    std::vector<YAML::Node> documents;
     try {
-      root = YAML::Load(text);
+      documents = YAML::LoadAll(text);
     } catch (const YAML::Exception& error) {
       throw InputError(source_, error.mark.line + 1, error.mark.column + 1,
                        "YAML syntax error: " + error.msg);
     }
+    // A second document (two files run together after '---') would be
+    // dropped unread.
+    if (documents.size() > 1) {
+      Fail(documents[1], "a second YAML document: expected one (two files joined?)");
+    }
+    const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
     if (!root.IsMap()) Fail(root, expected);
     NoDuplicateKeys(root);
     return root;

@@ -85,6 +85,12 @@ TEST(ParamsYamlTest, APipelineModelLeftOutIsTheConductanceLag) {
   EXPECT_EQ(p.pipeline.model, PipelineModel::kConductanceLag);
 }
 
+// A document may open with '---' (one document).
+TEST(ParamsYamlTest, ADocumentMayOpenWithItsMarker) {
+  const std::string text = ReadText(kConfigs + "paper.yaml");
+  EXPECT_EQ(ParamsFromYaml("---\n" + text, "marked.yaml").unit, "paper");
+}
+
 struct BadCase {
   const char* name;
   const char* find;     // text in paper.yaml to replace
@@ -132,6 +138,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "  delta_by_length:\n    - {tube_length: 0.09, delta: 8.1}\n    - {tube_length: "
                 "-0.09, delta: 8.1}",
                 28, "pipeline.delta_by_length[1]"},
+        // Two files run together: the second would be dropped unread.
+        BadCase{"second_document", "provenance: {source:",
+                "---\nunit: other\n---\nprovenance: {source:", 34, "a second YAML document"},
         // A missing subsection is named at its section's line, not the file's first.
         BadCase{"missing_subsection",
                 "  decreasing: {a: 9.86, b: -19.30, c: 10.95, d: -0.21, q_max: 9.15e-5, u_sat: "
