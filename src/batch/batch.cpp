@@ -298,6 +298,7 @@ std::string BatchSummary::BriefReport() const {
         << (u.status == UnitOutcome::Status::kFailed ? u.reason : u.verdict) << ", " << seconds
         << ")\n";
   }
+  for (const std::string& path : not_units) out << "  skipped " << path << ": no unit.yaml\n";
   return out.str();
 }
 
@@ -307,7 +308,8 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
   if (!options.IsValid(&error)) throw InputError("batch options", 0, 0, error);
   // A unit is keyed by its directory's name: a corrupt manifest has no id
   // to trust.
-  const std::vector<std::string> fleet = FleetUnits(fleet_dir);
+  std::vector<std::string> not_units;
+  const std::vector<std::string> fleet = FleetUnits(fleet_dir, &not_units);
   if (fleet.empty()) {
     throw InputError(fleet_dir, 0, 0,
                      "no unit directories (subdirectories holding a unit.yaml) in the fleet");
@@ -336,6 +338,7 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
   if (created) throw InputError(results_dir, 0, 0, "cannot create: " + created.message());
   const std::string fingerprint = OptionsFingerprint(options);
   BatchSummary summary;
+  summary.not_units = not_units;
   summary.units.resize(units.size());
   // One stop flag per unit (a late store by the monitor can only hit the unit
   // it was meant for), one deadline and current unit per worker.

@@ -604,17 +604,19 @@ std::optional<Experiment> ReadLogOfUnit(const std::string& csv_path) {
   return std::nullopt;
 }
 
-std::vector<std::string> FleetUnits(const std::string& fleet_directory) {
-  std::vector<std::string> units;
+std::vector<std::string> FleetUnits(const std::string& fleet_directory,
+                                    std::vector<std::string>* not_units) {
+  std::vector<std::string> units, others;
   if (!fs::is_directory(fleet_directory)) {
     throw InputError(fleet_directory, 0, 0, "not a fleet directory");
   }
   for (const auto& entry : fs::directory_iterator(fleet_directory)) {
-    if (entry.is_directory() && fs::exists(entry.path() / "unit.yaml")) {
-      units.push_back(entry.path().string());
-    }
+    if (!entry.is_directory()) continue;
+    (fs::exists(entry.path() / "unit.yaml") ? units : others).push_back(entry.path().string());
   }
   std::sort(units.begin(), units.end());
+  std::sort(others.begin(), others.end());
+  if (not_units != nullptr) *not_units = others;
   return units;
 }
 

@@ -80,6 +80,25 @@ TEST(BatchTest, AFleetGetsItsSetsItsFailureAndItsOutlier) {
             std::string::npos);
 }
 
+// A subdirectory without a unit.yaml (here a misnamed manifest) is not a
+// unit: not run, and said so in the summary rather than dropped unsaid.
+TEST(BatchTest, ASubdirectoryThatIsNoUnitIsSaidToBeSkipped) {
+  const fs::path fleet = Fresh("not_units");
+  fs::create_directories(fleet);
+  fs::copy(kFleet + "/PVQ13-0001", fleet / "PVQ13-0001");
+  fs::copy(kFleet + "/PVQ13-0002", fleet / "PVQ13-0002");
+  fs::rename(fleet / "PVQ13-0002" / "unit.yaml", fleet / "PVQ13-0002" / "Unit.yml");
+  BatchOptions options = Options(1);
+  const BatchSummary summary = RunBatch(fleet.string(), (fleet / "results").string(), options);
+  ASSERT_EQ(summary.units.size(), 1u);
+  EXPECT_EQ(summary.units[0].unit, "PVQ13-0001");
+  EXPECT_EQ(summary.not_units, std::vector<std::string>{(fleet / "PVQ13-0002").string()});
+  EXPECT_NE(
+      summary.BriefReport().find("skipped " + (fleet / "PVQ13-0002").string() + ": no unit.yaml"),
+      std::string::npos)
+      << summary.BriefReport();
+}
+
 TEST(BatchTest, ShardsAreDisjointAndCoverTheFleet) {
   std::vector<std::string> units;
   for (const auto& entry : fs::directory_iterator(kFleet)) {

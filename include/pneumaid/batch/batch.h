@@ -75,6 +75,9 @@ struct UnitOutcome {
 
 struct BatchSummary {
   std::vector<UnitOutcome> units;  // of this shard, by name
+  // Subdirectories of the fleet without a unit.yaml, not run (a misnamed
+  // manifest must not make a unit vanish unsaid).
+  std::vector<std::string> not_units;
   int failed() const;
   std::string BriefReport() const;
 };

@@ -133,7 +133,9 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
 std::optional<Experiment> ReadLogOfUnit(const std::string& csv_path);
 
 // The unit directories of a fleet directory (its immediate subdirectories that
-// hold a unit.yaml), sorted by name.
-std::vector<std::string> FleetUnits(const std::string& fleet_directory);
+// hold a unit.yaml), sorted by name; `not_units` (may be null) gets the
+// other subdirectories, sorted, for a caller to say that it skipped them.
+std::vector<std::string> FleetUnits(const std::string& fleet_directory,
+                                    std::vector<std::string>* not_units = nullptr);
 
 }  // namespace pneumaid
