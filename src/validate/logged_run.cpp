@@ -155,6 +155,23 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
   return initial;
 }
 
+std::optional<Unit> OnTheSetsStroke(const Unit& unit, const Parameters& params) {
+  const double manifest_m = unit.manifest.rig.stroke_m;
+  const double set_m = params.cylinder.stroke_m;
+  if (unit.manifest.rig.position_origin != PositionOrigin::kRetracted || manifest_m == set_m) {
+    return std::nullopt;
+  }
+  Unit moved = unit;
+  moved.manifest.rig.stroke_m = set_m;
+  const double shift_m = 0.5 * (manifest_m - set_m);  // logged - L/2, with the set's L
+  for (Experiment& e : moved.experiments) {
+    const auto x = e.columns.find("x");
+    if (x == e.columns.end()) continue;
+    for (double& value : x->second) value += shift_m;
+  }
+  return moved;
+}
+
 Parameters WithRigConditions(const Parameters& params, const Unit& unit) {
   const Manifest& m = unit.manifest;
   const RigConstants& rig = m.rig;

@@ -142,11 +142,13 @@ std::string ValidationReport::BriefReport() const {
   return out.str();
 }
 
-ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
+ValidationReport ValidateUnit(const Parameters& params, const Unit& given_unit,
                               const ValidationOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("validation options", 0, 0, error);
-  const Parameters conditioned = WithRigConditions(params, unit);
+  const Parameters conditioned = WithRigConditions(params, given_unit);
+  const std::optional<Unit> moved = OnTheSetsStroke(given_unit, params);
+  const Unit& unit = moved ? *moved : given_unit;
   ValidationReport report;
   report.unit = unit.manifest.unit;
   const PositionZero zero = ReadPositionZero(unit);  // once for every run

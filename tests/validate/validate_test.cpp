@@ -72,6 +72,39 @@ TEST(ValidateTest, ConditionsComeFromTheManifestAndGeometryMustAgree) {
   EXPECT_NO_THROW(WithRigConditions(params, unit));
 }
 
+// A log written from the retracted stop, under a manifest whose stroke the
+// set's differs from (within the 1 % allowed): its x is placed from the
+// set's retracted stop. Where the rod rests at both stops, the position zero
+// read off them made up for it already (the comparison is the same with and
+// without); where it rests at one, the zero cannot, and x was half the
+// difference off.
+TEST(ValidateTest, ALogFromTheRetractedStopIsComparedOnTheSetsStroke) {
+  const Unit unit = ReadUnit(kUnit);
+  ASSERT_EQ(unit.manifest.rig.position_origin, PositionOrigin::kRetracted);
+  const Parameters truth = LoadParams(kUnit + "/truth.yaml");
+  const double rmse = ValidateUnit(truth, unit, {}).experiments[0].channels.at("x").rmse;
+  EXPECT_FALSE(OnTheSetsStroke(unit, truth).has_value());  // the strokes agree
+  Unit longer = unit;  // as read with the manifest's stroke 0.45 mm longer
+  longer.manifest.rig.stroke_m = truth.cylinder.stroke_m + 0.45e-3;
+  for (Experiment& e : longer.experiments) {
+    for (auto& [name, values] : e.columns) {
+      if (name != "x") continue;
+      for (double& x : values) x -= 0.225e-3;
+    }
+  }
+  EXPECT_NEAR(ReadPositionZero(longer).offset_m, -0.225e-3, 1e-6);  // the rests show it
+  const std::optional<Unit> moved = OnTheSetsStroke(longer, truth);
+  ASSERT_TRUE(moved.has_value());
+  EXPECT_EQ(moved->manifest.rig.stroke_m, truth.cylinder.stroke_m);
+  const PositionZero zero = ReadPositionZero(*moved);  // the rests are on the set's stops
+  EXPECT_EQ(zero.offset_m, 0.0) << zero.note;
+  EXPECT_NEAR(zero.from_stop_m[0], 0.0, 20e-6) << zero.note;
+  EXPECT_NEAR(zero.from_stop_m[1], 0.0, 20e-6) << zero.note;
+  const double compared = ValidateUnit(truth, longer, {}).experiments[0].channels.at("x").rmse;
+  EXPECT_NEAR(compared, rmse, 1e-6) << rmse;
+  EXPECT_LT(rmse, 0.05e-3);
+}
+
 TEST(ValidateTest, UnknownExperimentAndReportFormats) {
   const Unit unit = ReadUnit(kUnit);
   ValidationOptions options;
