@@ -310,9 +310,19 @@ BatchSummary RunBatch(const std::string& fleet_dir, const std::string& results_d
   // to trust.
   std::vector<std::string> not_units;
   const std::vector<std::string> fleet = FleetUnits(fleet_dir, &not_units);
+  not_units.erase(std::remove_if(not_units.begin(), not_units.end(),
+                                 [&](const std::string& path) {
+                                   std::error_code ignored;  // results kept in the fleet
+                                   return fs::equivalent(path, results_dir, ignored);
+                                 }),
+                  not_units.end());
   if (fleet.empty()) {
-    throw InputError(fleet_dir, 0, 0,
-                     "no unit directories (subdirectories holding a unit.yaml) in the fleet");
+    std::string others;
+    for (const std::string& path : not_units)
+      others += (others.empty() ? "; without one: " : ", ") + fs::path(path).filename().string();
+    throw InputError(
+        fleet_dir, 0, 0,
+        "no unit directories (subdirectories holding a unit.yaml) in the fleet" + others);
   }
   std::vector<std::string> units;
   for (const std::string& path : fleet) {

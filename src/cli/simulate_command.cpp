@@ -9,6 +9,7 @@
 #include "pneumaid/eval/stroke_summary.h"
 #include "pneumaid/io/csv_table.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/json.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/io/trajectory_csv.h"
@@ -97,7 +98,7 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
     for (std::size_t i = 0; i < columns["x"].size(); ++i) {
       if (std::fabs(columns["x"][i]) > half_m + 1e-3) {
         throw InputError(path, table.row_lines[i], table.Find("x")->column,
-                         "column 'x': position " + std::to_string(columns["x"][i] * 1e3) +
+                         "column 'x': position " + FormatSignificant(columns["x"][i] * 1e3, 6) +
                              " mm is more than 1 mm outside the stroke; a log outside a unit "
                              "directory is read with x from mid-stroke (as pneumaid writes logs)");
       }

@@ -69,8 +69,9 @@ std::string DiagnoseResult::MarkdownReport() const {
     out << "\nWorst windows (RMSE relative to the channel's whole-run RMSE):\n\n";
     for (const ResidualWindow& w : it.where.worst) {
       out << "- " << w.run << " " << w.channel << " "
-          << (w.to_s > w.from_s ? Format("%.2f-%.2f s", w.from_s, w.to_s)
-                                : Format("at %.2f s", w.from_s))  // a run of one sample
+          << (Format("%.2f", w.from_s) != Format("%.2f", w.to_s)
+                  ? Format("%.2f-%.2f s", w.from_s, w.to_s)
+                  : Format("at %.2f s", w.from_s))  // one sample, or two 1 ms apart
           << Format(": RMSE %.4g", Display(w.channel, w.rmse)) << " " << DisplayUnit(w.channel)
           << Format(", mean %+.4g", Display(w.channel, w.mean)) << "\n";
     }

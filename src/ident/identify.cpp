@@ -82,7 +82,12 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
   // Absolute: a set outlives the shell it was identified in ("." names
   // nothing once it is handed on).
   root["unit"] = unit.manifest.unit;
-  root["unit_directory"] = std::filesystem::absolute(unit.directory).lexically_normal().string();
+  std::error_code no_working_directory;  // then the directory as given
+  const std::filesystem::path directory =
+      std::filesystem::absolute(unit.directory, no_working_directory);
+  root["unit_directory"] =
+      (no_working_directory ? std::filesystem::path(unit.directory) : directory.lexically_normal())
+          .string();
   if (!unit.manifest.defaults_used.empty()) {
     YAML::Node defaults(YAML::NodeType::Sequence);  // the rig constants the manifest left out
     for (const std::string& path : unit.manifest.defaults_used) defaults.push_back(path);

@@ -92,7 +92,10 @@ class CsvParser {
       const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + nul, '\n'));
       Fail(line, 0, "a NUL byte: expected UTF-8 text (is the log UTF-16?)");
     }
-    if (text.find('\n') == std::string_view::npos && text.find('\r') != std::string_view::npos) {
+    const std::size_t first_break = text.find_first_of("\r\n");
+    if (first_break != std::string_view::npos && text[first_break] == '\r' &&
+        (first_break + 1 == text.size() || text[first_break + 1] != '\n') &&
+        text.find('\r', first_break + 1) != std::string_view::npos) {
       Fail(1, 0, "lines end in CR alone: expected LF or CRLF line ends");
     }
   }

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -54,7 +55,11 @@ std::string FileNameOfId(const std::string& id) {
   std::string name;
   for (size_t i = 0; i < id.size(); ++i) {
     const unsigned char c = static_cast<unsigned char>(id[i]);
-    if (std::isalnum(c) || c == '_' || c == '-' || (c == '.' && i > 0)) {
+    // ASCII by its ranges (isalnum follows the host's locale); bytes of
+    // UTF-8 characters as they are (none is '/' or '.').
+    const bool ascii_kept = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                            (c >= '0' && c <= '9') || c == '_' || c == '-' || (c == '.' && i > 0);
+    if (ascii_kept || c >= 0x80) {
       name += static_cast<char>(c);
     } else {
       char escaped[4];
@@ -68,14 +73,17 @@ std::string FileNameOfId(const std::string& id) {
 void ReplaceDirectoryAtomically(const std::string& directory,
                                 const std::map<std::string, std::string>& files) {
   namespace fs = std::filesystem;
+  std::set<fs::path> names;
   for (const auto& [name, contents] : files) {
-    const fs::path relative(name);
-    const bool inside = !relative.empty() && relative.is_relative() &&
+    const fs::path relative = fs::path(name).lexically_normal();
+    const bool inside = relative.is_relative() && relative.has_filename() &&
+                        relative.filename() != "." &&
                         std::none_of(relative.begin(), relative.end(),
-                                     [](const fs::path& part) { return part == ".."; });
+                                     [](const fs::path& part) { return part == ".."; }) &&
+                        names.insert(relative).second;  // "a" and "./a" are one file
     if (!inside) {
-      throw std::logic_error("ReplaceDirectoryAtomically: '" + name + "' is not a path inside " +
-                             directory);
+      throw std::logic_error("ReplaceDirectoryAtomically: '" + name +
+                             "' is not a path of its own inside " + directory);
     }
   }
   const fs::path target(directory);

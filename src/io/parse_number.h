@@ -10,6 +10,38 @@
 
 namespace pneumaid::internal {
 
+// The decimal exponent of the first significant digit of the number in
+// [begin, stop) as std::from_chars reads it ("1e-400": -400; "0.05": -2;
+// "120": 2); 0 for a number without one (zero).
+inline long DecimalExponent(const char* begin, const char* stop) {
+  const char* p = begin;
+  if (p != stop && *p == '-') ++p;
+  bool significant = false;  // a nonzero digit seen
+  bool after_point = false;
+  long position = 0;  // of the first significant digit: 0 is the units
+  for (; p != stop && *p != 'e' && *p != 'E'; ++p) {
+    if (*p == '.') {
+      after_point = true;
+    } else if (after_point) {
+      if (!significant) --position;
+      significant = significant || *p != '0';
+    } else if (significant || *p != '0') {
+      if (significant) ++position;
+      significant = true;
+    }
+  }
+  if (!significant) return 0;
+  long exponent = 0;
+  if (p != stop) {
+    ++p;  // 'e'
+    const bool negative = p != stop && *p == '-';
+    if (p != stop && (*p == '-' || *p == '+')) ++p;
+    for (; p != stop; ++p) exponent = std::min(exponent * 10 + (*p - '0'), 100000000L);
+    if (negative) exponent = -exponent;
+  }
+  return position + exponent;
+}
+
 // Parses a number at the start of [begin, end) into *value; returns where the
 // number ends, or nullptr when there is none.
 inline const char* ParseNumber(const char* begin, const char* end, double* value) {
@@ -20,13 +52,9 @@ inline const char* ParseNumber(const char* begin, const char* end, double* value
   const auto [stop, status] = std::from_chars(begin, end, *value);
   if (status == std::errc::result_out_of_range) {
     // A finite number below the smallest double ("1e-400") is read as zero,
-    // as strtod reads it; one above the largest is no finite number.
-    const char* exponent = std::find_if(begin, stop, [](char c) { return c == 'e' || c == 'E'; });
-    if (exponent + 1 < stop && exponent[1] == '-') {
-      *value = *begin == '-' ? -0.0 : 0.0;
-      return stop;
-    }
-    return nullptr;
+    // as strtod reads it; one above the largest is no finite number. Which
+    // it is: the decimal exponent of its first significant digit.
+    return DecimalExponent(begin, stop) < 0 ? (*value = *begin == '-' ? -0.0 : 0.0, stop) : nullptr;
   }
   return status == std::errc() ? stop : nullptr;
 }

@@ -1,8 +1,11 @@
 #include "pneumaid/io/provenance.h"
 
+#include <cmath>
 #include <regex>
+#include <set>
 #include <stdexcept>
 
+#include "parse_number.h"
 #include "pneumaid/io/json.h"
 #include "provenance_map.h"
 
@@ -61,17 +64,27 @@ YAML::Node Field(const std::string& provenance, const std::string& key, const st
   return entry[field];
 }
 
+// Keys whose values are text whatever they look like: yaml-cpp writes a
+// string unquoted, so a unit "12345" or a file "007" would read as numbers
+// (and `held` maps paths to reasons).
+bool IsTextKey(const std::string& key) {
+  static const std::set<std::string> kText = {"unit",   "unit_directory", "tool",   "date",
+                                              "file",   "sha256",         "status", "given",
+                                              "source", "held",           "verdict"};
+  return kText.count(key) > 0;
+}
+
 // A node as JSON: mappings as objects, sequences as arrays; a plain scalar
-// that YAML's core schema reads as a number, a boolean or null as that
-// (JSON's own spelling of a number only); every other scalar as a string.
-void AppendJson(const YAML::Node& node, std::string* out) {
+// in JSON's spelling of a finite number, or true, false or null, as that
+// (unless `text`); every other scalar as a string.
+void AppendJson(const YAML::Node& node, bool text, std::string* out) {
   if (node.IsMap()) {
     *out += '{';
     bool first = true;
     for (const auto& item : node) {
       *out += first ? "" : ", ";
       *out += JsonString(item.first.Scalar()) + ": ";
-      AppendJson(item.second, out);
+      AppendJson(item.second, text || IsTextKey(item.first.Scalar()), out);
       first = false;
     }
     *out += '}';
@@ -79,19 +92,23 @@ void AppendJson(const YAML::Node& node, std::string* out) {
     *out += '[';
     for (size_t i = 0; i < node.size(); ++i) {
       *out += i == 0 ? "" : ", ";
-      AppendJson(node[i], out);
+      AppendJson(node[i], text, out);
     }
     *out += ']';
   } else if (node.IsScalar()) {
-    static const std::regex number(R"(-?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][-+]?[0-9]+)?)");
-    const std::string& text = node.Scalar();
-    const bool plain = node.Tag() == "?";
-    if (plain && (text == "true" || text == "false" || text == "null")) {
-      *out += text;
-    } else if (plain && std::regex_match(text, number)) {
-      *out += text;
+    static const std::regex number(
+        R"(-?(0|[1-9][0-9]{0,300})(\.[0-9]{1,300})?([eE][-+]?[0-9]{1,4})?)");
+    const std::string& scalar = node.Scalar();
+    const bool plain = !text && node.Tag() == "?";
+    double value = 0;
+    const char* end = scalar.c_str() + scalar.size();
+    if (plain && (scalar == "true" || scalar == "false" || scalar == "null")) {
+      *out += scalar;
+    } else if (plain && std::regex_match(scalar, number) &&
+               internal::ParseNumber(scalar.c_str(), end, &value) == end && std::isfinite(value)) {
+      *out += scalar;
     } else {
-      *out += JsonString(text);
+      *out += JsonString(scalar);
     }
   } else {
     *out += "null";
@@ -102,7 +119,7 @@ void AppendJson(const YAML::Node& node, std::string* out) {
 
 std::string ProvenanceJson(const std::string& provenance) {
   std::string out;
-  AppendJson(ProvenanceMap(provenance), &out);
+  AppendJson(ProvenanceMap(provenance), false, &out);
   return out;
 }
 

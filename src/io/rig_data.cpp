@@ -611,7 +611,8 @@ std::vector<std::string> FleetUnits(const std::string& fleet_directory,
     throw InputError(fleet_directory, 0, 0, "not a fleet directory");
   }
   for (const auto& entry : fs::directory_iterator(fleet_directory)) {
-    if (!entry.is_directory()) continue;
+    // Hidden ones (.git, .snapshot) are neither units nor worth a word.
+    if (!entry.is_directory() || entry.path().filename().string().front() == '.') continue;
     (fs::exists(entry.path() / "unit.yaml") ? units : others).push_back(entry.path().string());
   }
   std::sort(units.begin(), units.end());

@@ -34,8 +34,10 @@ class YamlReader {
     }
     // A second document (two files run together after '---') would be
     // dropped unread.
-    if (documents.size() > 1) {
-      Fail(documents[1], "a second YAML document: expected one (two files joined?)");
+    for (std::size_t i = 1; i < documents.size(); ++i) {
+      if (!documents[i].IsNull()) {  // a trailing '---' opens an empty one: nothing dropped
+        Fail(documents[i], "a second YAML document: expected one (two files joined?)");
+      }
     }
     const YAML::Node root = documents.empty() ? YAML::Node() : documents.front();
     if (!root.IsMap()) Fail(root, expected);

@@ -88,6 +88,8 @@ TEST(BatchTest, ASubdirectoryThatIsNoUnitIsSaidToBeSkipped) {
   fs::copy(kFleet + "/PVQ13-0001", fleet / "PVQ13-0001");
   fs::copy(kFleet + "/PVQ13-0002", fleet / "PVQ13-0002");
   fs::rename(fleet / "PVQ13-0002" / "unit.yaml", fleet / "PVQ13-0002" / "Unit.yml");
+  fs::create_directories(fleet / ".git");     // hidden: not a word
+  fs::create_directories(fleet / "results");  // the results kept in the fleet: neither
   BatchOptions options = Options(1);
   const BatchSummary summary = RunBatch(fleet.string(), (fleet / "results").string(), options);
   ASSERT_EQ(summary.units.size(), 1u);

@@ -72,7 +72,7 @@ TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
       {"--params " + kPaper + " --step 1@0", "--until"},
       {"--params " + kPaper + " --input " + ragged, "ragged.csv:3: ragged row"},
       {"--params " + kPaper + " --input " + retracted,
-       "retracted.csv:3:3: column 'x': position 51.000000 mm is more than 1 mm outside the stroke"},
+       "retracted.csv:3:3: column 'x': position 51 mm is more than 1 mm outside the stroke"},
       {"--params " + kPaper + " --input " + (dir_ / "missing.csv").string(), "cannot open"},
       {"--params " + (dir_ / "none.yaml").string() + " --step 1@0 --until 1", "cannot open"},
       {"--params " + kPaper + " --step 1@0.1 --until 1e6 --rate 1e6",

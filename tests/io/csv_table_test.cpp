@@ -43,6 +43,11 @@ TEST(CsvTableTest, ANumberBelowTheSmallestDoubleIsZero) {
   EXPECT_EQ(table.Find("q")->values[0], 0.0);
   EXPECT_EQ(table.Find("q")->values[1], 0.0);
   EXPECT_TRUE(std::signbit(table.Find("q")->values[1]));
+  // Below it without an exponent; an exponent that a long mantissa overcomes.
+  const std::string tiny = "0." + std::string(400, '0') + "1";
+  EXPECT_EQ(ParseCsv("t,q\n0," + tiny + "\n", "tiny.csv").Find("q")->values[0], 0.0);
+  EXPECT_THROW(ParseCsv("t,q\n0,1" + std::string(400, '0') + "e-10\n", "huge.csv"), InputError);
+  EXPECT_THROW(ParseCsv("t,q\n0,1e-\n", "cut.csv"), InputError);
 }
 
 // A NUL byte (UTF-16 text without its mark) is named at its line.
@@ -98,7 +103,8 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCsv{"tabs", "t\tu\n0\t1\n", 1, 0, "header separated by tabs"},
                       BadCsv{"overflow", "t,u\n0,1e400\n", 2, 2, "expected a finite number"},
                       BadCsv{"utf16_bom", "\xFF\xFEt\0,\0u\0", 1, 0, "UTF-16 byte-order mark"},
-                      BadCsv{"cr_only", "t,u\r0,1\r1,2\r", 1, 0, "CR alone"}),
+                      BadCsv{"cr_only", "t,u\r0,1\r1,2\r", 1, 0, "CR alone"},
+                      BadCsv{"cr_then_lf", "t,u\r0,1\r1,2\n", 1, 0, "CR alone"}),
     [](const ::testing::TestParamInfo<BadCsv>& info) { return std::string(info.param.name); });
 
 }  // namespace

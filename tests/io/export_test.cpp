@@ -181,7 +181,8 @@ TEST(ExportTest, JsonCarriesTheProvenanceAsAnObject) {
   Parameters p = Identified();
   p.provenance_yaml =
       "{tool: pneumaid test, inputs: [{file: a.csv, sha256: 0e5f}], friction: {final_cost: "
-      "22547.45, iterations: 93, status: converged}, code: '007', ok: true}";
+      "22547.45, iterations: 93, status: converged}, code: '007', ok: true, unit: 12345, "
+      "plain: 007, big: 1e999}";
   const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson));
   const YAML::Node provenance = json["provenance"];
   ASSERT_TRUE(provenance.IsMap()) << Export(p, ExportFormat::kJson);
@@ -193,6 +194,11 @@ TEST(ExportTest, JsonCarriesTheProvenanceAsAnObject) {
   EXPECT_NE(text.find("\"iterations\": 93,"), std::string::npos) << text;
   EXPECT_NE(text.find("\"code\": \"007\""), std::string::npos) << text;
   EXPECT_NE(text.find("\"ok\": true"), std::string::npos) << text;
+  // Text stays text where yaml-cpp writes it unquoted (a unit id of digits);
+  // what JSON does not spell as a finite number is a string.
+  EXPECT_NE(text.find("\"unit\": \"12345\""), std::string::npos) << text;
+  EXPECT_NE(text.find("\"plain\": \"007\""), std::string::npos) << text;
+  EXPECT_NE(text.find("\"big\": \"1e999\""), std::string::npos) << text;
   p.provenance_yaml = "made by hand";
   EXPECT_NE(Export(p, ExportFormat::kJson).find("\"provenance\": {\"given\": \"made by hand\"}"),
             std::string::npos)

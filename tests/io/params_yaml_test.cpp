@@ -79,9 +79,9 @@ TEST(ParamsYamlTest, APipelineModelLeftOutIsTheConductanceLag) {
   const std::string model = "  model: conductance_lag\n";
   ASSERT_NE(text.find(model), std::string::npos);
   text.erase(text.find(model), model.size());
-  Parameters p = LoadParams(kConfigs + "paper.yaml");
-  p.pipeline.model = PipelineModel::kFlowLag;
-  p = ParamsFromYaml(text, "no-model.yaml");
+  text.replace(text.find("delta: 8.0"), 10, "delta: 7.0");  // the set read is this one
+  const Parameters p = ParamsFromYaml(text, "no-model.yaml");
+  EXPECT_EQ(p.pipeline.delta_per_s, 7.0);
   EXPECT_EQ(p.pipeline.model, PipelineModel::kConductanceLag);
 }
 
@@ -89,6 +89,7 @@ TEST(ParamsYamlTest, APipelineModelLeftOutIsTheConductanceLag) {
 TEST(ParamsYamlTest, ADocumentMayOpenWithItsMarker) {
   const std::string text = ReadText(kConfigs + "paper.yaml");
   EXPECT_EQ(ParamsFromYaml("---\n" + text, "marked.yaml").unit, "paper");
+  EXPECT_EQ(ParamsFromYaml(text + "---\n", "trailing.yaml").unit, "paper");  // nothing after it
 }
 
 struct BadCase {
