@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -99,6 +100,10 @@ class ParamsReader : internal::YamlReader {
         }
       } else if (key == "unit") {
         params->unit = ScalarText(value, key);
+        // The rig format's unit id (the set names the unit its logs name).
+        static const std::regex kUnitId("[A-Za-z0-9._-]+");
+        if (!std::regex_match(params->unit, kUnitId))
+          Fail(value, "unit: expected an id of letters, digits, '.', '_' or '-'");
       } else if (key == "effects") {
         ReadEffects(value, params);
       } else if (key == "uncertainty") {

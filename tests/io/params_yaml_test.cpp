@@ -139,6 +139,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "  delta_by_length:\n    - {tube_length: 0.09, delta: 8.1}\n    - {tube_length: "
                 "-0.09, delta: 8.1}",
                 28, "pipeline.delta_by_length[1]"},
+        BadCase{"unit_not_an_id", "unit: paper", "unit: pa per", 5,
+                "unit: expected an id of letters, digits"},
         // Two files run together: the second would be dropped unread.
         BadCase{"second_document", "provenance: {source:",
                 "---\nunit: other\n---\nprovenance: {source:", 34, "a second YAML document"},
