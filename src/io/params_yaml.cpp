@@ -7,13 +7,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
-#include <regex>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/effects.h"
 #include "pneumaid/model/parameter_table.h"
 #include "provenance_map.h"
@@ -101,8 +101,7 @@ class ParamsReader : internal::YamlReader {
       } else if (key == "unit") {
         params->unit = ScalarText(value, key);
         // The rig format's unit id (the set names the unit its logs name).
-        static const std::regex kUnitId("[A-Za-z0-9._-]+");
-        if (!std::regex_match(params->unit, kUnitId))
+        if (!IsUnitId(params->unit))
           Fail(value, "unit: expected an id of letters, digits, '.', '_' or '-'");
       } else if (key == "effects") {
         ReadEffects(value, params);

@@ -111,7 +111,7 @@ class ManifestReader : internal::YamlReader {
     }
     Manifest manifest;
     manifest.unit = Text(root["unit"], "unit");
-    if (!std::regex_match(manifest.unit, std::regex("[A-Za-z0-9._-]+"))) {
+    if (!IsUnitId(manifest.unit)) {
       Fail(root["unit"], "unit: expected an id of letters, digits, '.', '_' or '-'");
     }
     ReadRig(root["rig"], &manifest);
@@ -602,6 +602,11 @@ std::optional<Experiment> ReadLogOfUnit(const std::string& csv_path) {
     return ParseExperiment(ReadTextFile(csv_path, "CSV file"), csv_path, entry, manifest);
   }
   return std::nullopt;
+}
+
+bool IsUnitId(const std::string& id) {
+  static const std::regex kUnitId("[A-Za-z0-9._-]+");
+  return std::regex_match(id, kUnitId);
 }
 
 std::vector<std::string> FleetUnits(const std::string& fleet_directory,

@@ -102,6 +102,10 @@ struct Unit {
   std::string manifest_path() const { return directory + "/unit.yaml"; }
 };
 
+// Whether `id` is a unit id as the rig format has it ([A-Za-z0-9._-]+): a
+// manifest's `unit`, and a parameter set's.
+bool IsUnitId(const std::string& id);
+
 // The ids of a unit's simulable runs (IsSimulable), in the manifest's order.
 std::vector<std::string> SimulableRuns(const Unit& unit);
 
