@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
@@ -31,17 +33,60 @@ const std::set<std::string> kRequiredTopLevelKeys = {"format",   "unit",  "gas",
 const std::set<std::string> kSubsections = {"valve.increasing", "valve.decreasing",
                                             "friction.positive", "friction.negative"};
 
-// The model's choices a set must state (pipeline.model may be left out: the
-// format's default, conductance_lag), with what each accepts (ReadSpecial).
-struct RequiredChoice {
+// The model's choices of a set, one entry per key: what it accepts (in the
+// order messages list them) and where the choice goes. The format requires
+// each but pipeline.model (its default, conductance_lag).
+struct ChoiceKey {
   const char* path;
-  const char* accepted;
+  bool required;
+  std::vector<std::string> names;
+  // Stores the choice by its index in `names`; null for a key of one name
+  // that the model does not store (valve.model, friction.model).
+  std::function<void(Parameters*, std::size_t)> set;
+
+  std::string Accepted() const {
+    std::string text;
+    for (const auto& name : names) text += (text.empty() ? "" : " | ") + name;
+    return text;
+  }
 };
-constexpr RequiredChoice kRequiredChoices[] = {
-    {"cylinder.orientation", "vertical | horizontal"},
-    {"valve.model", "kvp_poly4"},
-    {"valve.branch", "increasing | decreasing | hysteresis"},
-    {"friction.model", "stribeck"}};
+
+// A key whose names are the enum's own (ToString), stored in `field`.
+template <typename Enum>
+ChoiceKey EnumChoice(const char* path, bool required, std::vector<Enum> values,
+                     Enum& (*field)(Parameters&)) {
+  ChoiceKey key{path, required, {}, nullptr};
+  for (const Enum value : values) key.names.emplace_back(ToString(value));
+  key.set = [values, field](Parameters* params, std::size_t index) {
+    field(*params) = values[index];
+  };
+  return key;
+}
+
+const std::vector<ChoiceKey>& ChoiceKeys() {
+  static const std::vector<ChoiceKey> keys = {
+      EnumChoice<Orientation>("cylinder.orientation", true,
+                              {Orientation::kVertical, Orientation::kHorizontal},
+                              [](Parameters& p) -> Orientation& { return p.cylinder.orientation; }),
+      ChoiceKey{"valve.model", true, {"kvp_poly4"}, nullptr},
+      EnumChoice<ValveBranchMode>("valve.branch", true,
+                                  {ValveBranchMode::kIncreasing, ValveBranchMode::kDecreasing,
+                                   ValveBranchMode::kHysteresis},
+                                  [](Parameters& p) -> ValveBranchMode& { return p.valve.branch; }),
+      EnumChoice<PipelineModel>(
+          "pipeline.model", false,
+          {PipelineModel::kConductanceLag, PipelineModel::kFlowLag, PipelineModel::kNone},
+          [](Parameters& p) -> PipelineModel& { return p.pipeline.model; }),
+      ChoiceKey{"friction.model", true, {"stribeck"}, nullptr}};
+  return keys;
+}
+
+const ChoiceKey* FindChoiceKey(const std::string& path) {
+  for (const ChoiceKey& key : ChoiceKeys()) {
+    if (path == key.path) return &key;
+  }
+  return nullptr;
+}
 
 // Reads one document, remembering where each path was written for messages.
 class ParamsReader : internal::YamlReader {
@@ -77,15 +122,14 @@ class ParamsReader : internal::YamlReader {
     return value;
   }
 
-  template <typename Enum>
-  Enum Choice(const YAML::Node& node, const std::string& path,
-              const std::map<std::string, Enum>& choices) const {
-    const std::string text = ScalarText(node, path);
-    const auto found = choices.find(text);
-    if (found != choices.end()) return found->second;
-    std::string expected;
-    for (const auto& [name, value] : choices) expected += (expected.empty() ? "" : " | ") + name;
-    Fail(node, path + ": expected " + expected + ", got '" + text + "'");
+  void ReadChoice(const YAML::Node& node, const ChoiceKey& key, Parameters* params) const {
+    const std::string text = ScalarText(node, key.path);
+    for (std::size_t i = 0; i < key.names.size(); ++i) {
+      if (text != key.names[i]) continue;
+      if (key.set) key.set(params, i);
+      return;
+    }
+    Fail(node, std::string(key.path) + ": expected " + key.Accepted() + ", got '" + text + "'");
   }
 
   void ReadTopLevel(const YAML::Node& root, Parameters* params) {
@@ -139,26 +183,8 @@ class ParamsReader : internal::YamlReader {
 
   // Non-numeric keys of the sections. False when `path` is not one.
   bool ReadSpecial(const YAML::Node& value, const std::string& path, Parameters* params) {
-    if (path == "cylinder.orientation") {
-      params->cylinder.orientation = Choice<Orientation>(
-          value, path,
-          {{"vertical", Orientation::kVertical}, {"horizontal", Orientation::kHorizontal}});
-    } else if (path == "valve.model") {
-      Choice<int>(value, path, {{"kvp_poly4", 0}});
-    } else if (path == "friction.model") {
-      Choice<int>(value, path, {{"stribeck", 0}});
-    } else if (path == "valve.branch") {
-      params->valve.branch =
-          Choice<ValveBranchMode>(value, path,
-                                  {{"increasing", ValveBranchMode::kIncreasing},
-                                   {"decreasing", ValveBranchMode::kDecreasing},
-                                   {"hysteresis", ValveBranchMode::kHysteresis}});
-    } else if (path == "pipeline.model") {
-      params->pipeline.model =
-          Choice<PipelineModel>(value, path,
-                                {{"conductance_lag", PipelineModel::kConductanceLag},
-                                 {"flow_lag", PipelineModel::kFlowLag},
-                                 {"none", PipelineModel::kNone}});
+    if (const ChoiceKey* key = FindChoiceKey(path)) {
+      ReadChoice(value, *key, params);
     } else if (path == "pipeline.delta_by_length") {
       ReadDeltaByLength(value, params);
     } else {
@@ -238,8 +264,8 @@ class ParamsReader : internal::YamlReader {
     for (const auto& info : ScalarParameterTable()) {
       missing(info.path, std::string(" [") + info.unit + "]: " + info.doc);
     }
-    for (const RequiredChoice& choice : kRequiredChoices) {
-      missing(choice.path, std::string(" (") + choice.accepted + ")");
+    for (const ChoiceKey& key : ChoiceKeys()) {
+      if (key.required) missing(key.path, " (" + key.Accepted() + ")");
     }
   }
 
@@ -324,7 +350,7 @@ std::string ParamsToYaml(const Parameters& params) {
   root["cylinder"] = Section(params, "cylinder", false);
   root["cylinder"]["orientation"] = ToString(params.cylinder.orientation);
   root["valve"] = YAML::Node(YAML::NodeType::Map);
-  root["valve"]["model"] = "kvp_poly4";
+  root["valve"]["model"] = FindChoiceKey("valve.model")->names.front();
   root["valve"]["normalization"] = Scalar(params.valve.normalization);
   root["valve"]["increasing"] = Section(params, "valve.increasing", true);
   root["valve"]["decreasing"] = Section(params, "valve.decreasing", true);
@@ -343,7 +369,7 @@ std::string ParamsToYaml(const Parameters& params) {
   }
   root["pipeline"]["delta_by_length"] = by_length;
   root["friction"] = YAML::Node(YAML::NodeType::Map);
-  root["friction"]["model"] = "stribeck";
+  root["friction"]["model"] = FindChoiceKey("friction.model")->names.front();
   root["friction"]["positive"] = Section(params, "friction.positive", true);
   root["friction"]["negative"] = Section(params, "friction.negative", true);
   YAML::Node effects = FlowMap();

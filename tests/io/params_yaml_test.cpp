@@ -158,7 +158,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "duplicate key 'delta'"},
         BadCase{"wrong_format", "pneumaid-params/1", "pneumaid-params/2", 4, "format"},
         BadCase{"bad_enum", "branch: increasing", "branch: sideways", 21,
-                "decreasing | hysteresis | increasing"},
+                "expected increasing | decreasing | hysteresis, got 'sideways'"},
         BadCase{"unknown_effect", "effects: {}", "effects: {warp: {x: 1}}", 31,
                 "unknown effect 'warp'"},
         BadCase{"effect_missing_parameter", "effects: {}", "effects: {valve_lag: {}}", 31,
