@@ -2,6 +2,7 @@
 #include <string>
 
 #include "commands.h"
+#include "pneumaid/io/log_notes.h"
 
 namespace pneumaid::cli {
 
@@ -14,6 +15,9 @@ Unit ReadUnitSayingWhatItAssumed(const std::string& directory) {
     for (const std::string& path : unit.manifest.defaults_used) std::cerr << " " << path;
     std::cerr << "\n";
   }
+  // What the logs contradict or repeat of the manifest (check lists them too).
+  for (const std::string& note : ManifestNotes(unit))
+    std::cerr << "note: " << unit.manifest_path() << ": " << note << "\n";
   for (const Experiment& e : unit.experiments) {
     if (e.ignored_columns.empty()) continue;
     std::cerr << "note: " << e.path << ": ignored columns:";

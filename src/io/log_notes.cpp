@@ -75,6 +75,17 @@ std::vector<std::string> ManifestNotes(const Unit& unit) {
                         kGaugeHint);
       }
     }
+    // A log listed twice is fitted twice, and a validation run that is also
+    // a fitted one is not held out (the format is silent on it).
+    for (const Experiment& earlier : unit.experiments) {
+      if (&earlier == &e) break;
+      if (earlier.sha256.empty() || earlier.sha256 != e.sha256) continue;
+      notes.push_back("logs '" + earlier.entry.id + "' (" + ToString(earlier.entry.kind) +
+                      ") and '" + e.entry.id + "' (" + ToString(e.entry.kind) +
+                      ") are the same bytes: a run listed twice counts twice in a fit, and a "
+                      "held-out run that is also fitted is not held out");
+      break;
+    }
     const auto& p1 = e.column("p1");
     const auto& p2 = e.column("p2");
     if (p1.empty() || p1.size() != p2.size()) continue;

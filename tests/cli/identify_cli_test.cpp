@@ -112,8 +112,9 @@ TEST_F(IdentifyCliTest, AUnitWithNothingToRefineIsRefusedBeforeTheComponentFits)
 }
 
 // The format's promise: the tool says which rig defaults it used and which
-// columns it ignores (check was the only command that did); the identified
-// set's provenance records the defaults.
+// columns it ignores (check was the only command that did), and the
+// manifest's notes (here a log listed twice); the identified set's
+// provenance records the defaults.
 TEST_F(IdentifyCliTest, SaysWhichRigDefaultsItUsedAndWhichColumnsItIgnores) {
   const std::filesystem::path unit = dir_ / "unit";
   std::filesystem::copy(testing::Source("datasets/paper-rig"), unit);
@@ -121,6 +122,13 @@ TEST_F(IdentifyCliTest, SaysWhichRigDefaultsItUsedAndWhichColumnsItIgnores) {
   const std::string density = "  air_density: 1.178\n";
   ASSERT_NE(manifest.find(density), std::string::npos);
   manifest.erase(manifest.find(density), density.size());
+  // The 9 cm tube's log listed once more, as if its test had been run again.
+  const std::string tube =
+      "  - {id: pipe-009, kind: pipeline, file: pipe-009.csv, tube_length: \"9 cm\"}\n";
+  ASSERT_NE(manifest.find(tube), std::string::npos);
+  manifest.insert(
+      manifest.find(tube) + tube.size(),
+      "  - {id: pipe-009-again, kind: pipeline, file: pipe-009.csv, tube_length: \"9 cm\"}\n");
   std::ofstream(unit / "unit.yaml", std::ios::binary) << manifest;
   std::string log = Read(unit / "pipe-009.csv");
   std::string with_column;
@@ -137,6 +145,10 @@ TEST_F(IdentifyCliTest, SaysWhichRigDefaultsItUsedAndWhichColumnsItIgnores) {
             std::string::npos)
       << Stderr();
   EXPECT_NE(Stderr().find((unit / "pipe-009.csv").string() + ": ignored columns: temp"),
+            std::string::npos)
+      << Stderr();
+  EXPECT_NE(Stderr().find("logs 'pipe-009' (pipeline) and 'pipe-009-again' (pipeline) are the "
+                          "same bytes"),
             std::string::npos)
       << Stderr();
   EXPECT_NE(Read(out).find("rig_defaults_used: [rig.air_density]"), std::string::npos) << Read(out);

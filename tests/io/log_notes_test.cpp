@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace pneumaid {
@@ -85,6 +86,28 @@ TEST(LogNotesTest, NamesASupplyPressureTheLogsContradict) {
                        "the log, 25 % above"),
             std::string::npos)
       << notes;
+}
+
+// The same log listed under two ids (a stroke test listed again as a
+// validation run: its held-out figures would be the fit's own): named once,
+// with both ids and kinds. Logs of other bytes say nothing.
+TEST(LogNotesTest, NamesALogListedTwice) {
+  Unit unit;
+  unit.manifest.rig.supply_pressure_Pa = 5e5;
+  for (const auto& [id, kind, hash] :
+       {std::make_tuple("stroke-1", ExperimentKind::kStroke, "aa"),
+        std::make_tuple("stroke-2", ExperimentKind::kStroke, "bb"),
+        std::make_tuple("step", ExperimentKind::kValidation, "aa")}) {
+    unit.experiments.push_back(Log(id, kind, Clock(100, 1e-3)));
+    unit.experiments.back().sha256 = hash;
+  }
+  const std::string notes = Joined(ManifestNotes(unit));
+  EXPECT_NE(notes.find("logs 'stroke-1' (stroke) and 'step' (validation) are the same bytes"),
+            std::string::npos)
+      << notes;
+  EXPECT_EQ(notes.find("stroke-2"), std::string::npos) << notes;
+  unit.experiments.back().sha256 = "cc";
+  EXPECT_TRUE(ManifestNotes(unit).empty()) << Joined(ManifestNotes(unit));
 }
 
 }  // namespace

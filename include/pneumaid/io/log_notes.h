@@ -30,7 +30,8 @@ std::vector<std::string> LogNotes(const Experiment& experiment);
 
 // The notes on a unit's manifest against its logs: a supply_pressure that the
 // valve logs' p_up or the chamber pressures contradict (a gauge unit where
-// the rig's supply is absolute, or the other way).
+// the rig's supply is absolute, or the other way); two experiments whose logs
+// are the same bytes.
 std::vector<std::string> ManifestNotes(const Unit& unit);
 
 }  // namespace pneumaid
