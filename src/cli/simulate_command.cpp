@@ -124,6 +124,11 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
     logged.p1_Pa = columns["p1"];
     logged.p2_Pa = columns["p2"];
     run.initial = LoggedInitialState(logged, 0.5 * params.cylinder.stroke_m);
+    // As validation takes a log's command (one that starts at its step too).
+    RigConstants rig;
+    rig.supply_pressure_Pa = params.supply.supply_pressure_Pa;
+    rig.atmospheric_pressure_Pa = params.supply.atmospheric_pressure_Pa;
+    run.command = LoggedCommand(logged, rig);
   }
   return run;
 }

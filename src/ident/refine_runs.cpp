@@ -91,7 +91,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
   FitExperiment out;
   out.id = e.entry.id;
   out.measured = LoggedTrajectory(e, zero);
-  out.command = SampledCommand(out.measured.t_s, out.measured.u_V);
+  out.command = LoggedCommand(out.measured, unit.manifest.rig);
   int averaged = 1;
   out.initial = LoggedInitialState(out.measured, half_stroke_m, &averaged);
   const double root_n = std::sqrt(static_cast<double>(averaged));
@@ -119,21 +119,29 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
 // A window is at least this long.
 constexpr std::size_t kMinWindowSamples = 20;
 
-// Samples [begin, end) of a run as a trajectory.
-Trajectory Slice(const Trajectory& run, std::size_t begin, std::size_t end) {
-  Trajectory out;
-  const auto cut = [&](const std::vector<double>& from, std::vector<double>* to) {
-    if (!from.empty()) to->assign(from.begin() + begin, from.begin() + end);
-  };
-  cut(run.t_s, &out.t_s);
-  cut(run.u_V, &out.u_V);
-  cut(run.x_m, &out.x_m);
-  cut(run.v_m_per_s, &out.v_m_per_s);
-  cut(run.p1_Pa, &out.p1_Pa);
-  cut(run.p2_Pa, &out.p2_Pa);
-  cut(run.q1_kg_per_s, &out.q1_kg_per_s);
-  cut(run.q2_kg_per_s, &out.q2_kg_per_s);
-  return out;
+// Pieces (refine_runs.h). A piece of one sample has nothing to simulate.
+std::vector<FitExperiment> Pieces(const FitExperiment& run, const RigConstants& rig,
+                                  double half_stroke_m,
+                                  const std::array<double, kStartOffsets>& sample_sigma_Pa) {
+  const std::vector<std::size_t> begins = PieceStarts(run.measured);
+  if (begins.size() <= 1) return {run};
+  std::vector<FitExperiment> pieces;
+  for (std::size_t k = 0; k < begins.size(); ++k) {
+    const std::size_t begin = begins[k];
+    const std::size_t end = k + 1 < begins.size() ? begins[k + 1] : run.measured.size();
+    if (end - begin < 2) continue;
+    FitExperiment piece = run;
+    piece.measured = Slice(run.measured, begin, end);
+    piece.id = run.id + "@" + FormatDouble(run.measured.t_s[begin]);
+    piece.parent = run.id;
+    piece.command = LoggedCommand(piece.measured, rig);
+    int averaged = 1;
+    piece.initial = LoggedInitialState(piece.measured, half_stroke_m, &averaged);
+    const double root_n = std::sqrt(static_cast<double>(averaged));
+    for (int i = 0; i < kStartOffsets; ++i) piece.start_sigma_Pa[i] = sample_sigma_Pa[i] / root_n;
+    pieces.push_back(std::move(piece));
+  }
+  return pieces;
 }
 
 // Multiple shooting's windows (refine_runs.h).
@@ -161,7 +169,7 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, d
     FitExperiment window = run;
     window.measured = Slice(run.measured, begin, end);
     window.id = run.id + "@" + FormatDouble(run.measured.t_s[begin]);
-    window.parent = run.id;
+    window.parent = run.parent.empty() ? run.id : run.parent;
     if (begin > 0) {
       window.initial = InitialState{};
       window.initial.position_m = std::clamp(rest_positions[w], -half_stroke_m, half_stroke_m);
@@ -198,13 +206,15 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   const double sigma_x_m = windows ? internal::PositionNoise(unit) : 0.0;
   std::vector<FitExperiment> runs;
   for (const Experiment* e : fitted) {
-    FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma, zero);
-    if (!windows) {
-      runs.push_back(std::move(run));
-      continue;
-    }
-    for (FitExperiment& window : Windows(run, sigma_x_m, half_stroke, sample_sigma)) {
-      runs.push_back(std::move(window));
+    const FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma, zero);
+    for (FitExperiment& piece : Pieces(run, unit.manifest.rig, half_stroke, sample_sigma)) {
+      if (!windows) {
+        runs.push_back(std::move(piece));
+        continue;
+      }
+      for (FitExperiment& window : Windows(piece, sigma_x_m, half_stroke, sample_sigma)) {
+        runs.push_back(std::move(window));
+      }
     }
   }
   return runs;

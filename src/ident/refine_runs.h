@@ -88,11 +88,21 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
                       const std::array<double, kStartOffsets>& sample_sigma_Pa,
                       const PositionZero& zero);
 
+// A run cut where its logger paused (PieceStarts, logged_run.h): each piece
+// from its own logged start (LoggedInitialState) with the command as its own
+// log gives it (LoggedCommand), named `id@t` with the run as its parent, so
+// that the verdict, the clustered errors and the windows count it with its
+// run. A run without a pause is its only piece.
+std::vector<FitExperiment> Pieces(const FitExperiment& run, const RigConstants& rig,
+                                  double half_stroke_m,
+                                  const std::array<double, kStartOffsets>& sample_sigma_Pa);
+
 // Multiple shooting (FitStage::windows): the run cut where the rod has come
 // to rest in a stuck phase (ArrivalSample; stuck as the friction fit reads it
 // with FrictionFitOptions' defaults, for position noise `sigma_x_m`), each
 // window simulated from its logged state (the phase's rest position, v = 0),
-// with the command-driven lags replayed from the start of the log.
+// with the command-driven lags replayed from the start of the log (of the
+// piece). A window's parent is its run (a piece's, the piece's run).
 std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, double half_stroke_m,
                                    const std::array<double, kStartOffsets>& sample_sigma_Pa);
 

@@ -11,6 +11,7 @@
 #include "../util/median.h"
 #include "pneumaid/eval/metrics.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/log_notes.h"
 #include "pneumaid/model/load.h"
 
 namespace pneumaid {
@@ -127,13 +128,43 @@ Trajectory LoggedTrajectory(const Experiment& e, const PositionZero& zero) {
   return out;
 }
 
+namespace {
+
+// The rod's speed at a moving start: the least-squares slope of x over the
+// first kStartVelocity_s (at least three samples). A piece after a logger's
+// pause starts mid-slide, and from rest the simulated rod lagged behind.
+constexpr double kStartVelocity_s = 0.005;
+double StartVelocity(const Trajectory& m) {
+  std::size_t n = 1;
+  while (n < m.size() && (n < 3 || m.t_s[n] - m.t_s.front() <= kStartVelocity_s)) ++n;
+  if (n < 3) return 0.0;
+  double t_mean = 0, x_mean = 0;
+  for (std::size_t i = 0; i < n; ++i) t_mean += m.t_s[i], x_mean += m.x_m[i];
+  t_mean /= static_cast<double>(n);
+  x_mean /= static_cast<double>(n);
+  double tx = 0, tt = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    tx += (m.t_s[i] - t_mean) * (m.x_m[i] - x_mean);
+    tt += (m.t_s[i] - t_mean) * (m.t_s[i] - t_mean);
+  }
+  return tt > 0 ? tx / tt : 0.0;
+}
+
+}  // namespace
+
 // The state a run starts from: the mean of its leading samples while the
-// command has not yet changed (at most 50), so that one noisy first sample
-// does not set the start. A log that starts moving gets its first sample.
+// command and the pressures stay put (at most 50), so that one noisy first
+// sample does not set the start. A log that starts moving gets its first
+// sample and the speed its first samples show.
 InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* samples_averaged) {
   std::size_t n = 1;
   // A logger's noise on the command is not a change (as HeldLevels reads it).
-  while (n < m.size() && n < 50 && std::fabs(m.u_V[n] - m.u_V[0]) <= 0.01) ++n;
+  const auto still = [&m](std::size_t i) {
+    return std::fabs(m.u_V[i] - m.u_V[0]) <= kCommandNoise_V &&
+           std::fabs(m.p1_Pa[i] - m.p1_Pa[0]) <= kStartPressureBand_Pa &&
+           std::fabs(m.p2_Pa[i] - m.p2_Pa[0]) <= kStartPressureBand_Pa;
+  };
+  while (n < m.size() && n < 50 && still(n)) ++n;
   const auto mean = [n](const std::vector<double>& v) {
     return std::accumulate(v.begin(), v.begin() + static_cast<long>(n), 0.0) /
            static_cast<double>(n);
@@ -147,12 +178,71 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
     initial.position_m = m.x_m.front();
     initial.p1_Pa = m.p1_Pa.front();
     initial.p2_Pa = m.p2_Pa.front();
+    initial.velocity_m_per_s = StartVelocity(m);
     n = 1;
   }
   if (samples_averaged != nullptr) *samples_averaged = static_cast<int>(n);
   // A rod resting on an end stop reads up to a few noise sigmas beyond it.
   initial.position_m = std::clamp(initial.position_m, -half_stroke_m, half_stroke_m);
   return initial;
+}
+
+CommandSignal LoggedCommand(const Trajectory& m, const RigConstants& rig) {
+  CommandSignal command = SampledCommand(m.t_s, m.u_V);
+  if (m.size() < 2 || m.x_m.size() != m.size() || m.p1_Pa.size() != m.size() ||
+      m.p2_Pa.size() != m.size()) {
+    return command;
+  }
+  const double u0 = m.u_V.front();
+  if (std::fabs(u0) <= kCommandNoise_V) return command;
+  std::size_t k = 0;
+  while (k + 1 < m.size() && m.t_s[k + 1] - m.t_s.front() <= kStepRest_s) ++k;
+  constexpr double kRestMoved_m = 1e-4;  // LoggedInitialState's "already moves"
+  if (std::fabs(m.x_m[k] - m.x_m.front()) > kRestMoved_m) return command;
+  const double at_supply_Pa =
+      rig.atmospheric_pressure_Pa + 0.9 * (rig.supply_pressure_Pa - rig.atmospheric_pressure_Pa);
+  const double charged_Pa = u0 > 0 ? m.p1_Pa.front() : m.p2_Pa.front();
+  if (charged_Pa >= at_supply_Pa) return command;  // settled for u0
+  const double discharged_Pa = u0 > 0 ? m.p2_Pa.front() : m.p1_Pa.front();
+  const double before_V = discharged_Pa >= at_supply_Pa ? -u0 : 0.0;
+  if (command.time_s.empty() || command.time_s.front() > m.t_s.front()) {
+    command.time_s.insert(command.time_s.begin(), m.t_s.front());
+    command.value_V.insert(command.value_V.begin(), u0);
+  }
+  command.initial_V = before_V;
+  return command;
+}
+
+std::vector<std::size_t> PieceStarts(const Trajectory& m) {
+  std::vector<std::size_t> starts = {0};
+  const std::vector<double>& t = m.t_s;
+  if (t.size() < 3) return starts;
+  std::vector<double> intervals(t.size() - 1);
+  for (std::size_t i = 0; i + 1 < t.size(); ++i) intervals[i] = t[i + 1] - t[i];
+  const double median_s = internal::Median(intervals);
+  for (std::size_t i = 0; i + 1 < t.size(); ++i) {
+    const double interval_s = t[i + 1] - t[i];
+    if (!(interval_s > kSamplingGapIntervals * median_s)) continue;
+    const bool changed = std::fabs(m.u_V[i + 1] - m.u_V[i]) > kCommandNoise_V;
+    if (changed || interval_s >= kLoggerPause_s) starts.push_back(i + 1);
+  }
+  return starts;
+}
+
+Trajectory Slice(const Trajectory& run, std::size_t begin, std::size_t end) {
+  Trajectory out;
+  const auto cut = [&](const std::vector<double>& from, std::vector<double>* to) {
+    if (!from.empty()) to->assign(from.begin() + begin, from.begin() + end);
+  };
+  cut(run.t_s, &out.t_s);
+  cut(run.u_V, &out.u_V);
+  cut(run.x_m, &out.x_m);
+  cut(run.v_m_per_s, &out.v_m_per_s);
+  cut(run.p1_Pa, &out.p1_Pa);
+  cut(run.p2_Pa, &out.p2_Pa);
+  cut(run.q1_kg_per_s, &out.q1_kg_per_s);
+  cut(run.q2_kg_per_s, &out.q2_kg_per_s);
+  return out;
 }
 
 std::optional<Unit> OnTheSetsStroke(const Unit& unit, const Parameters& params) {

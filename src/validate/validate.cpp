@@ -59,6 +59,33 @@ std::vector<std::string> MissedThresholds(const std::map<std::string, ChannelMet
   return missed;
 }
 
+// A later piece's run (PieceStarts) added to the whole run's summary: its
+// counters, and its failure.
+void AddPiece(const SimulationSummary& piece, SimulationSummary* whole) {
+  if (!piece.ok()) {
+    whole->status = piece.status;
+    whole->message = piece.message;
+  }
+  whole->steps += piece.steps;
+  whole->rhs_evaluations += piece.rhs_evaluations;
+  whole->jacobian_evaluations += piece.jacobian_evaluations;
+  whole->error_test_failures += piece.error_test_failures;
+  whole->convergence_failures += piece.convergence_failures;
+  whole->restarts += piece.restarts;
+  whole->events += piece.events;
+  whole->simulated_time_s += piece.simulated_time_s;
+  whole->wall_time_s += piece.wall_time_s;
+}
+
+void AppendPiece(const Trajectory& piece, Trajectory* whole) {
+  for (std::vector<double> Trajectory::*column :
+       {&Trajectory::t_s, &Trajectory::u_V, &Trajectory::x_m, &Trajectory::v_m_per_s,
+        &Trajectory::p1_Pa, &Trajectory::p2_Pa, &Trajectory::q1_kg_per_s,
+        &Trajectory::q2_kg_per_s}) {
+    (whole->*column).insert((whole->*column).end(), (piece.*column).begin(), (piece.*column).end());
+  }
+}
+
 ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& unit,
                                         const Experiment& experiment, const PositionZero& zero,
                                         const ValidationOptions& options) {
@@ -66,10 +93,25 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
   out.id = experiment.entry.id;
   out.measured = LoggedTrajectory(experiment, zero);
   const Trajectory& m = out.measured;
-  const InitialState initial = LoggedInitialState(m, 0.5 * params.cylinder.stroke_m);
-  out.simulation = Simulate(params, SampledCommand(m.t_s, m.u_V), initial, m.t_s,
-                            options.simulation, &out.simulated);
-  if (!out.simulation.ok()) return out;
+  // Piece by piece where the logger paused (PieceStarts), each from its own
+  // logged start; the simulated pieces end to end.
+  const std::vector<std::size_t> begins = PieceStarts(m);
+  for (std::size_t k = 0; k < begins.size(); ++k) {
+    const std::size_t end = k + 1 < begins.size() ? begins[k + 1] : m.size();
+    const Trajectory piece = Slice(m, begins[k], end);
+    const InitialState initial = LoggedInitialState(piece, 0.5 * params.cylinder.stroke_m);
+    Trajectory simulated;
+    const SimulationSummary summary = Simulate(params, LoggedCommand(piece, unit.manifest.rig),
+                                               initial, piece.t_s, options.simulation, &simulated);
+    if (k == 0) {
+      out.simulation = summary;
+      out.simulated = std::move(simulated);
+    } else {
+      AddPiece(summary, &out.simulation);
+      AppendPiece(simulated, &out.simulated);
+    }
+    if (!out.simulation.ok()) return out;
+  }
   ApplyDeclaredLags(unit.manifest, &out.simulated);
   Trajectory comparable = out.simulated;
   if (m.q1_kg_per_s.empty()) comparable.q1_kg_per_s.clear();

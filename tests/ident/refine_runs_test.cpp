@@ -95,6 +95,28 @@ TEST(RefineRunsTest, AWindowStartsWhereTheRodArrivedAtEachRestFromThatRest) {
   EXPECT_NEAR(windows[2].initial.position_m, 2e-4, 3 * kSigmaM);
 }
 
+// A logger's pause of 0.2 s after 0.3 s cuts the run in two pieces, each
+// from its own first samples, both counted with the run; so are the windows
+// of a piece.
+TEST(RefineRunsTest, ALoggersPauseCutsTheRunInPiecesOfTheRun) {
+  refine_internal::FitExperiment run = Logged();
+  for (std::size_t i = 300; i < run.measured.size(); ++i) run.measured.t_s[i] += 0.2;
+  const RigConstants rig;
+  EXPECT_EQ(refine_internal::Pieces(Logged(), rig, 0.025, {0, 0}).size(), 1u);
+  const std::vector<refine_internal::FitExperiment> pieces =
+      refine_internal::Pieces(run, rig, 0.025, {0, 0});
+  ASSERT_EQ(pieces.size(), 2u);
+  EXPECT_EQ(pieces[0].measured.size(), 300u);
+  EXPECT_EQ(pieces[1].measured.size(), run.measured.size() - 300);
+  EXPECT_EQ(pieces[1].measured.t_s.front(), run.measured.t_s[300]);
+  // Its first samples while the pressures stay within 5 kPa (1 kPa per sample).
+  EXPECT_NEAR(pieces[1].initial.p1_Pa, run.measured.p1_Pa[300], kStartPressureBand_Pa);
+  EXPECT_EQ(pieces[1].command.initial_V, 0.5);
+  for (const auto& piece : pieces) EXPECT_EQ(piece.parent, "stroke");
+  for (const auto& window : refine_internal::Windows(pieces[1], kSigmaM, 0.025, {0, 0}))
+    EXPECT_EQ(window.parent, "stroke");
+}
+
 // A rest beyond the model's stroke (a rod on its stop reads a few sigma past
 // it) starts its window at the stop.
 TEST(RefineRunsTest, AWindowStartsWithinTheStroke) {
