@@ -29,13 +29,21 @@ struct TubeLog {
   std::vector<int> level;  // per sample
   int levels = 0;
   double tau_in_s = 0, tau_out_s = 0, sigma_in = 1, sigma_out = 1;
+  // Where the record does not start settled (its meters' first readings are
+  // not their readings at the end of the first level: a record that starts
+  // as the valve opens), the lags start at those first readings; NaN:
+  // settled for the first level.
+  double start_in = NAN, start_out = NAN;
 
   double Interval(std::size_t i) const { return (*t)[i] - (*t)[i - 1]; }
 
   // Both meters' readings for valve flows `flow` (one per level), delta and
   // the valve's own opening lag: the flow held per level, through the valve's
-  // lag and the inlet meter; through Eq. 5 and the outlet meter. The record
-  // starts settled.
+  // lag and the inlet meter; through Eq. 5 and the outlet meter. The lags
+  // start settled for the first level, or, where the record does not start
+  // settled, where its meters' first readings say (start_in, start_out). (A
+  // tube test logged from the valve's opening was "not determined" from a
+  // settled start, and delta came from the prior: 8 for 5.)
   template <typename T>
   void Predict(const T* flow, const T& delta, const T& valve_tau_s, std::vector<T>* inlet,
                std::vector<T>* outlet) const {
@@ -43,11 +51,19 @@ struct TubeLog {
     outlet->resize(n);
     for (std::size_t i = 0; i < n; ++i) (*outlet)[i] = flow[level[i]];
     const auto interval = [this](std::size_t i) { return Interval(i); };
-    if (valve_tau_s > T(0.0)) ApplyFirstOrderLag(interval, valve_tau_s, outlet);
+    const bool settled = std::isnan(start_in);
+    const auto lag = [&](const T& tau_s, double start, std::vector<T>* signal) {
+      if (settled) {
+        ApplyFirstOrderLag(interval, tau_s, signal);
+      } else {
+        ApplyFirstOrderLagFrom(interval, tau_s, T(start), signal);
+      }
+    };
+    if (valve_tau_s > T(0.0)) lag(valve_tau_s, start_in, outlet);
     *inlet = *outlet;
-    if (tau_in_s > 0) ApplyFirstOrderLag(interval, T(tau_in_s), inlet);
-    ApplyFirstOrderLag(interval, T(1.0) / delta, outlet);
-    if (tau_out_s > 0) ApplyFirstOrderLag(interval, T(tau_out_s), outlet);
+    if (tau_in_s > 0) lag(T(tau_in_s), start_in, inlet);
+    lag(T(1.0) / delta, start_out, outlet);
+    if (tau_out_s > 0) lag(T(tau_out_s), start_out, outlet);
   }
 };
 
@@ -77,12 +93,20 @@ double BestLevels(const TubeLog& log, double delta, std::vector<double>* flow) {
   const int m = log.levels;
   Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(m, m);
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(m);
+  // The readings are affine in the flows: what the lags' start gives with
+  // every flow 0, plus each level's response.
+  std::vector<double> zero(m, 0.0), free_in, free_out;
+  log.Predict(zero.data(), delta, 0.0, &free_in, &free_out);
   std::vector<std::vector<double>> inlet(m), outlet(m);
   std::vector<double> unit(m, 0.0);
   for (int k = 0; k < m; ++k) {
     unit.assign(m, 0.0);
     unit[k] = 1.0;
     log.Predict(unit.data(), delta, 0.0, &inlet[k], &outlet[k]);
+    for (std::size_t i = 0; i < n; ++i) {
+      inlet[k][i] -= free_in[i];
+      outlet[k][i] -= free_out[i];
+    }
   }
   const double w_in = 1 / (log.sigma_in * log.sigma_in),
                w_out = 1 / (log.sigma_out * log.sigma_out);
@@ -95,7 +119,8 @@ double BestLevels(const TubeLog& log, double delta, std::vector<double>* flow) {
       normal(a, b) = normal(b, a) = sum;
     }
     for (std::size_t i = 0; i < n; ++i) {
-      rhs(a) += w_in * inlet[a][i] * (*log.q_in)[i] + w_out * outlet[a][i] * (*log.q_out)[i];
+      rhs(a) += w_in * inlet[a][i] * ((*log.q_in)[i] - free_in[i]) +
+                w_out * outlet[a][i] * ((*log.q_out)[i] - free_out[i]);
     }
   }
   const Eigen::VectorXd solution = normal.completeOrthogonalDecomposition().solve(rhs);
@@ -163,6 +188,16 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   }
   log.tau_in_s = manifest.DeclaredTau("q_in", 0.0);
   log.tau_out_s = manifest.DeclaredTau("q_out", 0.0);
+  // Settled: the meters' first readings within 5 sigma of their last on the
+  // first level (which a held level reaches).
+  const std::size_t first_end = held.front().second - 1;
+  const auto settled = [&](const std::vector<double>& q, double sigma) {
+    return std::fabs(q.front() - q[first_end]) <= 5 * sigma;
+  };
+  if (!settled(*log.q_in, log.sigma_in) || !settled(*log.q_out, log.sigma_out)) {
+    log.start_in = log.q_in->front();
+    log.start_out = log.q_out->front();
+  }
 
   // Start: the best of the prior's delta and a log-spaced scan, each with
   // its best level flows.
