@@ -40,6 +40,10 @@ struct IdentifyReport {
   FrictionFitResult friction;
   std::vector<std::string> fitted;  // parameter paths
   std::vector<std::string> priors;  // parameter paths taken from the prior, with why
+  // What the logs say of the prior's model choices, which no fit makes
+  // ("valve.branch: the prior's increasing; ... the choice matters for these
+  // logs"); empty when nothing.
+  std::vector<std::string> notes;
   // The channels whose noise the unit does not declare, with the estimates
   // from the logs that the fits used, and the declared ones whose logs show
   // far more (ChannelNoiseNote); empty when neither.
