@@ -86,7 +86,8 @@ void ListPriorEffects(const Parameters& params, IdentifyReport* report) {
 // gave 6 um.)
 void NoteTheValveBranch(const Unit& unit, const Parameters& params, IdentifyReport* report) {
   const ValveFitResult& valve = report->valve;
-  if (params.valve.branch == ValveBranchMode::kHysteresis || !valve.increasing.has_values() ||
+  // (A prior of `decreasing` follows that branch whatever the command does.)
+  if (params.valve.branch != ValveBranchMode::kIncreasing || !valve.increasing.has_values() ||
       !valve.decreasing.has_values()) {
     return;
   }
@@ -116,12 +117,13 @@ void NoteTheValveBranch(const Unit& unit, const Parameters& params, IdentifyRepo
   }
   if (largest < 0.01) return;
   char why[400];
-  std::snprintf(why, sizeof(why),
-                "the prior's %s; the branches fitted differ by up to %.0f %% of q_max, and the "
-                "stroke and validation logs close a valve pair part way %d times, where a valve "
-                "with hysteresis follows its decreasing branch (branch: hysteresis) and one "
-                "without its increasing one: the choice matters for these logs",
-                ToString(params.valve.branch), 100 * largest, closings);
+  std::snprintf(
+      why, sizeof(why),
+      "the prior's increasing; the branches fitted differ by up to %.0f %% of q_max, and the "
+      "stroke and validation logs close a valve pair part way %d times, where a valve "
+      "with hysteresis follows its decreasing branch (branch: hysteresis) and one "
+      "without its increasing one: the choice matters for these logs",
+      100 * largest, closings);
   report->notes.push_back(std::string("valve.branch: ") + why);
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
@@ -134,7 +135,9 @@ std::vector<FitExperiment> Pieces(const FitExperiment& run, const RigConstants& 
     piece.measured = Slice(run.measured, begin, end);
     piece.id = run.id + "@" + FormatDouble(run.measured.t_s[begin]);
     piece.parent = run.id;
-    piece.command = LoggedCommand(piece.measured, rig);
+    piece.command = LoggedCommand(
+        piece.measured, rig,
+        begin > 0 ? std::optional<double>(run.measured.u_V[begin - 1]) : std::nullopt);
     int averaged = 1;
     piece.initial = LoggedInitialState(piece.measured, half_stroke_m, &averaged);
     const double root_n = std::sqrt(static_cast<double>(averaged));

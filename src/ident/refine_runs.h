@@ -37,7 +37,9 @@ struct FitExperiment {
   CommandSignal command;
   InitialState initial;
   std::vector<Channel> channels;
-  std::string parent;  // a window's run (multiple shooting); empty for a whole run
+  // The run a window (multiple shooting) or a piece (a logger's pause:
+  // Pieces) is part of; empty for a whole run.
+  std::string parent;
   // Standard errors of the logged initial p1, p2 [Pa] when they are estimated
   // (FitSpec::fit_initial_pressures); {0, 0}: the start is taken as logged.
   std::array<double, kStartOffsets> start_sigma_Pa = {0, 0};

@@ -66,7 +66,9 @@ void RelaxCommandLags(const ActuatorLayout& layout, const ActuatorCoefficients<T
 }
 
 // The lag states at t0 (InitialState::lag_history_from_s): settled for the
-// command at `from`, then relaxed through every knot up to t0. `tracker` is
+// command before `from` (a knot at `from` is a step the lags then follow, as
+// Run() applies the knots at t0: a log that starts at its step), then relaxed
+// through every knot up to t0. `tracker` is
 // fresh; it is advanced as the run's own tracker would be.
 template <typename T>
 void ReplayLagHistory(const ActuatorLayout& layout, const ActuatorCoefficients<T>& c,
@@ -74,7 +76,7 @@ void ReplayLagHistory(const ActuatorLayout& layout, const ActuatorCoefficients<T
                       double t0, T* y) {
   ValveCommand current = tracker.Next(command.initial_V);
   size_t knot = 0;
-  for (; knot < command.time_s.size() && command.time_s[knot] <= from; ++knot) {
+  for (; knot < command.time_s.size() && command.time_s[knot] < from; ++knot) {
     current = tracker.Next(command.value_V[knot]);
   }
   SetLagStatesToEquilibrium(layout, c, current, y);

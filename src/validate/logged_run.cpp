@@ -130,6 +130,9 @@ Trajectory LoggedTrajectory(const Experiment& e, const PositionZero& zero) {
 
 namespace {
 
+// A rod that moves this far over a log's leading samples is moving at its start.
+constexpr double kMovedAtStart_m = 1e-4;
+
 // The rod's speed at a moving start: the least-squares slope of x over the
 // first kStartVelocity_s (at least three samples). A piece after a logger's
 // pause starts mid-slide, and from rest the simulated rod lagged behind.
@@ -174,7 +177,7 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
   initial.p1_Pa = mean(m.p1_Pa);
   initial.p2_Pa = mean(m.p2_Pa);
   const double moved = std::fabs(m.x_m[n - 1] - m.x_m[0]);
-  if (moved > 1e-4) {  // not at rest: averaging would blur a moving start
+  if (moved > kMovedAtStart_m) {  // not at rest: averaging would blur a moving start
     initial.position_m = m.x_m.front();
     initial.p1_Pa = m.p1_Pa.front();
     initial.p2_Pa = m.p2_Pa.front();
@@ -187,7 +190,8 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
   return initial;
 }
 
-CommandSignal LoggedCommand(const Trajectory& m, const RigConstants& rig) {
+CommandSignal LoggedCommand(const Trajectory& m, const RigConstants& rig,
+                            std::optional<double> logged_before_V) {
   CommandSignal command = SampledCommand(m.t_s, m.u_V);
   if (m.size() < 2 || m.x_m.size() != m.size() || m.p1_Pa.size() != m.size() ||
       m.p2_Pa.size() != m.size()) {
@@ -195,10 +199,10 @@ CommandSignal LoggedCommand(const Trajectory& m, const RigConstants& rig) {
   }
   const double u0 = m.u_V.front();
   if (std::fabs(u0) <= kCommandNoise_V) return command;
+  if (logged_before_V && std::fabs(*logged_before_V - u0) <= kCommandNoise_V) return command;
   std::size_t k = 0;
   while (k + 1 < m.size() && m.t_s[k + 1] - m.t_s.front() <= kStepRest_s) ++k;
-  constexpr double kRestMoved_m = 1e-4;  // LoggedInitialState's "already moves"
-  if (std::fabs(m.x_m[k] - m.x_m.front()) > kRestMoved_m) return command;
+  if (std::fabs(m.x_m[k] - m.x_m.front()) > kMovedAtStart_m) return command;
   const double at_supply_Pa =
       rig.atmospheric_pressure_Pa + 0.9 * (rig.supply_pressure_Pa - rig.atmospheric_pressure_Pa);
   const double charged_Pa = u0 > 0 ? m.p1_Pa.front() : m.p2_Pa.front();
@@ -220,11 +224,17 @@ std::vector<std::size_t> PieceStarts(const Trajectory& m) {
   std::vector<double> intervals(t.size() - 1);
   for (std::size_t i = 0; i + 1 < t.size(); ++i) intervals[i] = t[i + 1] - t[i];
   const double median_s = internal::Median(intervals);
+  if (!(median_s > 0)) return starts;
+  const auto held = [&m](std::size_t a, std::size_t b) {  // the same command at samples a, b
+    return std::fabs(m.u_V[a] - m.u_V[b]) <= kCommandNoise_V;
+  };
   for (std::size_t i = 0; i + 1 < t.size(); ++i) {
     const double interval_s = t[i + 1] - t[i];
     if (!(interval_s > kSamplingGapIntervals * median_s)) continue;
-    const bool changed = std::fabs(m.u_V[i + 1] - m.u_V[i]) > kCommandNoise_V;
-    if (changed || interval_s >= kLoggerPause_s) starts.push_back(i + 1);
+    // A held command that stepped inside the gap: held on both sides, not across.
+    const bool stepped =
+        i > 0 && i + 2 < t.size() && held(i - 1, i) && held(i + 1, i + 2) && !held(i, i + 1);
+    if (stepped || interval_s >= kLoggerPause_s) starts.push_back(i + 1);
   }
   return starts;
 }

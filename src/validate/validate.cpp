@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include "pneumaid/io/channel_noise.h"
@@ -101,8 +102,11 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
     const Trajectory piece = Slice(m, begins[k], end);
     const InitialState initial = LoggedInitialState(piece, 0.5 * params.cylinder.stroke_m);
     Trajectory simulated;
-    const SimulationSummary summary = Simulate(params, LoggedCommand(piece, unit.manifest.rig),
-                                               initial, piece.t_s, options.simulation, &simulated);
+    const std::optional<double> before =
+        k > 0 ? std::optional<double>(m.u_V[begins[k] - 1]) : std::nullopt;
+    const SimulationSummary summary =
+        Simulate(params, LoggedCommand(piece, unit.manifest.rig, before), initial, piece.t_s,
+                 options.simulation, &simulated);
     if (k == 0) {
       out.simulation = summary;
       out.simulated = std::move(simulated);

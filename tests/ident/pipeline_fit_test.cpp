@@ -134,7 +134,7 @@ INSTANTIATE_TEST_SUITE_P(
 // A tube test logged from the valve's opening: the rows before the step are
 // cut, so that the first sample is at u = 1 with the tube still empty. The
 // lags start where the meters' first readings say; settled for the first
-// level instead, the fit found delta "not determined" (4.38 +- 2.2 for 5)
+// level instead, the fit found delta "not determined" (4.36 +- 2.2 for 5)
 // and kept the prior's.
 TEST(PipelineFitTest, ATubeTestLoggedFromTheValvesOpening) {
   Parameters truth;

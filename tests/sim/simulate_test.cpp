@@ -262,6 +262,31 @@ TEST(SimulateTest, ARunRestartedFromItsOwnStateWithTheLagHistoryContinuesTheSame
   EXPECT_GT(settled_x, 10 * worst_x);
 }
 
+// A step at the run's first instant (a log that starts at its step) with the
+// lag history replayed from that instant, as a window of multiple shooting
+// starts: the lags start settled for the command before the step and follow
+// the step, as the run from that instant does. Before, the replay settled
+// for the step's command (the lagged gains fully open).
+TEST(SimulateTest, AStepAtTheStartOfTheLagHistoryIsFollowedNotSettled) {
+  const Parameters p;
+  CommandSignal command;
+  command.initial_V = 0.0;
+  command.time_s = {0.0};
+  command.value_V = {0.6};
+  const std::vector<double> times = UniformTimes(0, 0.3, 1000);
+  const Trajectory run = MustSimulate(p, command, RetractedAtRest(p), times);
+  InitialState replayed = RetractedAtRest(p);
+  replayed.lag_history_from_s = 0.0;
+  const Trajectory window = MustSimulate(p, command, replayed, times);
+  double worst_x = 0;
+  for (size_t i = 0; i < run.size(); ++i)
+    worst_x = std::max(worst_x, std::fabs(window.x_m[i] - run.x_m[i]));
+  EXPECT_LT(worst_x, 1e-6);
+  // And the run's valves were closed before: its p1 rises from the
+  // atmosphere through the tube's lag, not at once.
+  EXPECT_LT(run.p1_Pa[5], 1.3e5);
+}
+
 // The valve lag as the last group of states (no tube lag after it): its
 // tolerances once filled four entries for its two states, past the state
 // vector (the sanitizer pass catches a regression) and, with a tube lag

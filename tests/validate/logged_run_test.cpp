@@ -134,13 +134,23 @@ TEST(PieceStartsTest, ARunIsCutWhereTheLoggerPausedOrTheCommandChangedInAGap) {
       column->erase(column->begin() + static_cast<long>(from),
                     column->begin() + static_cast<long>(to));
   };
-  drop(10, 12);  // two rows, 3 ms: not a cut
+  drop(10, 15);  // five rows, a 6 ms gap with the command held: not a cut
   EXPECT_EQ(PieceStarts(m), std::vector<std::size_t>{0});
+  Trajectory ramp = m;  // a command that is not held, across the same gap: not a cut
+  for (std::size_t i = 0; i < ramp.size(); ++i) ramp.u_V[i] = 0.4 + 0.5 * ramp.t_s[i];
+  EXPECT_EQ(PieceStarts(ramp), std::vector<std::size_t>{0});
   for (std::size_t i = 30; i < m.size(); ++i) m.u_V[i] = -0.4;
-  drop(28, 32);  // 5 ms with the command changed inside: a cut
+  drop(28, 32);  // 5 ms with the held command stepped inside: a cut
   EXPECT_EQ(PieceStarts(m), (std::vector<std::size_t>{0, 28}));
   for (std::size_t i = 40; i < m.size(); ++i) m.t_s[i] += 0.2;  // a pause, the command held
   EXPECT_EQ(PieceStarts(m), (std::vector<std::size_t>{0, 28, 40}));
+  // The piece after the pause: the command before it the same, the valves
+  // were settled for it (a rod at rest, the charged chamber below the
+  // supply, would otherwise read as a log starting at its step).
+  const RigConstants rig;
+  const Trajectory after = Slice(m, 40, m.size());
+  EXPECT_EQ(LoggedCommand(after, rig, m.u_V[39]).initial_V, -0.4);
+  EXPECT_EQ(LoggedCommand(after, rig).initial_V, 0.0);
 }
 
 // The bundled unit's stroke log with 1.2 s of rows missing while the rod

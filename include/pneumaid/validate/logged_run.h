@@ -53,29 +53,34 @@ InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m
 // The command of a logged run as the simulator takes it: held from each
 // sample to the next. Before the log the valves are taken as settled for its
 // first command, unless the log starts at that command's step: the first
-// command is not 0 (beyond the logger's 0.01 V), the rod rests over the first
-// kStepRest_s, and the chamber the command charges (1 for u > 0) is not yet at
-// the supply (below p_atm + 0.9 (p_s - p_atm)). Then the command before the
-// log is the opposite one, -u, where the chamber it discharges is at the
-// supply (the rod was driven the other way), else 0 (the valves closed): a
-// rig that starts logging as it gives the command. Settled for the step's
-// command instead, the valves' lagged gains started fully open and the first
-// leg ran too fast (a 0.5 kg unit "not explained" at 1.3e5 per residual,
-// against 1.12 with a 0.1 s lead at u = 0).
+// command is not 0 (beyond the logger's 0.01 V), the rod has not moved 0.1 mm
+// by kStepRest_s, and the chamber the command charges (1 for u > 0) is not
+// yet at the supply (below p_atm + 0.9 (p_s - p_atm)). Then the command
+// before the log is the opposite one, -u, where the chamber it discharges is
+// at the supply (the rod was driven the other way), else 0 (the valves
+// closed): a rig that starts logging as it gives the command. Settled for the
+// step's command instead, the valves' lagged gains started fully open and the
+// first leg ran too fast (a 0.5 kg unit "not explained" at 1.3e5 per
+// residual, against 1.12 with a 0.1 s lead at u = 0). `logged_before_V`: the
+// command logged just before the run, when the run is a piece of a longer
+// log (PieceStarts); the same command as the piece's first, the valves were
+// settled for it.
 constexpr double kStepRest_s = 0.005;
 constexpr double kCommandNoise_V = 0.01;  // a logger's noise on the command is not a change
-CommandSignal LoggedCommand(const Trajectory& measured, const RigConstants& rig);
+CommandSignal LoggedCommand(const Trajectory& measured, const RigConstants& rig,
+                            std::optional<double> logged_before_V = std::nullopt);
 
 // Where a logged run is cut into pieces, each simulated from its own logged
 // start with its own command (LoggedCommand of the piece): after an interval
-// over kSamplingGapIntervals times the median (log_notes.h) across which the
-// command changed (when, the log does not say), or that lasts kLoggerPause_s
-// or more (the logger paused, the rig went on). Held across such a pause,
-// the command before it drove a simulation that the rod did not follow: a
-// stroke log with 1.2 s of rows missing mid-stroke left the refinement "not
-// explained" at 1.2e6 per residual with q_max 2.7 times the truth. A row or
-// two dropped (the command the same on both sides) is no cut. The first
-// sample of every piece, in order; {0} for a run without one.
+// over kSamplingGapIntervals times the median (log_notes.h) that lasts
+// kLoggerPause_s or more (the logger paused, the rig went on), or across
+// which a held command stepped (when, the log does not say). Held across
+// such a pause, the command before it drove a simulation that the rod did
+// not follow: a stroke log with 1.2 s of rows missing mid-stroke left the
+// refinement "not explained" at 1.2e6 per residual with q_max 2.7 times the
+// truth. A shorter gap with the command held, or in a command that is not
+// held (a ramp, a sine), is no cut: the simulation holds the command across
+// it. The first sample of every piece, in order; {0} for a run without one.
 constexpr double kLoggerPause_s = 0.1;
 std::vector<std::size_t> PieceStarts(const Trajectory& measured);
 
