@@ -85,6 +85,19 @@ std::array<double, kStartOffsets> StartSampleSigma(const FitSpec& spec, const Un
   return {p1, p2};
 }
 
+// A run's command and start as its log gives them (logged_run.h), and the
+// standard errors of its start's pressures: a sample's, over the samples the
+// start is the mean of. `logged_before_V`: LoggedCommand's.
+void StartFromLog(const RigConstants& rig, double half_stroke_m,
+                  const std::array<double, kStartOffsets>& sample_sigma_Pa,
+                  std::optional<double> logged_before_V, FitExperiment* run) {
+  run->command = LoggedCommand(run->measured, rig, logged_before_V);
+  int averaged = 1;
+  run->initial = LoggedInitialState(run->measured, half_stroke_m, &averaged);
+  const double root_n = std::sqrt(static_cast<double>(averaged));
+  for (int k = 0; k < kStartOffsets; ++k) run->start_sigma_Pa[k] = sample_sigma_Pa[k] / root_n;
+}
+
 FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec,
                       double half_stroke_m, const std::map<std::string, double>& sigmas,
                       const std::array<double, kStartOffsets>& sample_sigma_Pa,
@@ -92,11 +105,7 @@ FitExperiment Prepare(const Experiment& e, const Unit& unit, const FitSpec& spec
   FitExperiment out;
   out.id = e.entry.id;
   out.measured = LoggedTrajectory(e, zero);
-  out.command = LoggedCommand(out.measured, unit.manifest.rig);
-  int averaged = 1;
-  out.initial = LoggedInitialState(out.measured, half_stroke_m, &averaged);
-  const double root_n = std::sqrt(static_cast<double>(averaged));
-  for (int k = 0; k < kStartOffsets; ++k) out.start_sigma_Pa[k] = sample_sigma_Pa[k] / root_n;
+  StartFromLog(unit.manifest.rig, half_stroke_m, sample_sigma_Pa, std::nullopt, &out);
   for (const Channel& row : kChannelTable) {
     const auto wanted = spec.channels.find(row.name);
     if (wanted == spec.channels.end() || (out.measured.*row.values).empty()) continue;
@@ -135,13 +144,9 @@ std::vector<FitExperiment> Pieces(const FitExperiment& run, const RigConstants& 
     piece.measured = Slice(run.measured, begin, end);
     piece.id = run.id + "@" + FormatDouble(run.measured.t_s[begin]);
     piece.parent = run.id;
-    piece.command = LoggedCommand(
-        piece.measured, rig,
-        begin > 0 ? std::optional<double>(run.measured.u_V[begin - 1]) : std::nullopt);
-    int averaged = 1;
-    piece.initial = LoggedInitialState(piece.measured, half_stroke_m, &averaged);
-    const double root_n = std::sqrt(static_cast<double>(averaged));
-    for (int i = 0; i < kStartOffsets; ++i) piece.start_sigma_Pa[i] = sample_sigma_Pa[i] / root_n;
+    StartFromLog(rig, half_stroke_m, sample_sigma_Pa,
+                 begin > 0 ? std::optional<double>(run.measured.u_V[begin - 1]) : std::nullopt,
+                 &piece);
     pieces.push_back(std::move(piece));
   }
   return pieces;
