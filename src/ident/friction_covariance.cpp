@@ -15,12 +15,21 @@ namespace {
 // score outer products (J_k' r_k)(J_k' r_k)', segments and force-balance
 // slides being the clusters and each arrest time eliminated inside its own
 // segment (the Schur complement): the bread and meat of the cluster-robust
-// covariance (J'J)^-1 meat (J'J)^-1.
-void Information(const std::vector<SegmentJacobian>& segments, Eigen::MatrixXd* information,
-                 Eigen::MatrixXd* meat) {
+// covariance (J'J)^-1 meat (J'J)^-1. Also, per direction, how many clusters
+// inform it, and the residuals' sums for their misfit and correlation.
+struct Clustered {
+  Eigen::MatrixXd information, meat;
+  int clusters[2] = {0, 0};        // informing the positive, the negative columns
+  double lagged = 0, squared = 0;  // sum r_i r_(i+1), sum r_i^2
+  long residuals = 0;
+};
+
+Clustered Information(const std::vector<SegmentJacobian>& segments,
+                      const std::vector<int>& columns) {
+  Clustered c;
   const Eigen::Index m = segments.front().friction.cols();
-  *information = Eigen::MatrixXd::Zero(m, m);
-  *meat = Eigen::MatrixXd::Zero(m, m);
+  c.information = Eigen::MatrixXd::Zero(m, m);
+  c.meat = Eigen::MatrixXd::Zero(m, m);
   for (const SegmentJacobian& j : segments) {
     Eigen::MatrixXd a = j.friction;
     Eigen::VectorXd r = j.residuals;
@@ -29,10 +38,19 @@ void Information(const std::vector<SegmentJacobian>& segments, Eigen::MatrixXd* 
       a -= j.stop_time * (j.stop_time.transpose() * a) / norm;
       r -= j.stop_time * (j.stop_time.dot(r) / norm);
     }
-    *information += a.transpose() * a;
+    c.information += a.transpose() * a;
     const Eigen::VectorXd score = a.transpose() * r;
-    *meat += score * score.transpose();
+    c.meat += score * score.transpose();
+    bool informs[2] = {false, false};
+    for (Eigen::Index k = 0; k < m; ++k)
+      informs[columns[k] / kDirectionParameters] |= a.col(k).squaredNorm() > 0;
+    for (int d = 0; d < 2; ++d) c.clusters[d] += informs[d];
+    const Eigen::Index n = j.residuals.size();
+    c.squared += j.residuals.squaredNorm();
+    if (n > 1) c.lagged += j.residuals.head(n - 1).dot(j.residuals.tail(n - 1));
+    c.residuals += n;
   }
+  return c;
 }
 
 }  // namespace
@@ -46,27 +64,48 @@ Eigen::MatrixXd RobustCovariance(const std::vector<SegmentJacobian>& jacobians,
                                  const std::vector<int>& columns, const std::vector<int>& free,
                                  const Block* const blocks[2],
                                  const std::array<double, kDirectionParameters>& sigma) {
-  Eigen::MatrixXd information, meat;
-  Information(jacobians, &information, &meat);
+  Clustered c = Information(jacobians, columns);
   const double clusters = static_cast<double>(jacobians.size());
-  meat *= clusters / std::max(clusters - 1.0, 1.0);
+  c.meat *= clusters / std::max(clusters - 1.0, 1.0);
   std::vector<Eigen::Index> index;  // of each free column in `columns`
-  for (int c : free)
-    index.push_back(std::find(columns.begin(), columns.end(), c) - columns.begin());
+  int free_in[2] = {0, 0};          // free coefficients per direction
+  for (int k : free) {
+    index.push_back(std::find(columns.begin(), columns.end(), k) - columns.begin());
+    ++free_in[k / kDirectionParameters];
+  }
   const Eigen::Index m = static_cast<Eigen::Index>(free.size());
-  Eigen::MatrixXd bread(m, m), score(m, m);
+  Eigen::MatrixXd data(m, m), prior = Eigen::MatrixXd::Zero(m, m), score(m, m);
   for (Eigen::Index a = 0; a < m; ++a) {
     for (Eigen::Index b = 0; b < m; ++b) {
-      bread(a, b) = information(index[a], index[b]);
-      score(a, b) = meat(index[a], index[b]);
+      data(a, b) = c.information(index[a], index[b]);
+      score(a, b) = c.meat(index[a], index[b]);
     }
     const int i = free[a] % kDirectionParameters;
     const double slope = PriorSlope(i, (*blocks[free[a] / kDirectionParameters])[i], sigma);
-    bread(a, a) += slope * slope;
-    score(a, a) += slope * slope;
+    prior(a, a) = slope * slope;
   }
-  const Eigen::MatrixXd inverse = bread.inverse();
-  return inverse * score * inverse;
+  const Eigen::MatrixXd inverse = (data + prior).inverse();
+  const Eigen::MatrixXd robust = inverse * (score + prior) * inverse;
+  bool few = false;
+  for (int d = 0; d < 2; ++d) few |= free_in[d] > 0 && c.clusters[d] < 2 * free_in[d];
+  if (!few) return robust;
+  // Too few clusters for the sandwich (one stroke level: a segment per
+  // direction for four coefficients): its rank is below the coefficients'
+  // count and its errors are far too small. The model's own covariance,
+  // inflated by the misfit and the residuals' correlation as refinement's
+  // (refine_covariance.h), each error widened to the sandwich's where that
+  // is larger.
+  const double chi_square = c.squared / std::max(1.0, static_cast<double>(c.residuals - m));
+  const double inflation =
+      std::max(1.0, chi_square) * internal::CorrelationInflation(c.lagged, c.squared);
+  Eigen::MatrixXd model = inverse * (inflation * data + prior) * inverse;
+  for (Eigen::Index a = 0; a < m; ++a) {
+    const double widen =
+        model(a, a) > 0 ? std::sqrt(std::max(1.0, robust(a, a) / model(a, a))) : 1.0;
+    model.row(a) *= widen;
+    model.col(a) *= widen;
+  }
+  return model;
 }
 
 // Marks in `held` each free coefficient the logs do not determine

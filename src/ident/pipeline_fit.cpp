@@ -136,12 +136,11 @@ double BestLevels(const TubeLog& log, double delta, std::vector<double>* flow) {
 }
 
 // How much wider than the noise alone the errors are when the model misses
-// the data: the reduced chi-square, times the variance inflation of residuals
-// correlated from sample to sample (AR(1): (1 + r) / (1 - r), r the lag-one
-// autocorrelation of each channel's residuals). 1 when the residuals are the
-// sensors' white noise.
+// the data: the reduced chi-square, times the larger of the two channels'
+// correlation inflations (determination.h, CorrelationInflation). 1 when the
+// residuals are the sensors' white noise.
 double ModelErrorFactor(const std::vector<double>& residuals, std::size_t n, double chi_square) {
-  double worst = 0;
+  double worst = 1;
   for (std::size_t channel = 0; channel < 2; ++channel) {
     const double* r = residuals.data() + channel * n;
     double lagged = 0, squares = 0;
@@ -149,10 +148,9 @@ double ModelErrorFactor(const std::vector<double>& residuals, std::size_t n, dou
       squares += r[i] * r[i];
       if (i > 0) lagged += r[i] * r[i - 1];
     }
-    worst = std::max(worst, squares > 0 ? lagged / squares : 0.0);
+    worst = std::max(worst, internal::CorrelationInflation(lagged, squares));
   }
-  const double rho = std::min(worst, 0.99);
-  return std::max(1.0, chi_square * (1 + rho) / (1 - rho));
+  return std::max(1.0, chi_square * worst);
 }
 
 TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFitOptions& options) {

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <random>
 
+#include "determination.h"
+
 namespace pneumaid::refine_internal {
 
 namespace {
@@ -101,8 +103,7 @@ void ResidualCorrelation::Add(const FitExperiment& e, const Eigen::VectorXd& res
 }
 
 double ResidualCorrelation::Inflation() const {
-  const double rho = squared > 0 ? std::min(lagged / squared, 0.999) : 0.0;
-  return rho > 0 ? (1 + rho) / (1 - rho) : 1.0;
+  return internal::CorrelationInflation(lagged, squared);
 }
 
 Eigen::MatrixXd ParameterCovariance(const Eigen::MatrixXd& normal, const ParameterMap& map,

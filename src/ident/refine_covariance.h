@@ -54,10 +54,8 @@ struct ResidualCorrelation {
 
   // `weight`: the run's weight in the fit (a robust loss's slope; 1 else).
   void Add(const FitExperiment& e, const Eigen::VectorXd& residuals, double weight = 1.0);
-  // (1 + rho) / (1 - rho) for rho > 0, else 1: how much the residuals'
-  // correlation widens the Gauss-Newton covariance (an AR(1) residual
-  // carries that many times less information than as many white ones).
-  // rho is capped at 0.999.
+  // internal::CorrelationInflation (determination.h): how much the
+  // residuals' correlation widens the Gauss-Newton covariance.
   double Inflation() const;
 };
 

@@ -1,17 +1,22 @@
 // The friction fit's uncertainty (src/ident/friction_covariance.h): the
-// widening by the readings off the logs, in closed form.
+// covariance with few and with many clusters and the widening by the
+// readings off the logs, in closed form.
 #include "../../src/ident/friction_covariance.h"
 
 #include <gtest/gtest.h>
 
-#include <Eigen/Core>
+#include <Eigen/Dense>
 #include <cmath>
+#include <random>
+#include <vector>
 
 namespace pneumaid {
 namespace {
 
 using friction_internal::Block;
 using friction_internal::LogsReading;
+using friction_internal::RobustCovariance;
+using friction_internal::SegmentJacobian;
 using friction_internal::WidenByDisagreement;
 
 // Fitted positive Fs 10 +- 0.1 N, positive vs 10 +- 1 mm/s and negative Fs
@@ -56,6 +61,74 @@ TEST(FrictionCovarianceTest, OnlyWhatTheLogsReadWidensAnError) {
   EXPECT_DOUBLE_EQ(c.covariance(0, 0), before(0, 0));
   EXPECT_DOUBLE_EQ(c.covariance(1, 1), before(1, 1));
   EXPECT_NEAR(std::sqrt(c.covariance(2, 2)), 5.0, 1e-12);  // no error of its own: the distance
+}
+
+// `clusters` segments of 400 rows informing the positive Fs and Fd, their
+// residuals white with a spread of 2 (a reduced chi-square of 4).
+std::vector<SegmentJacobian> Segments(int clusters) {
+  std::mt19937 random(7);
+  std::normal_distribution<double> normal;
+  std::vector<SegmentJacobian> segments(clusters);
+  for (SegmentJacobian& s : segments) {
+    s.friction = Eigen::MatrixXd(400, 2);
+    s.residuals = Eigen::VectorXd(400);
+    for (int i = 0; i < 400; ++i) {
+      s.friction(i, 0) = 1.0 + 0.01 * i;
+      s.friction(i, 1) = 2.0 - 0.003 * i + 0.1 * normal(random);
+      s.residuals(i) = 2.0 * normal(random);
+    }
+  }
+  return segments;
+}
+
+// Gauss-Newton's (J'J + P)^-1 (J'J s^2 c + P) (J'J + P)^-1, s^2 the reduced
+// chi-square and c the residuals' correlation inflation (1 + rho)/(1 - rho).
+Eigen::MatrixXd ModelCovariance(const std::vector<SegmentJacobian>& segments,
+                                const std::array<double, 4>& sigma) {
+  Eigen::MatrixXd data = Eigen::MatrixXd::Zero(2, 2);
+  double squared = 0, lagged = 0;
+  long n = 0;
+  for (const SegmentJacobian& s : segments) {
+    data += s.friction.transpose() * s.friction;
+    squared += s.residuals.squaredNorm();
+    lagged += s.residuals.head(399).dot(s.residuals.tail(399));
+    n += 400;
+  }
+  const double rho = lagged / squared, chi2 = squared / (n - 2);
+  const double inflation = std::max(1.0, chi2) * (rho > 0 ? (1 + rho) / (1 - rho) : 1.0);
+  Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(2, 2);
+  prior(0, 0) = 1 / (sigma[0] * sigma[0]);
+  prior(1, 1) = 1 / (sigma[1] * sigma[1]);
+  const Eigen::MatrixXd inverse = (data + prior).inverse();
+  return inverse * (inflation * data + prior) * inverse;
+}
+
+// One segment for two coefficients: the sandwich has rank one, so the
+// errors are Gauss-Newton's inflated by the misfit, with its correlation,
+// each widened to the sandwich's where that is larger; with 40 segments they
+// are the sandwich's, near Gauss-Newton's times the spread of 2.
+TEST(FrictionCovarianceTest, TooFewClustersForTheSandwichGiveTheModelsInflatedErrors) {
+  const Block positive = {10.0, 1.0, 5.0, 0.01}, negative = positive;
+  const Block* blocks[2] = {&positive, &negative};
+  const std::array<double, 4> sigma = {100.0, 100.0, 100.0, 10.0};
+  const std::vector<int> columns = {0, 1}, free = {0, 1};
+  const std::vector<SegmentJacobian> one = Segments(1);
+  const Eigen::MatrixXd few = RobustCovariance(one, columns, free, blocks, sigma);
+  const Eigen::MatrixXd expected = ModelCovariance(one, sigma);
+  for (int a = 0; a < 2; ++a) EXPECT_GE(few(a, a), expected(a, a) * (1 - 1e-9)) << a;
+  const auto correlation = [](const Eigen::MatrixXd& c) {
+    return c(0, 1) / std::sqrt(c(0, 0) * c(1, 1));
+  };
+  EXPECT_NEAR(correlation(few), correlation(expected), 1e-9);
+
+  const std::vector<SegmentJacobian> forty = Segments(40);
+  const Eigen::MatrixXd many = RobustCovariance(forty, columns, free, blocks, sigma);
+  const Eigen::MatrixXd model = ModelCovariance(forty, sigma);
+  for (int a = 0; a < 2; ++a) {
+    const double ratio = std::sqrt(many(a, a) / model(a, a));
+    EXPECT_GT(ratio, 0.6) << a;  // 40 clusters: the sandwich's own spread
+    EXPECT_LT(ratio, 1.6) << a;
+  }
 }
 
 }  // namespace
