@@ -23,6 +23,7 @@ std::vector<ChannelMisfit> RunMisfits(const FitExperiment& e, const Eigen::Vecto
     m.run = run;
     m.channel = e.channels[c].name;
     m.reduced_chi_square = n > 0 ? r.squaredNorm() / static_cast<double>(n) : 0.0;
+    m.samples = static_cast<int>(n);
     // The worst window: a running sum over window_s.
     double sum = 0;
     Eigen::Index from = 0;
@@ -66,10 +67,12 @@ double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec
 }
 
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {
-  std::map<std::string, std::pair<double, int>> runs;  // sum of channel chi-squares, channels
+  // Per run: its channels' and pieces' chi-squares weighted by their rows.
+  std::map<std::string, std::pair<double, double>> runs;  // sum of chi2 x rows, rows
   for (const ChannelMisfit& m : misfits) {
-    runs[m.run].first += m.reduced_chi_square;
-    runs[m.run].second += 1;
+    const double rows = std::max(m.samples, 1);
+    runs[m.run].first += m.reduced_chi_square * rows;
+    runs[m.run].second += rows;
   }
   std::vector<double> values;
   for (const auto& [run, sum] : runs) {
@@ -82,8 +85,40 @@ double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {
   return values.size() % 2 ? values[half] : 0.5 * (values[half - 1] + values[half]);
 }
 
+namespace {
+
+// The pieces of a run cut at a logger's pause (refine_runs.h, Pieces) as
+// one misfit per run and channel: the chi-squares pooled by rows, the worst
+// window the worst piece's.
+void JoinPieces(std::vector<ChannelMisfit>* misfits) {
+  std::vector<ChannelMisfit> joined;
+  for (const ChannelMisfit& m : *misfits) {
+    auto same = std::find_if(joined.begin(), joined.end(), [&m](const ChannelMisfit& j) {
+      return j.run == m.run && j.channel == m.channel;
+    });
+    if (same == joined.end()) {
+      joined.push_back(m);
+      continue;
+    }
+    const double rows = std::max(same->samples, 1) + std::max(m.samples, 1);
+    same->reduced_chi_square = (same->reduced_chi_square * std::max(same->samples, 1) +
+                                m.reduced_chi_square * std::max(m.samples, 1)) /
+                               rows;
+    same->samples += m.samples;
+    if (m.worst_reduced_chi_square > same->worst_reduced_chi_square) {
+      same->worst_reduced_chi_square = m.worst_reduced_chi_square;
+      same->worst_from_s = m.worst_from_s;
+      same->worst_to_s = m.worst_to_s;
+    }
+  }
+  *misfits = std::move(joined);
+}
+
+}  // namespace
+
 void Judge(const RefineOptions& options, RefineResult* r) {
   r->acceptable_reduced_chi_square = options.acceptable_reduced_chi_square;
+  JoinPieces(&r->misfits);
   r->reduced_chi_square = MedianRunChiSquare(r->misfits);
   std::sort(r->misfits.begin(), r->misfits.end(),
             [](const ChannelMisfit& a, const ChannelMisfit& b) {

@@ -27,7 +27,8 @@ std::vector<ChannelMisfit> MisfitsOf(const std::vector<RunResiduals>& runs, doub
 std::vector<ChannelMisfit> WholeRunMisfits(const Parameters& params, const Unit& unit,
                                            const FitSpec& spec, const RefineOptions& options);
 
-// The median over runs of each run's reduced chi-square over its channels.
+// The median over runs of each run's reduced chi-square over its channels
+// and the pieces a logger's pause cut it in, weighted by their rows.
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits);
 
 // The verdict's rule, in one place: a median run reduced chi-square (of a
@@ -62,8 +63,9 @@ double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec
                        const RefineOptions& options, double above = HUGE_VAL,
                        bool* exact = nullptr);
 
-// The verdict on `r` (its misfits): status, threshold, and when it fails a
-// message naming the worst runs, channels and windows.
+// The verdict on `r` (its misfits, the pieces of a paused run joined into
+// one per run and channel): status, threshold, and when it fails a message
+// naming the worst runs, channels and windows.
 void Judge(const RefineOptions& options, RefineResult* r);
 
 }  // namespace pneumaid::refine_internal

@@ -46,12 +46,13 @@ std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
     left[k] = j;
   }
   if (in_gap != nullptr) {
+    std::vector<bool> gap(t.size() - 1, false);  // per logged interval
+    for (std::size_t j : SamplingGaps(t)) gap[j] = true;
     in_gap->assign(samples, false);
     const double round_off_s = 1e-9 * period;
     for (std::size_t k = 0; k < samples; ++k) {
       const std::size_t j = left[k];
-      (*in_gap)[k] = t[j + 1] - t[j] > kSamplingGapIntervals * period &&
-                     clock[k] > t[j] + round_off_s && clock[k] < t[j + 1] - round_off_s;
+      (*in_gap)[k] = gap[j] && clock[k] > t[j] + round_off_s && clock[k] < t[j + 1] - round_off_s;
     }
   }
   for (const auto& [name, values] : e.columns) {

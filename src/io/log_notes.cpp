@@ -23,29 +23,39 @@ std::string Format(const char* format, Numbers... numbers) {
 
 // `t` counts from the log's first sample; the note shows the log's own time.
 std::string SamplingGapNote(const std::vector<double>& t, double time_origin_s) {
+  double median = 0;
+  const std::vector<std::size_t> gaps = SamplingGaps(t, &median);
+  if (gaps.empty()) return {};
+  std::size_t longest = gaps.front();
+  for (std::size_t i : gaps) {
+    if (t[i + 1] - t[i] > t[longest + 1] - t[longest]) longest = i;
+  }
+  const double interval = t[longest + 1] - t[longest];
+  const double missing = std::round(interval / median) - 1;
+  return std::to_string(gaps.size()) + (gaps.size() == 1 ? " gap" : " gaps") +
+         Format(
+             " in the sampling (intervals over %.3g times the median %.3g ms), the longest "
+             "%.4g ms after t = %.8g s, about %.0f samples missing",
+             kSamplingGapIntervals, median * 1e3, interval * 1e3, t[longest] + time_origin_s,
+             missing);
+}
+
+}  // namespace
+
+std::vector<std::size_t> SamplingGaps(const std::vector<double>& t, double* median_interval_s) {
+  if (median_interval_s != nullptr) *median_interval_s = 0;
   if (t.size() < 3) return {};
   std::vector<double> intervals(t.size() - 1);
   for (std::size_t i = 0; i + 1 < t.size(); ++i) intervals[i] = t[i + 1] - t[i];
   const double median = Median(intervals);
-  if (!(median > 0)) return {};
-  std::size_t gaps = 0;
-  std::size_t longest = 0;
+  if (median_interval_s != nullptr) *median_interval_s = median;
+  std::vector<std::size_t> gaps;
+  if (!(median > 0)) return gaps;
   for (std::size_t i = 0; i < intervals.size(); ++i) {
-    if (intervals[i] <= kSamplingGapIntervals * median) continue;
-    ++gaps;
-    if (gaps == 1 || intervals[i] > intervals[longest]) longest = i;
+    if (intervals[i] > kSamplingGapIntervals * median) gaps.push_back(i);
   }
-  if (gaps == 0) return {};
-  const double missing = std::round(intervals[longest] / median) - 1;
-  return std::to_string(gaps) + (gaps == 1 ? " gap" : " gaps") +
-         Format(
-             " in the sampling (intervals over %.3g times the median %.3g ms), the longest "
-             "%.4g ms after t = %.8g s, about %.0f samples missing",
-             kSamplingGapIntervals, median * 1e3, intervals[longest] * 1e3,
-             t[longest] + time_origin_s, missing);
+  return gaps;
 }
-
-}  // namespace
 
 std::vector<std::string> LogNotes(const Experiment& experiment) {
   std::vector<std::string> notes;

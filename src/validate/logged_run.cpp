@@ -160,31 +160,41 @@ double StartVelocity(const Trajectory& m) {
 // sample does not set the start. A log that starts moving gets its first
 // sample and the speed its first samples show.
 InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* samples_averaged) {
-  std::size_t n = 1;
-  // A logger's noise on the command is not a change (as HeldLevels reads it).
-  const auto still = [&m](std::size_t i) {
-    return std::fabs(m.u_V[i] - m.u_V[0]) <= kCommandNoise_V &&
-           std::fabs(m.p1_Pa[i] - m.p1_Pa[0]) <= kStartPressureBand_Pa &&
-           std::fabs(m.p2_Pa[i] - m.p2_Pa[0]) <= kStartPressureBand_Pa;
+  // A first sample a spike threw off (a pressure further than the band from
+  // the next two samples, which agree) is left out: the band is measured from
+  // the second.
+  const auto spike = [&m](const std::vector<double>& p) {
+    return m.size() >= 3 && std::fabs(p[0] - p[1]) > kStartPressureBand_Pa &&
+           std::fabs(p[0] - p[2]) > kStartPressureBand_Pa &&
+           std::fabs(p[1] - p[2]) <= kStartPressureBand_Pa;
   };
-  while (n < m.size() && n < 50 && still(n)) ++n;
-  const auto mean = [n](const std::vector<double>& v) {
-    return std::accumulate(v.begin(), v.begin() + static_cast<long>(n), 0.0) /
-           static_cast<double>(n);
+  const std::size_t first = spike(m.p1_Pa) || spike(m.p2_Pa) ? 1 : 0;
+  std::size_t n = first + 1;
+  // A logger's noise on the command is not a change (as HeldLevels reads it).
+  const auto still = [&m, first](std::size_t i) {
+    return std::fabs(m.u_V[i] - m.u_V[first]) <= kCommandNoise_V &&
+           std::fabs(m.p1_Pa[i] - m.p1_Pa[first]) <= kStartPressureBand_Pa &&
+           std::fabs(m.p2_Pa[i] - m.p2_Pa[first]) <= kStartPressureBand_Pa;
+  };
+  while (n < m.size() && n < first + 50 && still(n)) ++n;
+  const auto mean = [first, n](const std::vector<double>& v) {
+    return std::accumulate(v.begin() + static_cast<long>(first), v.begin() + static_cast<long>(n),
+                           0.0) /
+           static_cast<double>(n - first);
   };
   InitialState initial;
   initial.position_m = mean(m.x_m);
   initial.p1_Pa = mean(m.p1_Pa);
   initial.p2_Pa = mean(m.p2_Pa);
-  const double moved = std::fabs(m.x_m[n - 1] - m.x_m[0]);
+  const double moved = std::fabs(m.x_m[n - 1] - m.x_m[first]);
   if (moved > kMovedAtStart_m) {  // not at rest: averaging would blur a moving start
-    initial.position_m = m.x_m.front();
-    initial.p1_Pa = m.p1_Pa.front();
-    initial.p2_Pa = m.p2_Pa.front();
+    initial.position_m = m.x_m[first];
+    initial.p1_Pa = m.p1_Pa[first];
+    initial.p2_Pa = m.p2_Pa[first];
     initial.velocity_m_per_s = StartVelocity(m);
-    n = 1;
+    n = first + 1;
   }
-  if (samples_averaged != nullptr) *samples_averaged = static_cast<int>(n);
+  if (samples_averaged != nullptr) *samples_averaged = static_cast<int>(n - first);
   // A rod resting on an end stop reads up to a few noise sigmas beyond it.
   initial.position_m = std::clamp(initial.position_m, -half_stroke_m, half_stroke_m);
   return initial;
@@ -220,21 +230,14 @@ CommandSignal LoggedCommand(const Trajectory& m, const RigConstants& rig,
 std::vector<std::size_t> PieceStarts(const Trajectory& m) {
   std::vector<std::size_t> starts = {0};
   const std::vector<double>& t = m.t_s;
-  if (t.size() < 3) return starts;
-  std::vector<double> intervals(t.size() - 1);
-  for (std::size_t i = 0; i + 1 < t.size(); ++i) intervals[i] = t[i + 1] - t[i];
-  const double median_s = internal::Median(intervals);
-  if (!(median_s > 0)) return starts;
   const auto held = [&m](std::size_t a, std::size_t b) {  // the same command at samples a, b
     return std::fabs(m.u_V[a] - m.u_V[b]) <= kCommandNoise_V;
   };
-  for (std::size_t i = 0; i + 1 < t.size(); ++i) {
-    const double interval_s = t[i + 1] - t[i];
-    if (!(interval_s > kSamplingGapIntervals * median_s)) continue;
+  for (std::size_t i : SamplingGaps(t)) {
     // A held command that stepped inside the gap: held on both sides, not across.
     const bool stepped =
         i > 0 && i + 2 < t.size() && held(i - 1, i) && held(i + 1, i + 2) && !held(i, i + 1);
-    if (stepped || interval_s >= kLoggerPause_s) starts.push_back(i + 1);
+    if (stepped || t[i + 1] - t[i] >= kLoggerPause_s) starts.push_back(i + 1);
   }
   return starts;
 }

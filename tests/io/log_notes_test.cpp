@@ -47,6 +47,20 @@ TEST(LogNotesTest, NamesSamplingGapsAndTheLongestNotASingleDroppedRow) {
       << notes;
 }
 
+// The one gap rule: an interval over 3.5 times the median (4 ms at 1 ms is,
+// 3 ms is not), each gap's index in order, and the median it was measured on.
+TEST(LogNotesTest, SamplingGapsAreIntervalsOverThreeAndAHalfMedians) {
+  std::vector<double> t = Clock(100, 1e-3);
+  t.erase(t.begin() + 10, t.begin() + 12);  // 3 ms from t[9] to t[10]
+  t.erase(t.begin() + 50, t.begin() + 53);  // 4 ms from t[49] to t[50]
+  t.erase(t.begin() + 80, t.begin() + 90);  // 11 ms from t[79] to t[80]
+  double median_s = 0;
+  EXPECT_EQ(SamplingGaps(t, &median_s), (std::vector<std::size_t>{49, 79}));
+  EXPECT_NEAR(median_s, 1e-3, 1e-12);
+  EXPECT_TRUE(SamplingGaps({0.0, 1.0}).empty());
+  EXPECT_TRUE(SamplingGaps({0.0, 0.0, 0.0, 5.0}).empty());  // a median of 0: no rule
+}
+
 TEST(LogNotesTest, NamesALastRowWithoutALineEnd) {
   Experiment e = Log("valve-1", ExperimentKind::kValve, Clock(100, 1e-3));
   EXPECT_TRUE(LogNotes(e).empty());

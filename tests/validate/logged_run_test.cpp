@@ -101,6 +101,18 @@ TEST(LoggedInitialStateTest, AFillingChamberIsNotAveragedIntoTheStart) {
   EXPECT_EQ(averaged, 50);
 }
 
+// A spike on the first sample (8 kPa on p1) neither stops the averaging nor
+// sets the start: the band is measured from the second sample.
+TEST(LoggedInitialStateTest, ASpikeOnTheFirstSampleIsLeftOut) {
+  Trajectory m = Log(0.0, 3e5, 2e5);
+  m.p1_Pa[0] += 8e3;
+  int averaged = 0;
+  const InitialState start = LoggedInitialState(m, 0.025, &averaged);
+  EXPECT_EQ(averaged, 50);
+  EXPECT_DOUBLE_EQ(start.p1_Pa, 3e5);
+  EXPECT_DOUBLE_EQ(start.p2_Pa, 2e5);
+}
+
 // The bundled unit's stroke log cut at its first step (the rows at u = 0
 // before it dropped, as a rig that logs from the command writes it) is
 // simulated by the truth as the whole log is: before, the valves started

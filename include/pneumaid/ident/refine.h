@@ -258,6 +258,7 @@ struct ExperimentCost {
 struct ChannelMisfit {
   std::string run, channel;
   double reduced_chi_square = 0;  // mean squared weighted residual (1: the noise alone)
+  int samples = 0;                // the rows it is over (a paused log's pieces together)
   // The worst stretch of misfit_window_s: where, and its reduced chi-square.
   double worst_from_s = 0, worst_to_s = 0, worst_reduced_chi_square = 0;
 };

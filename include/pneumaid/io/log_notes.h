@@ -4,6 +4,7 @@
 // errors: a log that breaks the format is an InputError where it is read.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,14 @@ namespace pneumaid {
 // is a gap (rows lost by the logger): a dropped row or two (2 or 3 times) is
 // common and harmless, a longer gap hides what the rod did while it lasted.
 constexpr double kSamplingGapIntervals = 3.5;
+
+// The sampling's gaps in `t`: the index i of each interval t[i + 1] - t[i]
+// over kSamplingGapIntervals times the median interval, in order (none with
+// fewer than three samples or a median of 0); the median in
+// `median_interval_s` when given. The one rule that `check` notes, the
+// friction fit's uniform clock leaves unmeasured and validation cuts a run at.
+std::vector<std::size_t> SamplingGaps(const std::vector<double>& t,
+                                      double* median_interval_s = nullptr);
 
 // A valve log's median p_up further than this fraction from the manifest's
 // supply_pressure, or the higher chamber pressure above the supply by more

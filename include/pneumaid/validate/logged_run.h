@@ -42,10 +42,11 @@ Parameters WithUnitConstants(const Parameters& params, const Unit& unit);
 // the command has not yet changed by more than 0.01 V and the pressures stay
 // within kStartPressureBand_Pa of the first sample's (at most 50: a log that
 // starts at a step has its chambers filling from the first sample); its first
-// sample when the rod already moves. The position is clamped to the stroke (+-half_stroke_m): a rod
-// resting on an end stop reads up to a few noise sigmas beyond it.
-// `samples_averaged`, if given, receives how many samples the start is the
-// mean of (1 for a moving start).
+// sample when the rod already moves. A first sample whose pressure a spike
+// threw further than the band from the next two (which agree) is left out. The position is clamped
+// to the stroke (+-half_stroke_m): a rod resting on an end stop reads up to a few noise sigmas
+// beyond it. `samples_averaged`, if given, receives how many samples the start is the mean of (1
+// for a moving start).
 constexpr double kStartPressureBand_Pa = 5e3;
 InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m,
                                 int* samples_averaged = nullptr);
