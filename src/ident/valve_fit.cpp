@@ -295,6 +295,17 @@ std::string ValveFitResult::BriefReport() const {
   out << "Valve K_vp fit: " << plateaus.size() - nodes << " plateaus";
   if (nodes > 0) out << ", " << nodes << " nodes of a continuous command";
   out << "\n";
+  std::string lag_of;  // each valve log whose meter lag was read off it, once
+  for (const ValvePlateau& p : plateaus) {
+    if (!p.meter_lag_read || lag_of.find(" " + p.experiment + ":") != std::string::npos) continue;
+    char text[160];
+    std::snprintf(text, sizeof(text), " %s: %.3g ms%s", p.experiment.c_str(), p.meter_lag_s * 1e3,
+                  p.meter_lag_s > 0 ? "" : " (its steps show none)");
+    lag_of += text;
+  }
+  if (!lag_of.empty())
+    out << "  the flow meter's lag, which the manifest does not declare, read off the steps:"
+        << lag_of << "\n";
   for (const auto& [name, fit] :
        {std::make_pair("increasing", &increasing), std::make_pair("decreasing", &decreasing)}) {
     out << "  " << name << ": " << ToString(fit->status);

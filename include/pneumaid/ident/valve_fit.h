@@ -66,6 +66,11 @@ struct ValvePlateau {
   double kvp_kg_per_s = 0;  // measured K_vp
   double kvp_sigma = 0;     // its standard error
   int samples = 0;
+  // The flow meter's lag it was read through [s]: the manifest's, or, where
+  // that declares none, read off the staircase's steps (meter_lag_read; 0
+  // when they show none).
+  double meter_lag_s = 0;
+  bool meter_lag_read = false;
   // A node of a continuous command: its K_vp is that of the hat from
   // u_V - support_half_width_V to u_V + support_half_width_V (one side of it
   // at a break, KvpBreaks); 0 for a plateau.
