@@ -95,12 +95,14 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   const std::size_t saturated = static_cast<std::size_t>(options.min_saturated_openings);
   // Fits u_sat between openings k and k + 1; kept when it beats the best
   // split by more than `margin` in chi-square (Ceres' cost is half of it).
+  std::vector<std::pair<std::size_t, double>> split_costs;  // every split fitted: k, cost
   const auto try_split = [&](std::size_t k, double margin) {
     const auto usable = OutsideGap(plateaus, openings[k], openings[k + 1]);
     if (!FlatAbove(usable, openings[k], options.saturation_flatness)) return;
     KvpBranchParams candidate = prior;
     candidate.u_sat_V = 0.5 * (openings[k] + openings[k + 1]);
     const BranchFit fit = FitBranch(usable, candidate, prefix, options);
+    if (fit.has_values()) split_costs.emplace_back(k, fit.final_cost);
     if (fit.has_values() &&
         (!best.has_values() || fit.final_cost < best.final_cost - 0.5 * margin)) {
       best = fit;
@@ -129,10 +131,33 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
     }
     return best;
   }
+  // Every split that explains the plateaus within 9 in chi-square of the
+  // best (3 sigma) is as good a place for u_sat: where the polynomial has
+  // reached q_max to within the noise below the kept split (a staircase of
+  // short holds: 0.675 +- 0.014 V reported for 0.75, the polynomial at
+  // 0.9993 q_max at 0.7 V), u_sat's interval spans them all. Plateaus only:
+  // a continuous command's nodes near the gap differ from split to split.
+  const bool plateaus_only =
+      std::none_of(plateaus.begin(), plateaus.end(),
+                   [](const ValvePlateau* p) { return p->support_half_width_V > 0; });
+  double u_sat_low = gap_low, u_sat_high = gap_high;
+  for (const auto& [k, cost] : split_costs) {
+    if (!plateaus_only || !(cost <= best.final_cost + 0.5 * kClearlyBetterChiSquare)) continue;
+    u_sat_low = std::min(u_sat_low, openings[k]);
+    u_sat_high = std::max(u_sat_high, openings[k + 1]);
+  }
   // Same split, same cost: only the value inside the gap changes.
   KvpBranchParams located = best.params;
   located.u_sat_V = ContinuousSaturation(best.params, gap_low, gap_high);
   best = FitBranch(OutsideGap(plateaus, gap_low, gap_high), located, prefix, options);
+  if (best.has_values() && (u_sat_low < gap_low || u_sat_high > gap_high)) {
+    char note[200];
+    std::snprintf(note, sizeof(note),
+                  "u_sat anywhere between %.3g and %.3g V: the splits there explain the "
+                  "plateaus within 9 in chi-square of the best",
+                  u_sat_low, u_sat_high);
+    best.reason += (best.reason.empty() ? "" : "; ") + std::string(note);
+  }
   // Saturation seen only at the top of a branch that stops below the full
   // opening may be K_vp still rising slowly above it: when the branch
   // fitted with u_sat one step above its top opening (no plateau saturated,
@@ -140,7 +165,6 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
   // reaches to the full opening. (The paper valve's staircase stopped at
   // 0.7 V: 0.65 and 0.7 V within 0.5 % of each other, u_sat 0.675 +- 0.014
   // reported for 0.75.)
-  double u_sat_high = gap_high;
   const double top = openings.back();
   if (best.has_values() && openings.size() >= 2 && top < kFullOpening_V - options.level_change_V) {
     KvpBranchParams rising = prior;
@@ -152,11 +176,11 @@ BranchFit FitBranchAndSaturation(const std::vector<const ValvePlateau*>& plateau
       std::snprintf(note, sizeof(note),
                     "K_vp seen flat only up to the branch's top opening %.3g V is not told from "
                     "K_vp still rising above it: u_sat between %.3g and %.3g V",
-                    top, gap_low, kFullOpening_V);
+                    top, u_sat_low, kFullOpening_V);
       best.reason += (best.reason.empty() ? "" : "; ") + std::string(note);
     }
   }
-  MarkSaturationFitted(prior, (u_sat_high - gap_low) / std::sqrt(12.0), &best);  // uniform
+  MarkSaturationFitted(prior, (u_sat_high - u_sat_low) / std::sqrt(12.0), &best);  // uniform
   best.u_sat_gap_low_V = gap_low;
   best.u_sat_gap_high_V = gap_high;
   return best;
