@@ -141,6 +141,9 @@ std::array<double, kBranchParameters> Pack(const KvpBranchParams& p) {
   return {p.q_max_kg_per_s, p.a, p.b, p.c, p.d};
 }
 
+// A reduced chi-square above this is said in the fit's note.
+constexpr double kScatterNoted = 4.0;
+
 BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpBranchParams& prior,
                     const std::string& prefix, const ValveFitOptions& options) {
   BranchFit fit;
@@ -193,6 +196,13 @@ BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpB
     return not_fitted(
         "the coefficients are not identifiable from these plateaus (singular covariance)");
   }
+  // Model error: plateaus that scatter about the quartic more than their
+  // errors explain (a valve that is not quite a quartic, a lag not read)
+  // widen its errors by the reduced chi-square when that is above 1.
+  const double dof = static_cast<double>(summary.num_residuals - summary.num_effective_parameters);
+  const double chi_square = dof > 0 ? 2 * summary.final_cost / dof : 1.0;
+  if (chi_square > 1)
+    for (double& v : c) v *= chi_square;
   char below[240] = "";
   if (q_max_held) {
     std::snprintf(below, sizeof(below),
@@ -209,6 +219,14 @@ BranchFit FitBranch(const std::vector<const ValvePlateau*>& plateaus, const KvpB
                                                                  : FitStatus::kConverged;
   if (fit.status == FitStatus::kNotConverged) fit.reason = summary.message;
   if (below_saturation) fit.reason += (fit.reason.empty() ? "" : "; ") + std::string(below);
+  if (chi_square > kScatterNoted) {
+    char scatter[200];
+    std::snprintf(scatter, sizeof(scatter),
+                  "the plateaus scatter about the quartic %.3g times as much as their errors "
+                  "explain (reduced chi-square): the errors are widened by its root",
+                  chi_square);
+    fit.reason += (fit.reason.empty() ? "" : "; ") + std::string(scatter);
+  }
   fit.params = Unpack(theta.data(), prior.u_sat_V);
   SetCoefficients(prefix, prior, fit.params, c, "", &fit);
   if (q_max_held) fit.coefficients.front().held = below;

@@ -257,6 +257,29 @@ TEST(ValveFitTest, USatsErrorSpansEverySplitThePlateausAllow) {
   }
 }
 
+// A 30 ms meter declared without its lag over holds of 60 ms: the plateaus
+// keep part of each step and scatter about the quartic far more than their
+// errors explain. The errors are widened by the reduced chi-square and the
+// note says so: q_max within 3 of them (unscaled, the decreasing one was 4.9
+// errors off).
+TEST(ValveFitTest, PlateausThatScatterWidenTheErrorsAndSaySo) {
+  Parameters truth;
+  Unit unit = SyntheticValveUnit(truth, 4, 0.05, 0.06);
+  unit.manifest.sensors["q"].tau_s = 0.0;
+  const ValveFitResult fit = FitValve(unit, Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << fit.BriefReport();
+  for (const auto& [fitted, real] : {std::make_pair(&fit.increasing, &truth.valve.increasing),
+                                     std::make_pair(&fit.decreasing, &truth.valve.decreasing)}) {
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
+    const FittedCoefficient& q_max = fitted->coefficients.front();
+    EXPECT_LE(std::fabs(q_max.value - real->q_max_kg_per_s), 3 * q_max.standard_error)
+        << q_max.path << " " << q_max.value << " +- " << q_max.standard_error;
+  }
+  // The decreasing branch at a reduced chi-square of 17 (the increasing at 3.9).
+  EXPECT_NE(fit.decreasing.reason.find("the errors are widened"), std::string::npos)
+      << fit.decreasing.reason;
+}
+
 // 2 mV of Gaussian noise (seeded) on every log's command, clipped to the
 // valve's [0, 1] V: a rig that logs the command it measured.
 void AddCommandNoise(std::uint64_t seed, Unit* unit) {
