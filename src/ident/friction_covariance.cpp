@@ -21,7 +21,7 @@ struct Clustered {
   Eigen::MatrixXd information, meat;
   int clusters[2] = {0, 0};        // informing the positive, the negative columns
   double lagged = 0, squared = 0;  // sum r_i r_(i+1), sum r_i^2
-  long residuals = 0;
+  long residuals = 0;              // measured rows less the arrest times
 };
 
 Clustered Information(const std::vector<SegmentJacobian>& segments,
@@ -48,7 +48,9 @@ Clustered Information(const std::vector<SegmentJacobian>& segments,
     const Eigen::Index n = j.residuals.size();
     c.squared += j.residuals.squaredNorm();
     if (n > 1) c.lagged += j.residuals.head(n - 1).dot(j.residuals.tail(n - 1));
-    c.residuals += n;
+    // Rows in a gap of the log weigh 0 (no measurement); an arrest time
+    // eliminated inside the segment is one unknown more.
+    c.residuals += (j.residuals.array() != 0.0).count() - (norm > 0 ? 1 : 0);
   }
   return c;
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <set>
 #include <sstream>
 
 #include "pneumaid/model/kvp.h"
@@ -201,9 +202,10 @@ std::array<std::vector<const ValvePlateau*>, 2> Branches(
 // (the other branch's break held), the one whose nodes the branch fits best
 // at that u_sat (per degree of freedom: a break next to a grid node leaves
 // a limit node with too few samples to report), into breaks->*branch.
+// `earlier`: the first reading's plateaus, whose held commands are reused.
 void ScanSaturation(const Unit& unit, double normalization, const ValveFitOptions& options,
                     const BranchFit& fit, const std::string& prefix, double KvpBreaks::*branch,
-                    KvpBreaks* breaks) {
+                    const std::vector<ValvePlateau>& earlier, KvpBreaks* breaks) {
   const double width = fit.u_sat_gap_high_V - fit.u_sat_gap_low_V;
   if (!fit.u_sat_fitted || !(width > 0)) return;
   constexpr int kPoints = 30;
@@ -213,7 +215,7 @@ void ScanSaturation(const Unit& unit, double normalization, const ValveFitOption
     breaks->*branch = low + (j + 0.5) * step;
     if (!(breaks->*branch > 0 && breaks->*branch < 1)) continue;
     const std::vector<ValvePlateau> nodes =
-        ExtractValvePlateaus(unit, normalization, options, *breaks);
+        ExtractValvePlateaus(unit, normalization, options, *breaks, &earlier);
     const auto points = Branches(nodes)[branch == &KvpBreaks::decreasing_V];
     KvpBranchParams at = fit.params;
     at.u_sat_V = breaks->*branch;
@@ -269,11 +271,11 @@ ValveFitResult FitValve(const Unit& unit, const ValveParams& prior,
     if (result.increasing.u_sat_fitted) breaks.increasing_V = result.increasing.params.u_sat_V;
     if (result.decreasing.u_sat_fitted) breaks.decreasing_V = result.decreasing.params.u_sat_V;
     ScanSaturation(unit, prior.normalization, options, result.increasing, "valve.increasing",
-                   &KvpBreaks::increasing_V, &breaks);
+                   &KvpBreaks::increasing_V, result.plateaus, &breaks);
     ScanSaturation(unit, prior.normalization, options, result.decreasing, "valve.decreasing",
-                   &KvpBreaks::decreasing_V, &breaks);
+                   &KvpBreaks::decreasing_V, result.plateaus, &breaks);
     std::vector<ValvePlateau> again =
-        ExtractValvePlateaus(unit, prior.normalization, options, breaks);
+        ExtractValvePlateaus(unit, prior.normalization, options, breaks, &result.plateaus);
     const auto second = Branches(again);
     BranchFit refits[2];
     bool all = true;
@@ -319,9 +321,10 @@ std::string ValveFitResult::BriefReport() const {
   out << "Valve K_vp fit: " << plateaus.size() - nodes << " plateaus";
   if (nodes > 0) out << ", " << nodes << " nodes of a continuous command";
   out << "\n";
-  std::string lag_of;  // each valve log whose meter lag was read off it, once
+  std::string lag_of;          // each valve log whose meter lag was read off it
+  std::set<std::string> said;  // once
   for (const ValvePlateau& p : plateaus) {
-    if (!p.meter_lag_read || lag_of.find(" " + p.experiment + ":") != std::string::npos) continue;
+    if (!p.meter_lag_read || !said.insert(p.experiment).second) continue;
     char text[160];
     std::snprintf(text, sizeof(text), " %s: %.3g ms%s", p.experiment.c_str(), p.meter_lag_s * 1e3,
                   p.meter_lag_s > 0 ? "" : " (its steps show none)");

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "../util/median.h"
 #include "held_levels.h"
-#include "pneumaid/eval/lag.h"
 #include "pneumaid/ident/valve_fit.h"
 #include "pneumaid/model/orifice.h"
 #include "pneumaid/model/valve_bank.h"
@@ -130,8 +130,7 @@ double ReadMeterLag(const std::vector<double>& t, const std::vector<double>& q,
                     const Levels& levels, const std::vector<char>& used) {
   std::vector<double> holds;
   for (const auto& [begin, end] : levels) holds.push_back(t[end - 1] - t[begin]);
-  std::nth_element(holds.begin(), holds.begin() + holds.size() / 2, holds.end());
-  const double longest_s = 0.5 * holds[holds.size() / 2];
+  const double longest_s = 0.5 * internal::Median(std::move(holds));
   const auto squares = [&](double tau_s) { return SolveLevels(t, q, levels, used, tau_s).squares; };
   const LevelSolve none = SolveLevels(t, q, levels, used, 0.0);
   std::vector<double> grid;
@@ -192,8 +191,9 @@ void StaircasePlateaus(const Experiment& e, const Levels& levels,
   // Undeclared: the solve's own residual spread, not NoiseOf's estimate from
   // the readings (io/channel_noise.h): a level's K_vp error then carries
   // whatever of the log the held levels do not model, not the noise alone.
+  const double unknowns = static_cast<double>(m) + (read_lag && tau_s > 0 ? 1.0 : 0.0);
   const double q_sigma = unit.manifest.DeclaredSigma(
-      "q", std::sqrt(squares / std::max<double>(1.0, static_cast<double>(rows) - m)));
+      "q", std::sqrt(squares / std::max<double>(1.0, static_cast<double>(rows) - unknowns)));
   double previous_u = 0.0;  // the level before, for the branch
   bool decreasing = false;
   for (std::size_t k = 0; k < m; ++k) {
@@ -393,6 +393,7 @@ void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& ori
     node.kvp_kg_per_s = kvp(j);
     node.kvp_sigma = std::max(q_sigma * std::sqrt(std::max(inverse(j, j), 0.0)), 1e-15);
     node.samples = static_cast<int>(std::lround(support[c]));
+    node.meter_lag_s = tau_s;
     node.support_half_width_V = h;
     plateaus->push_back(node);
   }
@@ -402,7 +403,8 @@ void ContinuousNodes(const Experiment& e, const OrificeCoefficients<double>& ori
 
 std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
                                                const ValveFitOptions& options,
-                                               const KvpBreaks& breaks) {
+                                               const KvpBreaks& breaks,
+                                               const std::vector<ValvePlateau>* earlier) {
   const RigConstants& rig = unit.manifest.rig;
   const auto orifice =
       MakeOrificeCoefficients<double>(rig.gas.heat_capacity_ratio, rig.gas.gas_constant_J_per_kgK,
@@ -414,7 +416,13 @@ std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normaliz
     const auto& u = e.column("u");
     const auto levels = internal::HeldLevels(u, options.level_change_V);
     if (HeldCommand(e.column("t"), u, levels, options)) {
-      StaircasePlateaus(e, levels, orifice, tau, unit, options, &plateaus);
+      if (earlier == nullptr) {
+        StaircasePlateaus(e, levels, orifice, tau, unit, options, &plateaus);
+        continue;
+      }
+      for (const ValvePlateau& p : *earlier) {
+        if (p.experiment == e.entry.id && p.support_half_width_V == 0) plateaus.push_back(p);
+      }
     } else {
       ContinuousNodes(e, orifice, std::max(tau, 0.0), unit, options, breaks, &plateaus);
     }

@@ -161,12 +161,12 @@ double StartVelocity(const Trajectory& m) {
 // sample and the speed its first samples show.
 InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* samples_averaged) {
   // A first sample a spike threw off (a pressure further than the band from
-  // the next two samples, which agree) is left out: the band is measured from
-  // the second.
+  // the second sample and from the line through the second and third, which
+  // a chamber filling from the first sample follows) is left out: the band
+  // is measured from the second.
   const auto spike = [&m](const std::vector<double>& p) {
     return m.size() >= 3 && std::fabs(p[0] - p[1]) > kStartPressureBand_Pa &&
-           std::fabs(p[0] - p[2]) > kStartPressureBand_Pa &&
-           std::fabs(p[1] - p[2]) <= kStartPressureBand_Pa;
+           std::fabs(p[0] - (2 * p[1] - p[2])) > kStartPressureBand_Pa;
   };
   const std::size_t first = spike(m.p1_Pa) || spike(m.p2_Pa) ? 1 : 0;
   std::size_t n = first + 1;

@@ -111,6 +111,12 @@ TEST(LoggedInitialStateTest, ASpikeOnTheFirstSampleIsLeftOut) {
   EXPECT_EQ(averaged, 50);
   EXPECT_DOUBLE_EQ(start.p1_Pa, 3e5);
   EXPECT_DOUBLE_EQ(start.p2_Pa, 2e5);
+  // A chamber filling from the first sample by 5.5 kPa, then 4.9 kPa a
+  // sample is no spike: its first sample is the start.
+  Trajectory filling = Log(0.4, 1e5, 1e5);
+  for (std::size_t i = 1; i < filling.size(); ++i)
+    filling.p1_Pa[i] = filling.p1_Pa[i - 1] + (i == 1 ? 5.5e3 : 4.9e3);
+  EXPECT_EQ(LoggedInitialState(filling, 0.025).p1_Pa, 1e5);
 }
 
 // The bundled unit's stroke log cut at its first step (the rows at u = 0

@@ -67,8 +67,8 @@ struct ValvePlateau {
   double kvp_sigma = 0;     // its standard error
   int samples = 0;
   // The flow meter's lag it was read through [s]: the manifest's, or, where
-  // that declares none, read off the staircase's steps (meter_lag_read; 0
-  // when they show none).
+  // that declares none, a staircase's read off its steps (meter_lag_read; 0
+  // when they show none) and a continuous command's 0.
   double meter_lag_s = 0;
   bool meter_lag_read = false;
   // A node of a continuous command: its K_vp is that of the hat from
@@ -111,10 +111,14 @@ struct KvpBreaks {
 
 // The plateaus of every valve experiment of `unit` (and the nodes of those
 // whose command is not held, with K_vp free to jump at `breaks`).
-// `normalization` is N of Eq. 4.
+// `normalization` is N of Eq. 4. `earlier`, when given, is an earlier call's
+// result for the same unit: the plateaus of the held commands, which do not
+// depend on `breaks`, are taken from it, not read again (a lag read off the
+// steps costs some 65 solves per log).
 std::vector<ValvePlateau> ExtractValvePlateaus(const Unit& unit, double normalization,
                                                const ValveFitOptions& options,
-                                               const KvpBreaks& breaks = {});
+                                               const KvpBreaks& breaks = {},
+                                               const std::vector<ValvePlateau>* earlier = nullptr);
 
 // Fits both branches; a branch without enough plateaus keeps `prior`'s values.
 ValveFitResult FitValve(const Unit& unit, const ValveParams& prior, const ValveFitOptions& options);

@@ -43,7 +43,8 @@ Parameters WithUnitConstants(const Parameters& params, const Unit& unit);
 // within kStartPressureBand_Pa of the first sample's (at most 50: a log that
 // starts at a step has its chambers filling from the first sample); its first
 // sample when the rod already moves. A first sample whose pressure a spike
-// threw further than the band from the next two (which agree) is left out. The position is clamped
+// threw further than the band from the second and from the line through the
+// second and third (a filling chamber's) is left out. The position is clamped
 // to the stroke (+-half_stroke_m): a rod resting on an end stop reads up to a few noise sigmas
 // beyond it. `samples_averaged`, if given, receives how many samples the start is the mean of (1
 // for a moving start).
