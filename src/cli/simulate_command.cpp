@@ -112,24 +112,29 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
   }
   LoggedRun run;
   run.t_s = columns["t"];
-  run.command = SampledCommand(run.t_s, columns["u"]);
-  run.initial = RetractedAtRest(params);
+  Trajectory logged;
+  logged.t_s = run.t_s;
+  logged.u_V = columns["u"];
   if (!columns["x"].empty() && !columns["p1"].empty() && !columns["p2"].empty()) {
     // As validation starts a logged run (a rod on its stop reads a little
     // beyond it: clamped to the stroke).
-    Trajectory logged;
-    logged.t_s = run.t_s;
-    logged.u_V = columns["u"];
     logged.x_m = columns["x"];
     logged.p1_Pa = columns["p1"];
     logged.p2_Pa = columns["p2"];
     run.initial = LoggedInitialState(logged, 0.5 * params.cylinder.stroke_m);
-    // As validation takes a log's command (one that starts at its step too).
-    RigConstants rig;
-    rig.supply_pressure_Pa = params.supply.supply_pressure_Pa;
-    rig.atmospheric_pressure_Pa = params.supply.atmospheric_pressure_Pa;
-    run.command = LoggedCommand(logged, rig);
+  } else {
+    // A command alone starts from the retracted rest at the atmosphere, as
+    // if logged so: a first command other than 0 is then a step at the start.
+    run.initial = RetractedAtRest(params);
+    logged.x_m.assign(run.t_s.size(), run.initial.position_m);
+    logged.p1_Pa.assign(run.t_s.size(), run.initial.p1_Pa);
+    logged.p2_Pa.assign(run.t_s.size(), run.initial.p2_Pa);
   }
+  // As validation takes a log's command (one that starts at its step too).
+  RigConstants rig;
+  rig.supply_pressure_Pa = params.supply.supply_pressure_Pa;
+  rig.atmospheric_pressure_Pa = params.supply.atmospheric_pressure_Pa;
+  run.command = LoggedCommand(logged, rig);
   return run;
 }
 

@@ -1,6 +1,8 @@
 // End to end: the `pneumaid simulate` binary, its output and its exit codes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 
 #include "cli_test_util.h"
@@ -34,6 +36,38 @@ TEST_F(SimulateCliTest, StepWritesAValidationLogInSI) {
             0)
       << Stderr();
   EXPECT_NEAR(ReadCsv(again).Find("x")->values.back(), table.Find("x")->values.back(), 2e-4);
+}
+
+// A command alone (t and u, no state) from a first command of 1 V: the run
+// starts from the retracted rest at the atmosphere, so the command is a
+// step at its start, as `--step 1@0` and as validation reads such a log.
+// Before, the valves started settled, fully open, from chambers at the
+// atmosphere: a log that validation, reading the same rows, took otherwise.
+TEST_F(SimulateCliTest, ACommandAloneStartsAtItsStepAsValidationReadsIt) {
+  const std::string step = (dir_ / "step.csv").string();
+  ASSERT_EQ(Run("simulate --params " + kPaper +
+                " --step 1@0 --step -1@0.8 --until 1.5 --rate 200 --out " + step),
+            0)
+      << Stderr();
+  const std::string command = (dir_ / "command.csv").string();
+  {
+    std::ofstream file(command);
+    file << "t [s],u [V]\n";
+    for (int i = 0; i <= 300; ++i) file << i * 0.005 << "," << (i * 0.005 < 0.8 ? 1 : -1) << "\n";
+  }
+  const std::string out = (dir_ / "sim.csv").string();
+  ASSERT_EQ(Run("simulate --params " + kPaper + " --input " + command + " --rate 200 --out " + out),
+            0)
+      << Stderr();
+  const CsvTable a = ReadCsv(step), b = ReadCsv(out);
+  ASSERT_EQ(a.rows(), b.rows());
+  double worst_x = 0, worst_p1 = 0;
+  for (std::size_t i = 0; i < a.rows(); ++i) {
+    worst_x = std::max(worst_x, std::fabs(a.Find("x")->values[i] - b.Find("x")->values[i]));
+    worst_p1 = std::max(worst_p1, std::fabs(a.Find("p1")->values[i] - b.Find("p1")->values[i]));
+  }
+  EXPECT_LT(worst_x, 2e-4);  // m
+  EXPECT_LT(worst_p1, 2e3);  // Pa
 }
 
 // A unit's log whose rod rests on its stop reads a little beyond it (the
