@@ -380,10 +380,16 @@ std::string RefineResult::BriefReport() const {
       return found == e.channels.end() ? NAN : found->second.rmse;
     };
     std::snprintf(line, sizeof(line),
-                  "  held out %-16s x RMSE %.4g -> %.4g mm, p1 RMSE %.4g -> %.4g bar\n",
+                  "  held out %-16s x RMSE %.4g -> %.4g mm, p1 RMSE %.4g -> %.4g bar, p2 RMSE %.4g "
+                  "-> %.4g bar",
                   after.id.c_str(), rmse(before, "x") * 1e3, rmse(after, "x") * 1e3,
-                  rmse(before, "p1") * 1e-5, rmse(after, "p1") * 1e-5);
+                  rmse(before, "p1") * 1e-5, rmse(after, "p1") * 1e-5, rmse(before, "p2") * 1e-5,
+                  rmse(after, "p2") * 1e-5);
     out << line;
+    // A threshold missed in any channel, p2's or a flow's too, is said here.
+    for (std::size_t k = 0; k < after.missed.size(); ++k)
+      out << (k == 0 ? "; missed: " : "; ") << after.missed[k];
+    out << "\n";
   }
   return out.str();
 }

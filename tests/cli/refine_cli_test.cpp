@@ -29,6 +29,8 @@ TEST_F(RefineCliTest, RefinesAndWritesUncertaintyAndProvenance) {
             0)
       << Stdout() << Stderr();
   EXPECT_NE(Stdout().find("held out profile-1"), std::string::npos) << Stdout();
+  // Every chamber's RMSE, p2's too (a miss in p2 alone showed nowhere here).
+  EXPECT_NE(Stdout().find("p2 RMSE"), std::string::npos) << Stdout();
   const std::string written = Read(out);
   EXPECT_NE(written.find("friction.negative.Fd"), std::string::npos) << written;  // uncertainty
   EXPECT_NE(written.find("refine:"), std::string::npos) << written;               // provenance
