@@ -66,11 +66,19 @@ double WindowedMeasure(const Parameters& params, const Unit& unit, const FitSpec
   return WindowedMeasures(unit, spec, options).Measure(params, above, exact);
 }
 
+namespace {
+
+// What a misfit weighs when chi-squares are pooled: its rows, at least 1
+// (the one home of that rule: runs' channels, a paused run's pieces).
+double PoolWeight(const ChannelMisfit& m) { return std::max(m.samples, 1); }
+
+}  // namespace
+
 double MedianRunChiSquare(const std::vector<ChannelMisfit>& misfits) {
   // Per run: its channels' and pieces' chi-squares weighted by their rows.
   std::map<std::string, std::pair<double, double>> runs;  // sum of chi2 x rows, rows
   for (const ChannelMisfit& m : misfits) {
-    const double rows = std::max(m.samples, 1);
+    const double rows = PoolWeight(m);
     runs[m.run].first += m.reduced_chi_square * rows;
     runs[m.run].second += rows;
   }
@@ -100,10 +108,9 @@ void JoinPieces(std::vector<ChannelMisfit>* misfits) {
       joined.push_back(m);
       continue;
     }
-    const double rows = std::max(same->samples, 1) + std::max(m.samples, 1);
-    same->reduced_chi_square = (same->reduced_chi_square * std::max(same->samples, 1) +
-                                m.reduced_chi_square * std::max(m.samples, 1)) /
-                               rows;
+    same->reduced_chi_square =
+        (same->reduced_chi_square * PoolWeight(*same) + m.reduced_chi_square * PoolWeight(m)) /
+        (PoolWeight(*same) + PoolWeight(m));
     same->samples += m.samples;
     if (m.worst_reduced_chi_square > same->worst_reduced_chi_square) {
       same->worst_reduced_chi_square = m.worst_reduced_chi_square;

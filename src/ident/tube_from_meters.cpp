@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <functional>
 
+#include "../util/golden_section.h"
 #include "determination.h"
 #include "pneumaid/eval/lag.h"
 
@@ -137,21 +138,9 @@ void FitTubeFromMeters(const Experiment& e, const Manifest& manifest,
   }
   // Golden section in k (log delta) across the best scan point's neighbours.
   double low = std::max(0.0, best_k - 1.0), high = std::min<double>(scan.points, best_k + 1.0);
-  const double golden = 0.5 * (std::sqrt(5.0) - 1.0);
-  double a = high - golden * (high - low), b = low + golden * (high - low);
-  double fa = objective(at(a)), fb = objective(at(b));
-  for (int iteration = 0; iteration < 60; ++iteration) {
-    if (fa < fb) {
-      high = b, b = a, fb = fa;
-      a = high - golden * (high - low);
-      fa = objective(at(a));
-    } else {
-      low = a, a = b, fa = fb;
-      b = low + golden * (high - low);
-      fb = objective(at(b));
-    }
-  }
-  const double delta = at(0.5 * (low + high));
+  // The interval's middle after 60 steps (its ends are 1e-12 of a step apart).
+  const auto at_k = [&](double k) { return objective(at(k)); };
+  const double delta = at(internal::GoldenSection(at_k, low, high, 60).x);
   fit->iterations = 60;
   // Sensitivities by central differences. The error: the meters' noise
   // through the filters, widened by the reduced chi-square where the fit is

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "../util/golden_section.h"
 #include "../util/median.h"
 #include "held_levels.h"
 #include "pneumaid/ident/valve_fit.h"
@@ -50,16 +51,19 @@ bool HeldCommand(const std::vector<double>& t, const std::vector<double>& u, con
 
 // The level flows of a staircase seen through a meter lag of `tau_s`: the
 // reading is linear in them (one lagged indicator column per level), so all
-// come from one least-squares solve over the `used` samples.
+// come from one least-squares solve over the `used` samples. The diagonal
+// of (A'A)^-1 (the levels' variance factors) only when asked: the lag
+// scan's 60-odd solves need the squares alone.
 struct LevelSolve {
   Eigen::VectorXd flow;
-  Eigen::MatrixXd inverse;  // (A'A)^-1
+  Eigen::VectorXd inverse_diagonal;  // of (A'A)^-1, when asked
   double squares = HUGE_VAL;
   std::size_t rows = 0;
 };
 
 LevelSolve SolveLevels(const std::vector<double>& t, const std::vector<double>& q,
-                       const Levels& levels, const std::vector<char>& used, double tau_s) {
+                       const Levels& levels, const std::vector<char>& used, double tau_s,
+                       bool with_inverse_diagonal = false) {
   const std::size_t n = t.size(), m = levels.size();
   // Each level's column, nonzero from its first sample until its lagged
   // tail has decayed below 1e-12: (first sample, values). The same
@@ -115,7 +119,8 @@ LevelSolve SolveLevels(const std::vector<double>& t, const std::vector<double>& 
   for (std::size_t i = 0; i < n; ++i) {
     if (used[i]) out.squares += std::pow(fitted[i] - q[i], 2);
   }
-  out.inverse = solver.solve(Eigen::MatrixXd::Identity(m, m));
+  if (with_inverse_diagonal)
+    out.inverse_diagonal = solver.solve(Eigen::MatrixXd::Identity(m, m)).diagonal();
   return out;
 }
 
@@ -141,19 +146,8 @@ double ReadMeterLag(const std::vector<double>& t, const std::vector<double>& q,
   const std::size_t best = std::min_element(cost.begin(), cost.end()) - cost.begin();
   double low = best > 0 ? grid[best - 1] : 0.5 * grid[0];
   double high = best + 1 < grid.size() ? grid[best + 1] : grid[best];
-  const double golden = 0.5 * (std::sqrt(5.0) - 1);
-  double x1 = high - golden * (high - low), x2 = low + golden * (high - low);
-  double f1 = squares(x1), f2 = squares(x2);
-  for (int i = 0; i < 20; ++i) {
-    if (f1 < f2) {
-      high = x2, x2 = x1, f2 = f1;
-      x1 = high - golden * (high - low), f1 = squares(x1);
-    } else {
-      low = x1, x1 = x2, f1 = f2;
-      x2 = low + golden * (high - low), f2 = squares(x2);
-    }
-  }
-  double tau_s = f1 < f2 ? x1 : x2, at = std::min(f1, f2);
+  const internal::GoldenSectionMinimum refined = internal::GoldenSection(squares, low, high, 20);
+  double tau_s = refined.x, at = refined.value;
   if (cost[best] < at) tau_s = grid[best], at = cost[best];
   const double dof = static_cast<double>(none.rows) - static_cast<double>(levels.size()) - 1;
   if (!(dof > 0) || !(none.squares - at > 25.0 * at / dof)) return 0.0;
@@ -182,10 +176,10 @@ void StaircasePlateaus(const Experiment& e, const Levels& levels,
   }
   const bool read_lag = tau_s < 0;
   if (read_lag) tau_s = ReadMeterLag(t, q, levels, used);
-  const LevelSolve solve = SolveLevels(t, q, levels, used, tau_s);
+  const LevelSolve solve = SolveLevels(t, q, levels, used, tau_s, true);
   if (!std::isfinite(solve.squares)) return;
   const Eigen::VectorXd& flow = solve.flow;
-  const Eigen::MatrixXd& inverse = solve.inverse;
+  const Eigen::VectorXd& inverse_diagonal = solve.inverse_diagonal;
   const double squares = solve.squares;
   const std::size_t rows = solve.rows;
   // Undeclared: the solve's own residual spread, not NoiseOf's estimate from
@@ -216,7 +210,7 @@ void StaircasePlateaus(const Experiment& e, const Levels& levels,
     plateau.decreasing = decreasing;
     plateau.kvp_kg_per_s = flow[k] / per_kvp;
     plateau.kvp_sigma =
-        std::max(q_sigma * std::sqrt(std::max(inverse(k, k), 0.0)), 1e-15) / per_kvp;
+        std::max(q_sigma * std::sqrt(std::max(inverse_diagonal[k], 0.0)), 1e-15) / per_kvp;
     plateau.samples = used_per_level[k];
     plateau.meter_lag_s = tau_s;
     plateau.meter_lag_read = read_lag;

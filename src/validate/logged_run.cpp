@@ -1,14 +1,17 @@
 #include "pneumaid/validate/logged_run.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numeric>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "../util/median.h"
+#include "../util/slope.h"
 #include "pneumaid/eval/metrics.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/log_notes.h"
@@ -130,9 +133,6 @@ Trajectory LoggedTrajectory(const Experiment& e, const PositionZero& zero) {
 
 namespace {
 
-// A rod that moves this far over a log's leading samples is moving at its start.
-constexpr double kMovedAtStart_m = 1e-4;
-
 // The rod's speed at a moving start: the least-squares slope of x over the
 // first kStartVelocity_s (at least three samples). A piece after a logger's
 // pause starts mid-slide, and from rest the simulated rod lagged behind.
@@ -140,17 +140,46 @@ constexpr double kStartVelocity_s = 0.005;
 double StartVelocity(const Trajectory& m) {
   std::size_t n = 1;
   while (n < m.size() && (n < 3 || m.t_s[n] - m.t_s.front() <= kStartVelocity_s)) ++n;
-  if (n < 3) return 0.0;
-  double t_mean = 0, x_mean = 0;
-  for (std::size_t i = 0; i < n; ++i) t_mean += m.t_s[i], x_mean += m.x_m[i];
-  t_mean /= static_cast<double>(n);
-  x_mean /= static_cast<double>(n);
-  double tx = 0, tt = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    tx += (m.t_s[i] - t_mean) * (m.x_m[i] - x_mean);
-    tt += (m.t_s[i] - t_mean) * (m.t_s[i] - t_mean);
+  return n < 3 ? 0.0 : internal::LeadingSlope(m.t_s, m.x_m, n);
+}
+
+// A pressure over samples [first, n) read at t[0] off the least-squares
+// polynomial of the lowest degree (0 to 2) whose next term is not
+// significant: a term is taken when its coefficient is over
+// kStartDriftSigmas standard errors and the samples are at least its degree
+// plus 2 (three samples of a chamber filling 2 kPa a sample before it
+// leaves the band: their line).
+struct LeadingFit {
+  int degree = 0;
+  double at_start = 0;  // the polynomial's value at the log's first sample
+  double samples = 1;   // the mean's count whose variance the value has: 1 / (A'A)^-1 [0, 0]
+};
+LeadingFit FitLeading(const std::vector<double>& t, const std::vector<double>& v, std::size_t first,
+                      std::size_t n) {
+  const int count = static_cast<int>(n - first);
+  LeadingFit fit;
+  const double span = t[n - 1] - t[0];
+  for (int degree = 0; degree <= 2 && count >= degree + 2; ++degree) {
+    Eigen::MatrixXd a(count, degree + 1);
+    Eigen::VectorXd b(count);
+    for (int i = 0; i < count; ++i) {
+      const double s = span > 0 ? (t[first + i] - t[0]) / span : 0.0;
+      for (int k = 0; k <= degree; ++k) a(i, k) = std::pow(s, k);
+      b(i) = v[first + i];
+    }
+    const Eigen::MatrixXd normal = a.transpose() * a;
+    const Eigen::LDLT<Eigen::MatrixXd> solve(normal);
+    const Eigen::VectorXd c = solve.solve(a.transpose() * b);
+    // A residual under 1 Pa is a logger's rounding, not a measure of noise.
+    const double variance = std::max(1.0, (b - a * c).squaredNorm() / (count - degree - 1));
+    const Eigen::MatrixXd inverse = solve.solve(Eigen::MatrixXd::Identity(degree + 1, degree + 1));
+    const double se = std::sqrt(variance * inverse(degree, degree));
+    if (degree > 0 && !(se > 0 && std::fabs(c(degree)) > kStartDriftSigmas * se)) break;
+    fit.degree = degree;
+    fit.at_start = c(0);
+    fit.samples = 1.0 / inverse(0, 0);
   }
-  return tt > 0 ? tx / tt : 0.0;
+  return fit;
 }
 
 }  // namespace
@@ -186,19 +215,49 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
   initial.position_m = mean(m.x_m);
   initial.p1_Pa = mean(m.p1_Pa);
   initial.p2_Pa = mean(m.p2_Pa);
+  double averaged = static_cast<double>(n - first);
+  // Pressures that drift over those samples (a chamber still filling or
+  // emptying) are read at the first sample off their fits (FitLeading); the
+  // mean lags by half the span (2 kPa, seven noise sigmas, on a chamber
+  // emptying 1 kPa/ms).
+  const LeadingFit fit1 = FitLeading(m.t_s, m.p1_Pa, first, n);
+  const LeadingFit fit2 = FitLeading(m.t_s, m.p2_Pa, first, n);
+  if (fit1.degree > 0 || fit2.degree > 0) {
+    initial.p1_Pa = fit1.at_start;
+    initial.p2_Pa = fit2.at_start;
+    averaged = std::min(fit1.samples, fit2.samples);
+  }
   const double moved = std::fabs(m.x_m[n - 1] - m.x_m[first]);
   if (moved > kMovedAtStart_m) {  // not at rest: averaging would blur a moving start
     initial.position_m = m.x_m[first];
     initial.p1_Pa = m.p1_Pa[first];
     initial.p2_Pa = m.p2_Pa[first];
     initial.velocity_m_per_s = StartVelocity(m);
-    n = first + 1;
+    averaged = 1;
   }
-  if (samples_averaged != nullptr) *samples_averaged = static_cast<int>(n - first);
+  if (samples_averaged != nullptr)
+    *samples_averaged = std::max(1, static_cast<int>(std::lround(averaged)));
   // A rod resting on an end stop reads up to a few noise sigmas beyond it.
   initial.position_m = std::clamp(initial.position_m, -half_stroke_m, half_stroke_m);
   return initial;
 }
+
+namespace {
+
+// `command` (a logged one, its first value holding before its first knot)
+// with the lags settled for `before_V` before t0_s and its logged value from
+// t0_s on (a knot added there when it has none).
+CommandSignal SettledBefore(CommandSignal command, double t0_s, double before_V) {
+  if (command.time_s.empty() || command.time_s.front() > t0_s) {
+    const double u0 = command.ValueAt(t0_s);
+    command.time_s.insert(command.time_s.begin(), t0_s);
+    command.value_V.insert(command.value_V.begin(), u0);
+  }
+  command.initial_V = before_V;
+  return command;
+}
+
+}  // namespace
 
 CommandSignal LoggedCommand(const Trajectory& m, const RigConstants& rig,
                             std::optional<double> logged_before_V) {
@@ -218,13 +277,8 @@ CommandSignal LoggedCommand(const Trajectory& m, const RigConstants& rig,
   const double charged_Pa = u0 > 0 ? m.p1_Pa.front() : m.p2_Pa.front();
   if (charged_Pa >= at_supply_Pa) return command;  // settled for u0
   const double discharged_Pa = u0 > 0 ? m.p2_Pa.front() : m.p1_Pa.front();
-  const double before_V = discharged_Pa >= at_supply_Pa ? -u0 : 0.0;
-  if (command.time_s.empty() || command.time_s.front() > m.t_s.front()) {
-    command.time_s.insert(command.time_s.begin(), m.t_s.front());
-    command.value_V.insert(command.value_V.begin(), u0);
-  }
-  command.initial_V = before_V;
-  return command;
+  return SettledBefore(std::move(command), m.t_s.front(),
+                       discharged_Pa >= at_supply_Pa ? -u0 : 0.0);
 }
 
 std::vector<std::size_t> PieceStarts(const Trajectory& m) {

@@ -10,6 +10,7 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
+#include "pneumaid/validate/lag_start.h"
 #include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid {
@@ -97,6 +98,7 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
   // Piece by piece where the logger paused (PieceStarts), each from its own
   // logged start; the simulated pieces end to end.
   const std::vector<std::size_t> begins = PieceStarts(m);
+  const std::map<std::string, double> noise = ChannelNoises(unit);
   for (std::size_t k = 0; k < begins.size(); ++k) {
     const std::size_t end = k + 1 < begins.size() ? begins[k + 1] : m.size();
     const Trajectory piece = Slice(m, begins[k], end);
@@ -104,9 +106,12 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
     Trajectory simulated;
     const std::optional<double> before =
         k > 0 ? std::optional<double>(m.u_V[begins[k] - 1]) : std::nullopt;
+    const CommandSignal command = LoggedCommand(piece, unit.manifest.rig, before);
+    const LagStart lag = ReadLagStart(params, piece, command, initial, noise, options.simulation);
+    if (lag.read) out.notes.push_back(lag.note);
     const SimulationSummary summary =
-        Simulate(params, LoggedCommand(piece, unit.manifest.rig, before), initial, piece.t_s,
-                 options.simulation, &simulated);
+        Simulate(params, lag.read ? lag.command : command, lag.read ? lag.initial : initial,
+                 piece.t_s, options.simulation, &simulated);
     if (k == 0) {
       out.simulation = summary;
       out.simulated = std::move(simulated);
@@ -120,7 +125,7 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
   Trajectory comparable = out.simulated;
   if (m.q1_kg_per_s.empty()) comparable.q1_kg_per_s.clear();
   if (m.q2_kg_per_s.empty()) comparable.q2_kg_per_s.clear();
-  out.channels = CompareRuns(m, comparable, ChannelNoises(unit));
+  out.channels = CompareRuns(m, comparable, noise);
   out.missed = MissedThresholds(out.channels, options);
   return out;
 }
@@ -180,6 +185,7 @@ std::string ValidationReport::BriefReport() const {
       out << line << ";";
     }
     out << "\n";
+    for (const auto& note : e.notes) out << "    note: " << note << "\n";
     for (const auto& miss : e.missed) out << "    MISSED: " << miss << "\n";
   }
   out << (numerical_failure() ? "a simulation failed\n"

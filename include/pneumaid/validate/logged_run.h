@@ -42,13 +42,18 @@ Parameters WithUnitConstants(const Parameters& params, const Unit& unit);
 // the command has not yet changed by more than 0.01 V and the pressures stay
 // within kStartPressureBand_Pa of the first sample's (at most 50: a log that
 // starts at a step has its chambers filling from the first sample); its first
-// sample when the rod already moves. A first sample whose pressure a spike
-// threw further than the band from the second and from the line through the
-// second and third (a filling chamber's) is left out. The position is clamped
-// to the stroke (+-half_stroke_m): a rod resting on an end stop reads up to a few noise sigmas
-// beyond it. `samples_averaged`, if given, receives how many samples the start is the mean of (1
-// for a moving start).
+// sample when the rod already moves. Pressures that drift over those samples
+// (a slope over kStartDriftSigmas standard errors in either: a chamber still
+// filling or emptying) are read at the first sample off their least-squares
+// lines instead. A first sample whose pressure a spike threw further than the
+// band from the second and from the line through the second and third (a
+// filling chamber's) is left out. The position is clamped to the stroke
+// (+-half_stroke_m): a rod resting on an end stop reads up to a few noise
+// sigmas beyond it. `samples_averaged`, if given, receives how many samples'
+// mean the start's pressures are as certain as (1 for a moving start; for a
+// line, 1 / (1/n + d^2/Stt), about n/4).
 constexpr double kStartPressureBand_Pa = 5e3;
+constexpr double kStartDriftSigmas = 3.0;
 InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m,
                                 int* samples_averaged = nullptr);
 
@@ -69,6 +74,7 @@ InitialState LoggedInitialState(const Trajectory& measured, double half_stroke_m
 // settled for it.
 constexpr double kStepRest_s = 0.005;
 constexpr double kCommandNoise_V = 0.01;  // a logger's noise on the command is not a change
+constexpr double kMovedAtStart_m = 1e-4;  // a rod that moves this far at a log's start moves
 CommandSignal LoggedCommand(const Trajectory& measured, const RigConstants& rig,
                             std::optional<double> logged_before_V = std::nullopt);
 

@@ -36,6 +36,8 @@ struct ExperimentValidation {
   std::map<std::string, ChannelMetrics> channels;
   SimulationSummary simulation;
   std::vector<std::string> missed;  // thresholds missed, as sentences
+  std::vector<std::string>
+      notes;  // how the run was started where the log did not say (lag_start.h)
 };
 
 struct ValidationReport {
