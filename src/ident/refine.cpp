@@ -211,6 +211,17 @@ bool RefineOptions::IsValid(std::string* error) const {
 
 namespace {
 
+// `options` with the fitted runs' lag starts read at `start` (once for all
+// of a refinement's attempts and inner fits), unless they have them.
+RefineOptions WithLagStarts(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                            const RefineOptions& options) {
+  if (options.lag_starts) return options;
+  RefineOptions with = options;
+  with.lag_starts = std::make_shared<const std::map<std::string, LagStart>>(
+      ReadLagStarts(WithRigConditions(start, unit), unit, spec, options.simulation));
+  return with;
+}
+
 // The fit of the spec's model (Refine without the creep fit).
 RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpec& spec,
                          const RefineOptions& options) {
@@ -270,8 +281,10 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
 }  // namespace
 
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                    const RefineOptions& options) {
+                    const RefineOptions& given) {
   const auto clock = std::chrono::steady_clock::now();
+  CheckInputs(spec, given);
+  const RefineOptions options = WithLagStarts(start, unit, spec, given);
   RefineResult r = RefineModel(start, unit, spec, options);
   if (!options.fit_stick_creep) return r;
   r = WithStickCreep(std::move(r), start, unit, spec, options);
@@ -297,12 +310,14 @@ void CheckRefinable(const Parameters& start, const Unit& unit, const FitSpec& sp
   // reason to refuse.
   const Parameters conditioned = WithRigConditions(WithUnitConstants(start, unit), unit);
   CheckPathsIn(conditioned, spec);
-  FittedRuns(conditioned, unit, spec, false);  // the runs, their channels and sigmas
+  // The runs, their channels and sigmas (as logged: no lag start is read).
+  FittedRuns(conditioned, unit, spec, false, nullptr);
 }
 
 RefineResult EvaluateFit(const Parameters& params, const Unit& unit, const FitSpec& spec,
-                         const RefineOptions& options) {
-  CheckInputs(spec, options);
+                         const RefineOptions& given) {
+  CheckInputs(spec, given);
+  const RefineOptions options = WithLagStarts(params, unit, spec, given);
   RefineResult r;
   r.params = params;
   r.misfits = WholeRunMisfits(params, unit, spec, options);

@@ -178,7 +178,9 @@ FrictionScreen ScreenFrictionStarts(const Parameters& start, const Unit& unit, c
   if (windows) {
     out.chi_square_after = VerdictMeasure(out.start, unit, spec, options);
     ++out.candidates;
-    const std::size_t all = FittedRuns(WithRigConditions(start, unit), unit, spec, true).size();
+    const std::size_t all =
+        FittedRuns(WithRigConditions(start, unit), unit, spec, true, options.lag_starts.get())
+            .size();
     const std::size_t ranked =
         SubsetSize(all, static_cast<std::size_t>(options.screen_windows_max));
     std::snprintf(line, sizeof(line),

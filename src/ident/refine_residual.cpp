@@ -16,7 +16,8 @@ FittedRunSet::FittedRunSet(const Parameters& params, const Unit& unit, const Fit
       theta_(map_.ThetaOf(conditioned_)),
       simulation_(options.simulation),
       jacobian_(options.jacobian) {
-  std::vector<FitExperiment> all = FittedRuns(conditioned_, unit, spec, windows);
+  std::vector<FitExperiment> all =
+      FittedRuns(conditioned_, unit, spec, windows, options.lag_starts.get());
   const std::vector<bool> kept = SubsetByHash(all.size(), max_runs);
   for (std::size_t k = 0; k < all.size(); ++k) {
     if (kept[k]) runs_.push_back(std::move(all[k]));

@@ -7,6 +7,7 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
+#include "pneumaid/validate/lag_start.h"
 #include "pneumaid/validate/validate.h"
 #include "stuck_phases.h"
 
@@ -183,7 +184,9 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, d
       window.initial.position_m = std::clamp(rest_positions[w], -half_stroke_m, half_stroke_m);
       window.initial.p1_Pa = run.measured.p1_Pa[begin];
       window.initial.p2_Pa = run.measured.p2_Pa[begin];
-      window.initial.lag_history_from_s = run.measured.t_s.front();
+      window.initial.lag_history_from_s = std::isnan(run.initial.lag_history_from_s)
+                                              ? run.measured.t_s.front()
+                                              : run.initial.lag_history_from_s;
       if (run.FitsStart()) window.start_sigma_Pa = sample_sigma_Pa;  // one sample each
     }
     windows.push_back(std::move(window));
@@ -203,27 +206,77 @@ std::vector<const Experiment*> RunsToFit(const FitSpec& spec, const Unit& unit) 
   return fitted;
 }
 
-// The fitted runs of a spec, whole or cut into windows.
-std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
-                                      const FitSpec& spec, bool windows) {
-  const auto fitted = RunsToFit(spec, unit);
+namespace {
+
+// The noise a lag start is read by: the spec's sigma of x, p1 and p2, else the unit's.
+std::map<std::string, double> LagStartNoise(const std::map<std::string, double>& sigmas,
+                                            const Unit& unit) {
+  std::map<std::string, double> noise;
+  for (const char* channel : {"x", "p1", "p2"}) {
+    const auto given = sigmas.find(channel);
+    noise[channel] = given != sigmas.end() ? given->second : NoiseSigma(unit, channel);
+  }
+  return noise;
+}
+
+// The spec's fitted runs cut at the loggers' pauses, as logged; each lag
+// start read at `conditioned` put in `read`, when given.
+std::vector<FitExperiment> FittedPieces(const Parameters& conditioned, const Unit& unit,
+                                        const FitSpec& spec, const SimulationOptions& simulation,
+                                        std::map<std::string, LagStart>* read) {
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
   const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
   const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);
   const PositionZero zero = ReadPositionZero(unit);
-  const double sigma_x_m = windows ? internal::PositionNoise(unit) : 0.0;
-  std::vector<FitExperiment> runs;
-  for (const Experiment* e : fitted) {
+  const std::map<std::string, double> noise = LagStartNoise(sigmas, unit);
+  std::vector<FitExperiment> pieces;
+  for (const Experiment* e : RunsToFit(spec, unit)) {
     const FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma, zero);
     for (FitExperiment& piece : Pieces(run, unit.manifest.rig, half_stroke, sample_sigma)) {
-      if (!windows) {
-        runs.push_back(std::move(piece));
-        continue;
+      if (read != nullptr) {
+        LagStart lag = ReadLagStart(conditioned, piece.measured, piece.command, piece.initial,
+                                    noise, simulation);
+        if (lag.read) (*read)[piece.id] = std::move(lag);
       }
-      for (FitExperiment& window : Windows(piece, sigma_x_m, half_stroke, sample_sigma)) {
-        runs.push_back(std::move(window));
-      }
+      pieces.push_back(std::move(piece));
     }
+  }
+  return pieces;
+}
+
+}  // namespace
+
+std::map<std::string, LagStart> ReadLagStarts(const Parameters& conditioned, const Unit& unit,
+                                              const FitSpec& spec,
+                                              const SimulationOptions& simulation) {
+  std::map<std::string, LagStart> read;
+  FittedPieces(conditioned, unit, spec, simulation, &read);
+  return read;
+}
+
+// The fitted runs of a spec, whole or cut into windows.
+std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
+                                      const FitSpec& spec, bool windows,
+                                      const std::map<std::string, LagStart>* lag_starts) {
+  std::vector<FitExperiment> pieces =
+      FittedPieces(conditioned, unit, spec, SimulationOptions{}, nullptr);
+  for (FitExperiment& piece : pieces) {
+    if (lag_starts == nullptr) break;
+    const auto found = lag_starts->find(piece.id);
+    if (found == lag_starts->end()) continue;
+    piece.command = found->second.command;
+    piece.initial.lag_history_from_s = found->second.initial.lag_history_from_s;
+    piece.initial.velocity_m_per_s = found->second.initial.velocity_m_per_s;
+  }
+  if (!windows) return pieces;
+  const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
+  const std::array<double, kStartOffsets> sample_sigma =
+      StartSampleSigma(spec, unit, ChannelSigmas(spec, unit));
+  const double sigma_x_m = internal::PositionNoise(unit);
+  std::vector<FitExperiment> runs;
+  for (FitExperiment& piece : pieces) {
+    for (FitExperiment& window : Windows(piece, sigma_x_m, half_stroke, sample_sigma))
+      runs.push_back(std::move(window));
   }
   return runs;
 }

@@ -112,9 +112,19 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, d
 std::vector<const Experiment*> RunsToFit(const FitSpec& spec, const Unit& unit);
 
 // The fitted runs of a spec, whole or cut into windows; InputError when none,
-// or when a run is both fitted and held out.
+// or when a run is both fitted and held out. A run (a piece) in
+// `lag_starts` (RefineOptions::lag_starts, by id) starts with its read lag
+// start; every other run (all, for null) as logged.
 std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
-                                      const FitSpec& spec, bool windows);
+                                      const FitSpec& spec, bool windows,
+                                      const std::map<std::string, LagStart>* lag_starts);
+
+// The lag starts of the spec's fitted runs read at `conditioned` under
+// `simulation` (ReadLagStart, lag_start.h), by run (piece) id: those read
+// only.
+std::map<std::string, LagStart> ReadLagStarts(const Parameters& conditioned, const Unit& unit,
+                                              const FitSpec& spec,
+                                              const SimulationOptions& simulation);
 
 // Windows' costs summed per run, in the order the runs first appear.
 std::vector<ExperimentCost> PerRun(const std::vector<ExperimentCost>& costs,

@@ -343,7 +343,8 @@ RefineResult RefineStage(const Parameters& start, const Unit& unit, const FitSpe
                          bool extra_starts_only) {
   const Parameters conditioned = WithRigConditions(start, unit);
   const ParameterMap map = MakeParameterMap(conditioned, spec);
-  const std::vector<FitExperiment> experiments = FittedRuns(conditioned, unit, spec, windows);
+  const std::vector<FitExperiment> experiments =
+      FittedRuns(conditioned, unit, spec, windows, options.lag_starts.get());
   const StartPrior prior = MakeStartPrior(
       map,
       options.start_prior_centre ? WithRigConditions(*options.start_prior_centre, unit)

@@ -158,6 +158,7 @@ LeadingFit FitLeading(const std::vector<double>& t, const std::vector<double>& v
                       std::size_t n) {
   const int count = static_cast<int>(n - first);
   LeadingFit fit;
+  fit.at_start = v[first];  // one sample: itself
   const double span = t[n - 1] - t[0];
   for (int degree = 0; degree <= 2 && count >= degree + 2; ++degree) {
     Eigen::MatrixXd a(count, degree + 1);
@@ -230,10 +231,16 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
   const double moved = std::fabs(m.x_m[n - 1] - m.x_m[first]);
   if (moved > kMovedAtStart_m) {  // not at rest: averaging would blur a moving start
     initial.position_m = m.x_m[first];
-    initial.p1_Pa = m.p1_Pa[first];
-    initial.p2_Pa = m.p2_Pa[first];
     initial.velocity_m_per_s = StartVelocity(m);
-    averaged = 1;
+    // The pressures off their fits over the samples the speed is read from.
+    std::size_t span = first + 1;
+    while (span < m.size() && (span < first + 3 || m.t_s[span] - m.t_s[first] <= kStartVelocity_s))
+      ++span;
+    const LeadingFit moving1 = FitLeading(m.t_s, m.p1_Pa, first, span);
+    const LeadingFit moving2 = FitLeading(m.t_s, m.p2_Pa, first, span);
+    initial.p1_Pa = moving1.at_start;
+    initial.p2_Pa = moving2.at_start;
+    averaged = std::min(moving1.samples, moving2.samples);
   }
   if (samples_averaged != nullptr)
     *samples_averaged = std::max(1, static_cast<int>(std::lround(averaged)));

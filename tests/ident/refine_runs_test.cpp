@@ -8,9 +8,16 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "../../src/ident/refine_verdict.h"
 #include "../../src/ident/stuck_phases.h"
+#include "pneumaid/ident/fit_spec.h"
+#include "pneumaid/io/params_yaml.h"
+#include "pneumaid/io/rig_data.h"
+#include "pneumaid/validate/lag_start.h"
+#include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid {
 namespace {
@@ -115,6 +122,52 @@ TEST(RefineRunsTest, ALoggersPauseCutsTheRunInPiecesOfTheRun) {
   for (const auto& piece : pieces) EXPECT_EQ(piece.parent, "stroke");
   for (const auto& window : refine_internal::Windows(pieces[1], kSigmaM, 0.025, {0, 0}))
     EXPECT_EQ(window.parent, "stroke");
+}
+
+// The bundled unit's validation profile (pneumaid synth, seed 1) logged from
+// 3.3 s on, inside its ramp (the command rising through 0.09 V, chamber 1
+// filling 2 kPa/ms), fitted as a run: its valves' lags are read off its
+// first 100 ms as validation reads them (lag_start.h), and the truth
+// explains it: median reduced chi-square 3.3; started settled for the first
+// command, as before, 2.4e4.
+TEST(RefineRunsTest, ARunCutMidRunStartsWithTheLagsItsFirstSamplesShow) {
+  const std::string dir = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig";
+  const Parameters truth = LoadParams(dir + "/truth.yaml");
+  const FitSpec spec = ParseFitSpec(R"(format: pneumaid-fit/1
+parameters:
+  friction.negative.Fd: {min: 0.5, max: 20}
+channels: {x: {}, p1: {}, p2: {}}
+experiments: {fit: [profile-1], hold_out: []}
+)",
+                                    "profile.yaml");
+  Unit cut = ReadUnit(dir);
+  for (Experiment& e : cut.experiments) {
+    if (e.entry.id != "profile-1") continue;
+    const std::vector<double>& t = e.columns.at("t");
+    const auto first = std::lower_bound(t.begin(), t.end(), 3.3) - t.begin();
+    for (auto& [name, column] : e.columns) column.erase(column.begin(), column.begin() + first);
+    const double t0 = e.columns.at("t").front();
+    for (double& ti : e.columns.at("t")) ti -= t0;
+  }
+  const Parameters conditioned = WithRigConditions(truth, cut);
+  const std::map<std::string, LagStart> read =
+      refine_internal::ReadLagStarts(conditioned, cut, spec, SimulationOptions{});
+  ASSERT_EQ(read.count("profile-1"), 1u);
+  // Without them it starts as logged: no history, the lags settled.
+  EXPECT_TRUE(std::isnan(refine_internal::FittedRuns(conditioned, cut, spec, false, nullptr)[0]
+                             .initial.lag_history_from_s));
+  const std::vector<refine_internal::FitExperiment> runs =
+      refine_internal::FittedRuns(conditioned, cut, spec, false, &read);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_NEAR(runs[0].initial.lag_history_from_s, -kLagHistory_s, 1e-12);
+  ASSERT_FALSE(runs[0].command.time_s.empty());
+  EXPECT_LT(runs[0].command.time_s.front(), 0.0);  // the read history before the log
+  // Its windows replay the lags from the history's start too.
+  for (const auto& window : refine_internal::Windows(runs[0], 5e-6, 0.025, {0, 0}))
+    EXPECT_NEAR(window.initial.lag_history_from_s, -kLagHistory_s, 1e-12);
+  // EvaluateFit reads them at the set it evaluates: 3.34 (the whole
+  // profile's stick-slip: 36.4).
+  EXPECT_LT(EvaluateFit(truth, cut, spec, RefineOptions{}).reduced_chi_square, 10.0);
 }
 
 // A rest beyond the model's stroke (a rod on its stop reads a few sigma past

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -20,6 +21,7 @@
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/model/parameters.h"
 #include "pneumaid/sim/simulate.h"
+#include "pneumaid/validate/lag_start.h"
 #include "pneumaid/validate/validate.h"
 
 namespace pneumaid {
@@ -223,6 +225,13 @@ struct RefineOptions {
   // centre lacks is centred on the stage's start, as one without a standard
   // error.
   std::shared_ptr<const Parameters> start_prior_centre;
+  // The fitted runs' lag starts (lag_start.h: runs that start unsettled,
+  // their command history read off their first 100 ms), by run id, read once
+  // at the parameters Refine starts from (EvaluateFit: those it evaluates),
+  // under `simulation`, unless the caller gives them. Everything the
+  // refinement runs takes them from here; a run not in it, or every run when
+  // null, starts as logged.
+  std::shared_ptr<const std::map<std::string, LagStart>> lag_starts;
   // Where the report looks for the worst stretch of a run [s].
   double misfit_window_s = 0.2;
   // Where the solver's progress goes, a line per iteration and a report per

@@ -19,6 +19,8 @@ namespace pneumaid {
 
 // The leading span of a run the lag state is read from.
 constexpr double kLagStartWindow_s = 0.1;
+// The span a read start must fit better than the given one too.
+constexpr double kLagStartConfirm_s = 0.3;
 // The given start's window misfit (mean squared residual per noise sigma)
 // above which a read start is tried, and the share of it a read start must
 // stay under to be kept.
@@ -32,6 +34,13 @@ constexpr double kLagHistory_s = 0.5;
 constexpr int kLagHistorySteps = 50;
 constexpr double kLagHistoryCommand_V = 1.0;
 constexpr int kLagStartRounds = 3;  // of the search's coordinate descent
+// What reads a start as unsettled: its samples before the command changes,
+// at most kLagStartSettle_s of them, and a pressure slope over
+// kLagStartDriftSigmas standard errors.
+constexpr double kLagStartSettle_s = 0.02;
+constexpr double kLagStartDriftSigmas = 5.0;
+// A moving start's speed is refined within this (or its own size) either side.
+constexpr double kLagStartSpeedSpan_m_per_s = 0.02;
 
 struct LagStart {
   bool read = false;        // the lag states read off the window (else as LoggedCommand gives them)
@@ -42,18 +51,25 @@ struct LagStart {
   std::string note;         // one line for a report when read, else empty
 };
 
-// Reads the lag states of a run that starts not settled (within the window's
-// first kLagStartSettle_s the rod moves more than 0.1 mm or a pressure more
-// than kStartPressureBand_Pa) under a command that changes within the window
-// (beyond the logger's kCommandNoise_V), and that LoggedCommand did not
-// already start at a step: the command before the run, held long enough for
-// the lags to settle, whose simulated window (x, p1, p2 against `noise`)
-// fits the logged one best (a grid over -1..1 V by 0.1 V, then golden
-// section to 1 mV). Kept when the given start's misfit is over
-// kLagStartMisfit and the read one under kLagStartKeepRatio of it. One
-// scalar stands for the lag states: the valve pair it opens at its settled
-// gain, the other closed.
-constexpr double kLagStartSettle_s = 0.02;
+// Reads the lag states of a run that starts unsettled: over its samples
+// before the command changes (beyond the logger's kCommandNoise_V; at most
+// kLagStartSettle_s, and at least two: a command that changes at once is a
+// log that starts at its step, LoggedCommand's rule) the rod moves more than
+// 0.1 mm, a pressure leaves the start's kStartPressureBand_Pa, or a pressure
+// drifts by more than kLagStartDriftSigmas standard errors of its slope. The
+// history before the run whose simulated window (x, p1, p2 against `noise`)
+// fits the logged one best is read from two families: a line of commands
+// through the log's start (a level on a 0.1 V grid with slope 0, and the
+// logged command's own line; then level and slope in turn by golden section,
+// kLagStartRounds rounds) and a step to the log's first command (from a
+// level on a 0.1 V grid, 5 to 320 ms before the log; then each in turn).
+// A moving start's speed is refined first with the logged command, then
+// with the history. Kept when the given start's misfit is over
+// kLagStartMisfit, the read one under kLagStartKeepRatio of the given
+// start's with its speed refined, and the read start fits the first
+// kLagStartConfirm_s better than the given one; else the speed alone when it
+// halves the misfit and holds so. The lags replay the history exactly
+// (InitialState::lag_history_from_s); the flow lags start settled.
 LagStart ReadLagStart(const Parameters& params, const Trajectory& measured,
                       const CommandSignal& command, const InitialState& initial,
                       const std::map<std::string, double>& noise, const SimulationOptions& options);

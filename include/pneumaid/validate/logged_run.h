@@ -42,7 +42,8 @@ Parameters WithUnitConstants(const Parameters& params, const Unit& unit);
 // the command has not yet changed by more than 0.01 V and the pressures stay
 // within kStartPressureBand_Pa of the first sample's (at most 50: a log that
 // starts at a step has its chambers filling from the first sample); its first
-// sample when the rod already moves. Pressures that drift over those samples
+// sample when the rod already moves (its pressures off their fits over the
+// 5 ms its speed is read from). Pressures that drift over those samples
 // (a slope over kStartDriftSigmas standard errors in either: a chamber still
 // filling or emptying) are read at the first sample off their least-squares
 // lines instead. A first sample whose pressure a spike threw further than the
