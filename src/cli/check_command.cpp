@@ -10,6 +10,7 @@
 #include "pneumaid/io/log_notes.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/io/rig_writer.h"
+#include "pneumaid/validate/lag_start.h"
 #include "pneumaid/validate/logged_run.h"
 
 namespace pneumaid::cli {
@@ -70,6 +71,12 @@ void PrintUnit(const Unit& unit) {
       std::cout << "\n";
     }
     for (const auto& note : LogNotes(e)) std::cout << "    note: " << note << "\n";
+    const Trajectory run = e.AsTrajectory();
+    if (!run.x_m.empty() && !run.p1_Pa.empty() && !run.p2_Pa.empty() && StartsUnsettled(run)) {
+      std::cout << "    note: the log starts unsettled (the rod moving or a chamber filling "
+                   "before its command changes: a log cut mid-run); validation and refinement "
+                   "read its valves' lag states off its first 100 ms\n";
+    }
   }
 }
 

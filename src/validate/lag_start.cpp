@@ -24,30 +24,6 @@ std::size_t SamplesWithin(const Trajectory& m, double span_s) {
   return n;
 }
 
-// Whether the run starts unsettled: over its samples before the command
-// changes (beyond the logger's noise; at most kLagStartSettle_s) the rod
-// moves 0.1 mm, a pressure leaves the start's band, or a pressure drifts
-// (its slope over kLagStartDriftSigmas standard errors). A command that
-// changes at once is a log that starts at its step (LoggedCommand's rule):
-// settled before it, not read.
-bool StartsUnsettled(const Trajectory& m) {
-  std::size_t n = 1;
-  while (n < m.size() && m.t_s[n] - m.t_s.front() <= kLagStartSettle_s + kTimeRounding_s &&
-         std::fabs(m.u_V[n] - m.u_V[0]) <= kCommandNoise_V)
-    ++n;
-  if (n < 2) return false;
-  for (std::size_t i = 1; i < n; ++i) {
-    if (std::fabs(m.x_m[i] - m.x_m[0]) > kMovedAtStart_m ||
-        std::fabs(m.p1_Pa[i] - m.p1_Pa[0]) > kStartPressureBand_Pa ||
-        std::fabs(m.p2_Pa[i] - m.p2_Pa[0]) > kStartPressureBand_Pa) {
-      return true;
-    }
-  }
-  // A residual under 1 Pa is a logger's rounding, not a measure of noise.
-  return internal::LeadingSlopeSigmas(m.t_s, m.p1_Pa, n, 1.0) > kLagStartDriftSigmas ||
-         internal::LeadingSlopeSigmas(m.t_s, m.p2_Pa, n, 1.0) > kLagStartDriftSigmas;
-}
-
 // The window's misfit from a command: the mean squared residual of x, p1
 // and p2 per their noise over the window's samples after the first (which
 // the start is), infinite when the simulation fails.
@@ -168,6 +144,30 @@ double NoiseOf(const std::map<std::string, double>& noise, const char* channel) 
 }
 
 }  // namespace
+
+// Over its samples before the command
+// changes (beyond the logger's noise; at most kLagStartSettle_s) the rod
+// moves 0.1 mm, a pressure leaves the start's band, or a pressure drifts
+// (its slope over kLagStartDriftSigmas standard errors). A command that
+// changes at once is a log that starts at its step (LoggedCommand's rule):
+// settled before it, not read.
+bool StartsUnsettled(const Trajectory& m) {
+  std::size_t n = 1;
+  while (n < m.size() && m.t_s[n] - m.t_s.front() <= kLagStartSettle_s + kTimeRounding_s &&
+         std::fabs(m.u_V[n] - m.u_V[0]) <= kCommandNoise_V)
+    ++n;
+  if (n < 2) return false;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (std::fabs(m.x_m[i] - m.x_m[0]) > kMovedAtStart_m ||
+        std::fabs(m.p1_Pa[i] - m.p1_Pa[0]) > kStartPressureBand_Pa ||
+        std::fabs(m.p2_Pa[i] - m.p2_Pa[0]) > kStartPressureBand_Pa) {
+      return true;
+    }
+  }
+  // A residual under 1 Pa is a logger's rounding, not a measure of noise.
+  return internal::LeadingSlopeSigmas(m.t_s, m.p1_Pa, n, 1.0) > kLagStartDriftSigmas ||
+         internal::LeadingSlopeSigmas(m.t_s, m.p2_Pa, n, 1.0) > kLagStartDriftSigmas;
+}
 
 LagStart ReadLagStart(const Parameters& params, const Trajectory& m, const CommandSignal& command,
                       const InitialState& initial, const std::map<std::string, double>& noise,

@@ -94,6 +94,26 @@ TEST_F(CheckCliTest, NamesASupplyTheLogsContradictACutLogAndSamplingGaps) {
   EXPECT_NE(after.find("note: the last row has no line end"), std::string::npos) << after;
 }
 
+// The profile's rows before 1.0 s dropped (a logger that started late, the
+// rod sliding under a held command): check notes that it starts unsettled;
+// the bundled logs, which start at rest, get no such note.
+TEST_F(CheckCliTest, NotesALogThatStartsUnsettled) {
+  const std::filesystem::path unit = PaperRigWith("unit: ", "unit: ");
+  std::string log = Read(unit / "profile-1.csv");
+  std::size_t header = 0;  // the comment and the header row stay
+  for (int i = 0; i < 2; ++i) header = log.find('\n', header) + 1;
+  std::size_t row = header;
+  for (int i = 0; i < 1000; ++i) row = log.find('\n', row) + 1;  // 1 kHz: 1.0 s
+  log.erase(header, row - header);
+  std::ofstream(unit / "profile-1.csv", std::ios::binary) << log;
+  ASSERT_EQ(Run("check " + unit.string()), 0) << Stderr();
+  const std::string out = Stdout();
+  const std::size_t profile = out.find("profile-1: validation");
+  ASSERT_NE(profile, std::string::npos) << out;
+  EXPECT_NE(out.find("note: the log starts unsettled", profile), std::string::npos) << out;
+  EXPECT_EQ(out.substr(0, profile).find("starts unsettled"), std::string::npos) << out;
+}
+
 TEST_F(CheckCliTest, MissingDirectoryIsBadInput) {
   EXPECT_EQ(Run("check " + (dir_ / "nowhere").string()), 2);
   EXPECT_NE(Stderr().find("not a unit directory"), std::string::npos) << Stderr();

@@ -70,6 +70,11 @@ struct LagStart {
 // kLagStartConfirm_s better than the given one; else the speed alone when it
 // halves the misfit and holds so. The lags replay the history exactly
 // (InitialState::lag_history_from_s); the flow lags start settled.
+// Whether a logged run starts unsettled by the rule above (before its
+// command changes: the rod moves, a pressure leaves the band or drifts).
+// `check` notes such a log; ReadLagStart reads only such runs.
+bool StartsUnsettled(const Trajectory& measured);
+
 LagStart ReadLagStart(const Parameters& params, const Trajectory& measured,
                       const CommandSignal& command, const InitialState& initial,
                       const std::map<std::string, double>& noise, const SimulationOptions& options);
