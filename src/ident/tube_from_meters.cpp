@@ -140,7 +140,8 @@ void FitTubeFromMeters(const Experiment& e, const Manifest& manifest,
   double low = std::max(0.0, best_k - 1.0), high = std::min<double>(scan.points, best_k + 1.0);
   // The interval's middle after 60 steps (its ends are 1e-12 of a step apart).
   const auto at_k = [&](double k) { return objective(at(k)); };
-  const double delta = at(internal::GoldenSection(at_k, low, high, 60).x);
+  const internal::GoldenSectionMinimum found = internal::GoldenSection(at_k, low, high, 60);
+  const double delta = at(0.5 * (found.low + found.high));
   fit->iterations = 60;
   // Sensitivities by central differences. The error: the meters' noise
   // through the filters, widened by the reduced chi-square where the fit is

@@ -8,8 +8,9 @@
 namespace pneumaid::internal {
 
 struct GoldenSectionMinimum {
-  double x = 0;      // the better of the last two interior points
-  double value = 0;  // f there
+  double x = 0;              // the better of the last two interior points
+  double value = 0;          // f there
+  double low = 0, high = 0;  // the last bracket
 };
 
 // `iterations` steps of golden section on [low, high] (each shrinks it by
@@ -28,7 +29,7 @@ GoldenSectionMinimum GoldenSection(F&& f, double low, double high, int iteration
       b = low + golden * (high - low), fb = f(b);
     }
   }
-  return fa < fb ? GoldenSectionMinimum{a, fa} : GoldenSectionMinimum{b, fb};
+  return fa < fb ? GoldenSectionMinimum{a, fa, low, high} : GoldenSectionMinimum{b, fb, low, high};
 }
 
 }  // namespace pneumaid::internal

@@ -42,13 +42,13 @@ Parameters WithUnitConstants(const Parameters& params, const Unit& unit);
 // the command has not yet changed by more than 0.01 V and the pressures stay
 // within kStartPressureBand_Pa of the first sample's (at most 50: a log that
 // starts at a step has its chambers filling from the first sample); its first
-// sample when the rod already moves (its pressures off their fits over the
-// 5 ms its speed is read from). Pressures that drift over those samples
-// (a slope over kStartDriftSigmas standard errors in either: a chamber still
-// filling or emptying) are read at the first sample off their least-squares
-// lines instead. A first sample whose pressure a spike threw further than the
-// band from the second and from the line through the second and third (a
-// filling chamber's) is left out. The position is clamped to the stroke
+// sample when the rod already moves. Where the run starts unsettled
+// (StartsUnsettled, lag_start.h: a log cut mid-run), pressures that drift
+// over those samples (a chamber still filling or emptying) are read at the
+// first sample off their least-squares polynomials instead (FitLeading), and
+// a moving start's off their fits over the 5 ms its speed is read from. A first sample whose
+// pressure a spike threw further than the band from the second and from the line through the second
+// and third (a filling chamber's) is left out. The position is clamped to the stroke
 // (+-half_stroke_m): a rod resting on an end stop reads up to a few noise
 // sigmas beyond it. `samples_averaged`, if given, receives how many samples'
 // mean the start's pressures are as certain as (1 for a moving start; for a
