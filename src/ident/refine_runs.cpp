@@ -219,16 +219,19 @@ std::map<std::string, double> LagStartNoise(const std::map<std::string, double>&
   return noise;
 }
 
-// The spec's fitted runs cut at the loggers' pauses, as logged; each lag
-// start read at `conditioned` put in `read`, when given.
+// The spec's fitted runs cut at the loggers' pauses, as logged, with the
+// spec's channel sigmas and start sigmas; each lag start read at
+// `conditioned` put in `read`, when given.
 std::vector<FitExperiment> FittedPieces(const Parameters& conditioned, const Unit& unit,
-                                        const FitSpec& spec, const SimulationOptions& simulation,
+                                        const FitSpec& spec,
+                                        const std::map<std::string, double>& sigmas,
+                                        const std::array<double, kStartOffsets>& sample_sigma,
+                                        const SimulationOptions& simulation,
                                         std::map<std::string, LagStart>* read) {
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
-  const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
-  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);
   const PositionZero zero = ReadPositionZero(unit);
-  const std::map<std::string, double> noise = LagStartNoise(sigmas, unit);
+  const std::map<std::string, double> noise =
+      read != nullptr ? LagStartNoise(sigmas, unit) : std::map<std::string, double>{};
   std::vector<FitExperiment> pieces;
   for (const Experiment* e : RunsToFit(spec, unit)) {
     const FitExperiment run = Prepare(*e, unit, spec, half_stroke, sigmas, sample_sigma, zero);
@@ -250,7 +253,9 @@ std::map<std::string, LagStart> ReadLagStarts(const Parameters& conditioned, con
                                               const FitSpec& spec,
                                               const SimulationOptions& simulation) {
   std::map<std::string, LagStart> read;
-  FittedPieces(conditioned, unit, spec, simulation, &read);
+  const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
+  FittedPieces(conditioned, unit, spec, sigmas, StartSampleSigma(spec, unit, sigmas), simulation,
+               &read);
   return read;
 }
 
@@ -258,8 +263,10 @@ std::map<std::string, LagStart> ReadLagStarts(const Parameters& conditioned, con
 std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit& unit,
                                       const FitSpec& spec, bool windows,
                                       const std::map<std::string, LagStart>* lag_starts) {
+  const std::map<std::string, double> sigmas = ChannelSigmas(spec, unit);
+  const std::array<double, kStartOffsets> sample_sigma = StartSampleSigma(spec, unit, sigmas);
   std::vector<FitExperiment> pieces =
-      FittedPieces(conditioned, unit, spec, SimulationOptions{}, nullptr);
+      FittedPieces(conditioned, unit, spec, sigmas, sample_sigma, SimulationOptions{}, nullptr);
   for (FitExperiment& piece : pieces) {
     if (lag_starts == nullptr) break;
     const auto found = lag_starts->find(piece.id);
@@ -270,8 +277,6 @@ std::vector<FitExperiment> FittedRuns(const Parameters& conditioned, const Unit&
   }
   if (!windows) return pieces;
   const double half_stroke = 0.5 * conditioned.cylinder.stroke_m;
-  const std::array<double, kStartOffsets> sample_sigma =
-      StartSampleSigma(spec, unit, ChannelSigmas(spec, unit));
   const double sigma_x_m = internal::PositionNoise(unit);
   std::vector<FitExperiment> runs;
   for (FitExperiment& piece : pieces) {

@@ -218,34 +218,40 @@ InitialState LoggedInitialState(const Trajectory& m, double half_stroke_m, int* 
   initial.p1_Pa = mean(m.p1_Pa);
   initial.p2_Pa = mean(m.p2_Pa);
   double averaged = static_cast<double>(n - first);
-  // Pressures that drift over those samples (a chamber still filling or
-  // emptying) are read at the first sample off their fits (FitLeading); the
-  // mean lags by half the span (2 kPa, seven noise sigmas, on a chamber
-  // emptying 1 kPa/ms).
-  // Only where the start is unsettled (lag_start.h): on a settled start
-  // a slow drift the fit takes for significant moved the refinement's start
-  // priors (N = 40: 294 -> 282 coefficients within tolerance).
+  // Where the start is unsettled (lag_start.h), pressures that drift over
+  // those samples (a chamber still filling or emptying) are read at the
+  // first sample off their fits (FitLeading): the mean lags by half the span
+  // (2 kPa, seven noise sigmas, on a chamber emptying 1 kPa/ms). Not on a
+  // settled start: a slow drift the fit took for significant moved the
+  // refinement's start priors (N = 40: 294 -> 282 within tolerance).
   const bool unsettled = StartsUnsettled(m);
-  const LeadingFit fit1 = FitLeading(m.t_s, m.p1_Pa, first, n);
-  const LeadingFit fit2 = FitLeading(m.t_s, m.p2_Pa, first, n);
-  if (unsettled && (fit1.degree > 0 || fit2.degree > 0)) {
-    initial.p1_Pa = fit1.at_start;
-    initial.p2_Pa = fit2.at_start;
-    averaged = std::min(fit1.samples, fit2.samples);
+  if (unsettled) {
+    const LeadingFit fit1 = FitLeading(m.t_s, m.p1_Pa, first, n);
+    const LeadingFit fit2 = FitLeading(m.t_s, m.p2_Pa, first, n);
+    if (fit1.degree > 0 || fit2.degree > 0) {
+      initial.p1_Pa = fit1.at_start;
+      initial.p2_Pa = fit2.at_start;
+      averaged = std::min(fit1.samples, fit2.samples);
+    }
   }
   const double moved = std::fabs(m.x_m[n - 1] - m.x_m[first]);
   if (moved > kMovedAtStart_m) {  // not at rest: averaging would blur a moving start
     initial.position_m = m.x_m[first];
     initial.velocity_m_per_s = StartVelocity(m);
-    // The pressures off their fits over the samples the speed is read from.
-    std::size_t span = first + 1;
-    while (span < m.size() && (span < first + 3 || m.t_s[span] - m.t_s[first] <= kStartVelocity_s))
-      ++span;
-    const LeadingFit moving1 = FitLeading(m.t_s, m.p1_Pa, first, span);
-    const LeadingFit moving2 = FitLeading(m.t_s, m.p2_Pa, first, span);
-    initial.p1_Pa = unsettled ? moving1.at_start : m.p1_Pa[first];
-    initial.p2_Pa = unsettled ? moving2.at_start : m.p2_Pa[first];
-    averaged = unsettled ? std::min(moving1.samples, moving2.samples) : 1.0;
+    initial.p1_Pa = m.p1_Pa[first];
+    initial.p2_Pa = m.p2_Pa[first];
+    averaged = 1.0;
+    if (unsettled) {  // the pressures off their fits over the samples the speed is read from
+      std::size_t span = first + 1;
+      while (span < m.size() &&
+             (span < first + 3 || m.t_s[span] - m.t_s[first] <= kStartVelocity_s))
+        ++span;
+      const LeadingFit moving1 = FitLeading(m.t_s, m.p1_Pa, first, span);
+      const LeadingFit moving2 = FitLeading(m.t_s, m.p2_Pa, first, span);
+      initial.p1_Pa = moving1.at_start;
+      initial.p2_Pa = moving2.at_start;
+      averaged = std::min(moving1.samples, moving2.samples);
+    }
   }
   if (samples_averaged != nullptr)
     *samples_averaged = std::max(1, static_cast<int>(std::lround(averaged)));
