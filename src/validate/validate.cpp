@@ -258,7 +258,14 @@ std::string ExperimentsToJson(const ValidationReport& report) {
     out << "}, \"missed\": [";
     for (std::size_t m = 0; m < e.missed.size(); ++m)
       out << (m ? ", " : "") << JsonString(e.missed[m]);
-    out << "]}";
+    out << "]";
+    if (!e.notes.empty()) {  // how the run was started where its log did not say
+      out << ", \"notes\": [";
+      for (std::size_t n = 0; n < e.notes.size(); ++n)
+        out << (n ? ", " : "") << JsonString(e.notes[n]);
+      out << "]";
+    }
+    out << "}";
   }
   out << "]";
   return out.str();

@@ -132,5 +132,18 @@ TEST(LagStartTest, SettledStartsAndStepStartsAreLeftAsLogged) {
   EXPECT_FALSE(ReadLagStart(conditioned, m, command, initial, no_x, options).read);
 }
 
+// The JSON report carries the read note with its run (`notes`); a run
+// whose log starts settled has none.
+TEST(LagStartTest, TheJsonReportCarriesTheNote) {
+  const Parameters truth = LoadParams(kUnit + "/truth.yaml");
+  ValidationOptions options;
+  options.experiment_ids = {"profile-1"};
+  const std::string cut = ReportToJson(ValidateUnit(truth, CutProfile(1.0), options));
+  EXPECT_NE(cut.find("\"notes\": [\""), std::string::npos) << cut;
+  EXPECT_NE(cut.find("read off its first 100 ms"), std::string::npos) << cut;
+  const std::string whole = ReportToJson(ValidateUnit(truth, ReadUnit(kUnit), options));
+  EXPECT_EQ(whole.find("\"notes\""), std::string::npos) << whole;
+}
+
 }  // namespace
 }  // namespace pneumaid
