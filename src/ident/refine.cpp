@@ -182,6 +182,7 @@ bool RefineOptions::IsValid(std::string* error) const {
   if (!(coordinate_start_keep_ratio > 0 && coordinate_start_keep_ratio <= 1))
     return fail("coordinate_start_keep_ratio must be in (0, 1]");
   if (!(rescue_box > 0 && rescue_box < 1)) return fail("rescue_box must be in (0, 1)");
+  if (rounds < 1) return fail("rounds must be >= 1");
   if (!(misfit_window_s > 0)) return fail("misfit_window_s must be > 0");
   if (!(clustered_error_block_s >= 0)) return fail("clustered_error_block_s must be >= 0");
   if (cost_resolution_directions < 0) return fail("cost_resolution_directions must be >= 0");
@@ -233,7 +234,7 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   Attempts attempts(start, unit, spec, stages, options);
   for (void (Attempts::*attempt)() :
        {&Attempts::ScreenFriction, &Attempts::CoordinateStart, &Attempts::RobustRefit,
-        &Attempts::WindowedRefit, &Attempts::Rescue}) {
+        &Attempts::WindowedRefit, &Attempts::Rescue, &Attempts::WindowedPolish}) {
     if (StopRequested(options)) break;  // none after a stop
     (attempts.*attempt)();
   }
@@ -255,6 +256,7 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   r.coordinate_report = attempts.coordinate_report();
   r.robust_report = attempts.robust_report();
   r.windowed_report = attempts.windowed_report();
+  r.polish_report = attempts.polish_report();
   for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
     r.fitted[k].before = before[k].before;
   }
@@ -278,6 +280,49 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   return r;
 }
 
+// RefineOptions::rounds: the refinement again from its result while that
+// is not explained, the Better result kept. The kept round's attempts are
+// the ones reported; what it says of the caller's start (the costs there,
+// the coefficients' start values, the held-out runs before) is the first
+// round's, and its errors are widened by the component fits' disagreement
+// as the first round's were (a later round starts from a refined set).
+RefineResult LaterRounds(RefineResult r, const Parameters& start, const Unit& unit,
+                         const FitSpec& spec, const RefineOptions& options) {
+  std::string report;
+  for (int round = 2; round <= options.rounds; ++round) {
+    if (!r.has_values() || r.explained() || StopRequested(options)) break;
+    const auto clock = std::chrono::steady_clock::now();
+    RefineResult again = RefineModel(r.params, unit, spec, options);
+    const bool kept = refine_internal::Better(again, r);
+    char line[200];
+    std::snprintf(line, sizeof(line),
+                  "round %d (the refinement again from the result so far): median reduced "
+                  "chi-square %.3g against %.3g, %s",
+                  round, again.reduced_chi_square, r.reduced_chi_square,
+                  kept ? "kept" : "not kept");
+    report += (report.empty() ? "" : "; ") + std::string(line) + refine_internal::Took(clock);
+    if (!kept) {  // a next round would start from the same result
+      r.iterations += again.iterations;
+      break;
+    }
+    again.iterations += r.iterations;
+    again.initial_cost = r.initial_cost;
+    for (size_t k = 0; k < again.fitted.size() && k < r.fitted.size(); ++k)
+      again.fitted[k].before = r.fitted[k].before;
+    const Parameters conditioned = WithRigConditions(start, unit);
+    for (FittedCoefficient& p : again.coefficients) GetParameter(conditioned, p.path, &p.start);
+    again.held_out_before = std::move(r.held_out_before);
+    if (options.start_disagreement_errors && !RefinedBefore(start))
+      WidenByStartDisagreement(start, &again);
+    r = std::move(again);
+  }
+  r.rounds_report = report;
+  // The entry records the rounds' counts (the iterations of all of them).
+  if (!report.empty() && r.has_values())
+    r.params.provenance_yaml = WithRefineEntry(r.params.provenance_yaml, r, spec);
+  return r;
+}
+
 }  // namespace
 
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
@@ -285,8 +330,11 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const auto clock = std::chrono::steady_clock::now();
   CheckInputs(spec, given);
   const RefineOptions options = WithLagStarts(start, unit, spec, given);
-  RefineResult r = RefineModel(start, unit, spec, options);
-  if (!options.fit_stick_creep) return r;
+  RefineResult r = LaterRounds(RefineModel(start, unit, spec, options), start, unit, spec, options);
+  if (!options.fit_stick_creep) {
+    r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
+    return r;
+  }
   r = WithStickCreep(std::move(r), start, unit, spec, options);
   if (Creeps(r.params) && !Creeps(start)) {
     // The creep fit kept: validated on the held-out runs (its inner fits are
@@ -356,6 +404,8 @@ std::string RefineResult::BriefReport() const {
   if (!coordinate_report.empty()) out << "  " << coordinate_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
+  if (!polish_report.empty()) out << "  " << polish_report << "\n";
+  if (!rounds_report.empty()) out << "  " << rounds_report << "\n";
   if (!creep_report.empty()) out << "  " << CreepLine() << "\n";
   if (!replay_report.empty()) out << "  friction replay stage: " << replay_report;
   if (!estimated_starts.empty()) {

@@ -401,4 +401,21 @@ void Attempts::Rescue() {
   r.iterations = iterations;
 }
 
+void Attempts::WindowedPolish() {
+  const std::optional<std::vector<FitStage>> windowed = ShootingFirst({stages_.back()});
+  if (Explained() || !options_.windowed_polish || !windowed || !best_.result.has_values()) return;
+  const auto clock = std::chrono::steady_clock::now();
+  const double before = best_.result.reduced_chi_square;
+  StagedFit candidate = FitStages(best_.result.params, unit_, spec_, *windowed, options_);
+  candidate.from_moved_start = true;
+  const double after = candidate.result.reduced_chi_square;
+  const bool kept = Offer(std::move(candidate), &polish_report_);
+  char line[200];
+  std::snprintf(line, sizeof(line),
+                "windowed polish (the kept fit's last stage again from its result, by multiple "
+                "shooting first): median reduced chi-square %.3g against %.3g, %s",
+                after, before, kept ? "kept" : "not kept");
+  polish_report_ = line + Took(clock);
+}
+
 }  // namespace pneumaid::refine_internal

@@ -14,7 +14,9 @@
 //   3. a robust refit (each run through a Cauchy loss);
 //   4. a windowed refit (the last stage by multiple shooting first);
 //   5. rescue starts in a trust box around the given start (the last stage
-//      only).
+//      only);
+//   6. a windowed polish: the kept fit's last stage again from its own
+//      result, by multiple shooting first.
 // What the kept fit started from and each attempt's one-line report are the
 // caller's to put into the result (refine.cpp).
 #pragma once
@@ -83,6 +85,7 @@ class Attempts {
   void RobustRefit();
   void WindowedRefit();
   void Rescue();
+  void WindowedPolish();
 
   // The fit kept.
   StagedFit& best() { return best_; }
@@ -93,6 +96,7 @@ class Attempts {
   const std::string& coordinate_report() const { return coordinate_report_; }
   const std::string& robust_report() const { return robust_report_; }
   const std::string& windowed_report() const { return windowed_report_; }
+  const std::string& polish_report() const { return polish_report_; }
   int screened_candidates() const { return screened_candidates_; }
 
  private:
@@ -124,7 +128,7 @@ class Attempts {
   // windows' screen): the windowed refit from it would repeat that fit.
   bool moved_start_shot_ = false;
   std::string screen_report_, windows_screen_report_, coordinate_report_, robust_report_,
-      windowed_report_;
+      windowed_report_, polish_report_;
   int screened_candidates_ = 0;
   std::string* kept_report_ = nullptr;  // the report of the later attempt kept, if any
 };

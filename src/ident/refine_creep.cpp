@@ -50,6 +50,8 @@ RefineOptions InnerOptions(const RefineOptions& options) {
   inner.robust_refit = false;
   inner.windowed_refit = false;
   inner.rescue_starts = 0;
+  inner.windowed_polish = false;
+  inner.rounds = 1;
   return inner;
 }
 
@@ -101,6 +103,8 @@ void InPaperFrame(const RefineResult& paper, RefineResult* creep) {
   creep->coordinate_report = paper.coordinate_report;
   creep->robust_report = paper.robust_report;
   creep->windowed_report = paper.windowed_report;
+  creep->polish_report = paper.polish_report;
+  creep->rounds_report = paper.rounds_report;
   creep->stages = paper.stages;
 }
 

@@ -34,7 +34,9 @@ struct ParameterMap {
 
   double ToValue(int j, double theta) const {
     const double w = Low(j) + Span(j) * Logistic(theta);
-    return IsLog(j) ? std::exp(w) : w;
+    // exp(ln upper) can round one ulp above the bound: a set written so
+    // would be refused as the next refinement's start.
+    return std::clamp(IsLog(j) ? std::exp(w) : w, free[j].lower, free[j].upper);
   }
   double ToTheta(int j, double value) const {
     const double w = IsLog(j) ? std::log(value) : value;

@@ -14,9 +14,9 @@
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
-// tolerance on at least K units (issue 12's suite target: 6 units, K = 5);
-// --min-units-valve-tube K: the same for K_vp and delta only (what the suite
-// gates on today: docs/identification.md). --start truth: refine from the
+// tolerance on at least K units (issue 12's suite target: 6 units, K = 5,
+// what scripts/test.sh gates on); --min-units-valve-tube K: the same for
+// K_vp and delta only. --start truth: refine from the
 // true parameters instead of identify's (how far starts are the gap).
 // --start rig: refine the rig's own model from the truth: where the rig
 // creeps (its smooth stick), the truth with that creep as `stick_creep` and
@@ -391,6 +391,8 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
                    (refined.coordinate_report.empty() ? "" : "\n  " + refined.coordinate_report) +
                    (refined.robust_report.empty() ? "" : "\n  " + refined.robust_report) +
                    (refined.windowed_report.empty() ? "" : "\n  " + refined.windowed_report) +
+                   (refined.polish_report.empty() ? "" : "\n  " + refined.polish_report) +
+                   (refined.rounds_report.empty() ? "" : "\n  " + refined.rounds_report) +
                    (refined.creep_report.empty() ? "" : "\n  " + refined.CreepLine());
     for (const FittedCoefficient& rp : refined.coefficients) {
       double truth = 0, value = 0;

@@ -45,6 +45,8 @@ RefineOptions OnlyTheCoordinateStart(int rounds) {
   options.robust_refit = false;
   options.windowed_refit = false;
   options.rescue_starts = 0;
+  options.windowed_polish = false;
+  options.rounds = 1;
   options.coordinate_rounds = rounds;
   return options;
 }

@@ -2,7 +2,7 @@
 // centred on the start with its standard errors, or on another centre
 // (RefineOptions::start_prior_centre) with that centre's errors; a free
 // parameter the centre lacks falls back to the start, as one without an
-// error. Closed forms.
+// error. Closed forms. The bounds map keeps every value inside its bounds.
 #include "../../src/ident/refine_parameters.h"
 
 #include <gtest/gtest.h>
@@ -65,6 +65,21 @@ TEST(StartPriorTest, AnotherCentreGivesItsValuesAndErrorsAndTheStartWhatItLacks)
   // (the start's own error is not the centre's).
   EXPECT_DOUBLE_EQ(prior.w[2], std::log(3e-4));
   EXPECT_DOUBLE_EQ(prior.sigma[2], std::log(3.0));
+}
+
+// A coordinate far out maps onto the bound itself, never past it: exp(ln
+// 1e-3) is 1.0000000000000002e-3, and a set written at that value would be
+// refused as the next refinement's start ("lies outside its bounds").
+TEST(ParameterMapTest, ValuesStayWithinTheirBounds) {
+  const ParameterMap map = Map();
+  for (int j = 0; j < map.size(); ++j) {
+    for (const double theta : {-60.0, -40.0, 0.0, 40.0, 60.0}) {
+      const double value = map.ToValue(j, theta);
+      EXPECT_GE(value, map.free[j].lower) << map.free[j].path << " at " << theta;
+      EXPECT_LE(value, map.free[j].upper) << map.free[j].path << " at " << theta;
+    }
+  }
+  EXPECT_EQ(map.ToValue(2, 60.0), 1e-3);
 }
 
 }  // namespace

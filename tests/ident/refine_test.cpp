@@ -690,6 +690,7 @@ TEST(RefineOptionsTest, IsValidNamesTheBadField) {
       {"clustered_error_block_s", [](RefineOptions* o) { o->clustered_error_block_s = -0.1; }},
       {"cost_resolution_directions", [](RefineOptions* o) { o->cost_resolution_directions = -1; }},
       {"screen_windows_max", [](RefineOptions* o) { o->screen_windows_max = -1; }},
+      {"rounds", [](RefineOptions* o) { o->rounds = 0; }},
       {"simulation.relative_tolerance",
        [](RefineOptions* o) { o->simulation.relative_tolerance = 0; }},
       {"validation.relative_tolerance",
