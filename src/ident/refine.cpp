@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -281,25 +282,32 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
 }
 
 // RefineOptions::rounds: the refinement again from its result while that
-// is not explained, the Better result kept. The kept round's attempts are
-// the ones reported; what it says of the caller's start (the costs there,
-// the coefficients' start values, the held-out runs before) is the first
-// round's, and its errors are widened by the component fits' disagreement
-// as the first round's were (a later round starts from a refined set).
+// is not explained, the Better result kept. The kept round's attempts (and
+// their counts: starts, screened candidates, rescue starts) are the ones
+// reported, its iterations the rounds' sum; what it says of the caller's
+// start (the costs there, the coefficients' start values, the held-out runs
+// before) is the first round's, and its errors are widened by the component
+// fits' disagreement as the first round's were (a later round starts from a
+// refined set).
 RefineResult LaterRounds(RefineResult r, const Parameters& start, const Unit& unit,
                          const FitSpec& spec, const RefineOptions& options) {
   std::string report;
   for (int round = 2; round <= options.rounds; ++round) {
     if (!r.has_values() || r.explained() || StopRequested(options)) break;
     const auto clock = std::chrono::steady_clock::now();
-    RefineResult again = RefineModel(r.params, unit, spec, options);
+    // The prior toward the caller's start, as the first round's: centred on
+    // the first round's result with its errors, it would count the runs twice.
+    RefineOptions round_options = options;
+    if (!round_options.start_prior_centre)
+      round_options.start_prior_centre = std::make_shared<const Parameters>(start);
+    RefineResult again = RefineModel(r.params, unit, spec, round_options);
     const bool kept = refine_internal::Better(again, r);
     char line[200];
     std::snprintf(line, sizeof(line),
                   "round %d (the refinement again from the result so far): median reduced "
                   "chi-square %.3g against %.3g, %s",
                   round, again.reduced_chi_square, r.reduced_chi_square,
-                  kept ? "kept" : "not kept");
+                  kept ? "kept (the attempts above are its)" : "not kept");
     report += (report.empty() ? "" : "; ") + std::string(line) + refine_internal::Took(clock);
     if (!kept) {  // a next round would start from the same result
       r.iterations += again.iterations;
@@ -307,8 +315,10 @@ RefineResult LaterRounds(RefineResult r, const Parameters& start, const Unit& un
     }
     again.iterations += r.iterations;
     again.initial_cost = r.initial_cost;
-    for (size_t k = 0; k < again.fitted.size() && k < r.fitted.size(); ++k)
-      again.fitted[k].before = r.fitted[k].before;
+    for (ExperimentCost& e : again.fitted) {
+      for (const ExperimentCost& first : r.fitted)
+        if (first.id == e.id) e.before = first.before;
+    }
     const Parameters conditioned = WithRigConditions(start, unit);
     for (FittedCoefficient& p : again.coefficients) GetParameter(conditioned, p.path, &p.start);
     again.held_out_before = std::move(r.held_out_before);

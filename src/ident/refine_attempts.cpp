@@ -408,6 +408,9 @@ void Attempts::WindowedPolish() {
   const double before = best_.result.reduced_chi_square;
   StagedFit candidate = FitStages(best_.result.params, unit_, spec_, *windowed, options_);
   candidate.from_moved_start = true;
+  // What the kept fit's attempts recorded stays (as the rescue keeps it).
+  candidate.result.replay_report = best_.result.replay_report;
+  candidate.result.rescue_starts_tried = best_.result.rescue_starts_tried;
   const double after = candidate.result.reduced_chi_square;
   const bool kept = Offer(std::move(candidate), &polish_report_);
   char line[200];

@@ -75,6 +75,8 @@ TEST(RefineRobustRefitTest, OneRunTheModelCannotFollowDoesNotDragTheOthers) {
   RefineOptions plain_options = options;
   plain_options.robust_refit = false;
   plain_options.windowed_refit = false;  // the robust refit alone against the plain fit
+  plain_options.windowed_polish = false;
+  plain_options.rounds = 1;
   const RefineResult plain = Refine(c.truth, c.unit, spec, plain_options);
   std::cout << plain.BriefReport();
   EXPECT_EQ(plain.status, FitStatus::kNotExplained);

@@ -225,7 +225,10 @@ TEST(RefineTest, FromBiasedComponentFitsItSaysWhenTheRunsAreNotExplained) {
       testing::WriteAndReadUnit(Synthesize(truth, protocol, 32, "B"), "refine_biased");
   IdentifyReport report;
   const Parameters identified = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
-  const RefineResult result = Refine(identified, unit, LoadFitSpec(kDefaultSpec), RefineOptions{});
+  RefineOptions options;  // one round, no polish: the verdict under test
+  options.windowed_polish = false;
+  options.rounds = 1;
+  const RefineResult result = Refine(identified, unit, LoadFitSpec(kDefaultSpec), options);
   std::cout << report.BriefReport() << result.BriefReport();
   ASSERT_TRUE(result.has_values()) << result.reason;
   if (result.reduced_chi_square <= result.acceptable_reduced_chi_square) {
@@ -283,6 +286,10 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
       Synthesize(truth, testing::RefinementProtocol({0.7, 1.0}, false), 35, "V"), "refine_verdict");
   RefineOptions options;
   options.rescue_starts = 2;
+  // One round, no polish: the verdict under test (the later attempts are
+  // tested in refine_windowed_refit_test.cpp).
+  options.windowed_polish = false;
+  options.rounds = 1;
   const RefineResult explained = Refine(truth, unit, LoadFitSpec(kDefaultSpec), options);
   std::cout << explained.BriefReport();
   EXPECT_EQ(explained.status, FitStatus::kConverged) << explained.reason;

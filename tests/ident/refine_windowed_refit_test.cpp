@@ -136,9 +136,26 @@ TEST(RefineWindowedRefitTest, ThePolishFindsItFromTheStallAndASecondRoundRuns) {
   EXPECT_NE(twice.rounds_report.find("round 2 (the refinement again from the result so far)"),
             std::string::npos)
       << twice.rounds_report;
-  EXPECT_LE(twice.reduced_chi_square, once.reduced_chi_square);
-  EXPECT_GT(twice.wall_time_s, once.wall_time_s);
-  EXPECT_EQ(twice.initial_cost, once.initial_cost);  // at the caller's start, not the round's
+  ASSERT_NE(twice.rounds_report.find(", kept"), std::string::npos) << twice.rounds_report;
+  EXPECT_LT(twice.reduced_chi_square, once.reduced_chi_square);
+  EXPECT_GT(twice.iterations, once.iterations);  // the rounds' sum
+  // What the kept round says of the caller's start is the first round's.
+  EXPECT_EQ(twice.initial_cost, once.initial_cost);
+  ASSERT_EQ(twice.fitted.size(), once.fitted.size());
+  for (std::size_t k = 0; k < once.fitted.size(); ++k) {
+    EXPECT_EQ(twice.fitted[k].id, once.fitted[k].id);
+    EXPECT_EQ(twice.fitted[k].before, once.fitted[k].before) << once.fitted[k].id;
+  }
+  for (const FittedCoefficient& p : once.coefficients) {
+    const FittedCoefficient* q = twice.Find(p.path);
+    ASSERT_NE(q, nullptr) << p.path;
+    EXPECT_EQ(q->start, p.start) << p.path;
+  }
+  ASSERT_EQ(twice.held_out_before.experiments.size(), once.held_out_before.experiments.size());
+  for (std::size_t k = 0; k < once.held_out_before.experiments.size(); ++k) {
+    EXPECT_EQ(twice.held_out_before.experiments[k].channels.at("x").rmse,
+              once.held_out_before.experiments[k].channels.at("x").rmse);
+  }
 }
 
 }  // namespace

@@ -108,12 +108,13 @@ struct RefineOptions {
   // other instants, is a rugged whole-run cost that the windows smooth out.
   // The Better fit is kept.
   bool windowed_polish = true;
-  // A refinement whose fit is not explained runs again from its result (its
-  // values, its standard errors the prior's), as a user would refine the
-  // written set once more, up to `rounds` in all; the Better result kept.
+  // A refinement whose fit is not explained runs again from its result, as a
+  // user would refine the written set once more (but with the prior toward
+  // the caller's start, not toward that result), up to `rounds` in all; the
+  // Better result kept.
   // The solver's trust region and the runs' start pressures start afresh
   // there: on the sweep's seed 2026 unit 4 (0.09 kg, 500 Hz, 113 slides
-  // one way) the second round ends explained at 1.64 with every coefficient
+  // one way) the second round ends explained at 2.38 with every coefficient
   // within tolerance, where the first stalls at 101 (docs/refinement.md).
   // Only a fit that is not explained pays for it. 1: one round.
   int rounds = 2;
@@ -364,7 +365,9 @@ struct RefineResult : FitResult {
   // whether it was kept (empty when it did not run).
   std::string polish_report;
   // What the later rounds (RefineOptions::rounds) ended at and whether they
-  // were kept (empty when none ran).
+  // were kept (empty when none ran). A kept round's attempts are the ones
+  // reported above (screens, rescue starts, their counts); its costs before
+  // and the coefficients' starts are the caller's start's.
   std::string rounds_report;
   // What the creep fit (RefineOptions::fit_stick_creep) ended at over its
   // profile and freed, and whether it was kept (empty when it did not run),
