@@ -108,7 +108,7 @@ TEST(RefineWindowedRefitTest, TheScreenRankedByWindowsFindsTheSameBasin) {
 // without the windowed refit: the stalled fit's last stage again from its
 // result, by multiple shooting first, finds the basin (2.05e3 -> 1.16).
 // Without the polish a second round (RefineOptions::rounds) runs from the
-// stall, its result kept where it ends lower (1.78e3 here: the whole runs
+// stall, its result kept where it ends lower (1.77e3 here: the whole runs
 // alone do not reach the basin from there), and the wall time covers both.
 TEST(RefineWindowedRefitTest, ThePolishFindsItFromTheStallAndASecondRoundRuns) {
   const testing::RefineCase& c = LightRodAt500Hz();
