@@ -5,6 +5,7 @@
 #include <cstddef>
 
 #include "centred_mean.h"
+#include "pneumaid/io/log_notes.h"
 #include "uniform_clock.h"
 
 namespace pneumaid::internal {

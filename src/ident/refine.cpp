@@ -224,15 +224,18 @@ RefineOptions WithLagStarts(const Parameters& start, const Unit& unit, const Fit
   return with;
 }
 
-// The fit of the spec's model (Refine without the creep fit).
+// The fit of the spec's model (Refine without the creep fit) from `start`,
+// or, for a later round, from `earlier`'s result, told of the caller's
+// `start` as `earlier` was (FromCallersStart).
 RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpec& spec,
-                         const RefineOptions& options) {
+                         const RefineOptions& options, const RefineResult* earlier = nullptr) {
   const auto clock = std::chrono::steady_clock::now();
+  const Parameters& from = earlier != nullptr ? earlier->params : start;
   CheckInputs(spec, options);
-  CheckReplayModel(start, spec);
+  CheckReplayModel(from, spec);
   const std::vector<FitStage> stages =
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
-  Attempts attempts(start, unit, spec, stages, options);
+  Attempts attempts(from, unit, spec, stages, options);
   for (void (Attempts::*attempt)() :
        {&Attempts::ScreenFriction, &Attempts::CoordinateStart, &Attempts::RobustRefit,
         &Attempts::WindowedRefit, &Attempts::Rescue, &Attempts::WindowedPolish}) {
@@ -241,28 +244,34 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   }
   StagedFit& fit = attempts.best();
   RefineResult& r = fit.result;
-  std::vector<ExperimentCost> before = std::move(fit.before);
-  double cost_before = fit.cost_before;
-  // A windowed stage's costs are windows': report whole runs, as validated
-  // (and at the caller's start when friction was replayed first or the kept
-  // fit started elsewhere).
-  if (fit.first_fit_windowed || stages.front().friction_replay || fit.from_moved_start) {
-    before = WholeRunCosts(start, unit, spec, options);
-    cost_before = 0;
-    for (const ExperimentCost& e : before) cost_before += e.before;
-  }
-  r.initial_cost = cost_before;
   r.screen_report = attempts.screen_report();
   r.screened_candidates = attempts.screened_candidates();
   r.coordinate_report = attempts.coordinate_report();
   r.robust_report = attempts.robust_report();
   r.windowed_report = attempts.windowed_report();
   r.polish_report = attempts.polish_report();
-  for (size_t k = 0; k < r.fitted.size() && k < before.size(); ++k) {
-    r.fitted[k].before = before[k].before;
-  }
   const Parameters conditioned = WithRigConditions(start, unit);
-  for (FittedCoefficient& p : r.coefficients) GetParameter(conditioned, p.path, &p.start);
+  const auto held_out = Select(unit, spec.hold_out, spec, false);
+  if (earlier != nullptr) {
+    FromCallersStart(*earlier, &r);
+  } else {
+    std::vector<ExperimentCost> before = std::move(fit.before);
+    r.initial_cost = fit.cost_before;
+    // A windowed stage's costs are windows': report whole runs, as
+    // validated (and at the caller's start when friction was replayed first
+    // or the kept fit started elsewhere).
+    if (fit.first_fit_windowed || stages.front().friction_replay || fit.from_moved_start) {
+      before = WholeRunCosts(start, unit, spec, options);
+      r.initial_cost = 0;
+      for (const ExperimentCost& e : before) r.initial_cost += e.before;
+    }
+    for (ExperimentCost& e : r.fitted) {
+      for (const ExperimentCost& b : before)
+        if (b.id == e.id) e.before = b.before;
+    }
+    for (FittedCoefficient& p : r.coefficients) GetParameter(conditioned, p.path, &p.start);
+    r.held_out_before = HeldOut(conditioned, unit, held_out, options);
+  }
   // Only against component fits: a start refined before on these runs is no
   // experiment of its own.
   if (r.has_values() && options.start_disagreement_errors && !RefinedBefore(start))
@@ -271,8 +280,6 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   if (r.has_values()) {
     r.params.provenance_yaml = WithRefineEntry(r.params.provenance_yaml, r, spec);
   }
-  const auto held_out = Select(unit, spec.hold_out, spec, false);
-  r.held_out_before = HeldOut(conditioned, unit, held_out, options);
   r.held_out_after = HeldOut(r.has_values() ? r.params : conditioned, unit, held_out, options);
   r.noise_note = NoiseNote(spec, unit);
   if (const PositionZero zero = ReadPositionZero(unit); zero.offset_m != 0)
@@ -287,8 +294,7 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
 // reported, its iterations the rounds' sum; what it says of the caller's
 // start (the costs there, the coefficients' start values, the held-out runs
 // before) is the first round's, and its errors are widened by the component
-// fits' disagreement as the first round's were (a later round starts from a
-// refined set).
+// fits' disagreement as the first round's were.
 RefineResult LaterRounds(RefineResult r, const Parameters& start, const Unit& unit,
                          const FitSpec& spec, const RefineOptions& options) {
   std::string report;
@@ -300,7 +306,7 @@ RefineResult LaterRounds(RefineResult r, const Parameters& start, const Unit& un
     RefineOptions round_options = options;
     if (!round_options.start_prior_centre)
       round_options.start_prior_centre = std::make_shared<const Parameters>(start);
-    RefineResult again = RefineModel(r.params, unit, spec, round_options);
+    RefineResult again = RefineModel(start, unit, spec, round_options, &r);
     const bool kept = refine_internal::Better(again, r);
     char line[200];
     std::snprintf(line, sizeof(line),
@@ -314,22 +320,28 @@ RefineResult LaterRounds(RefineResult r, const Parameters& start, const Unit& un
       break;
     }
     again.iterations += r.iterations;
-    again.initial_cost = r.initial_cost;
-    for (ExperimentCost& e : again.fitted) {
-      for (const ExperimentCost& first : r.fitted)
-        if (first.id == e.id) e.before = first.before;
-    }
-    const Parameters conditioned = WithRigConditions(start, unit);
-    for (FittedCoefficient& p : again.coefficients) GetParameter(conditioned, p.path, &p.start);
-    again.held_out_before = std::move(r.held_out_before);
-    if (options.start_disagreement_errors && !RefinedBefore(start))
-      WidenByStartDisagreement(start, &again);
     r = std::move(again);
   }
   r.rounds_report = report;
   // The entry records the rounds' counts (the iterations of all of them).
   if (!report.empty() && r.has_values())
     r.params.provenance_yaml = WithRefineEntry(r.params.provenance_yaml, r, spec);
+  return r;
+}
+
+// The creep fit (RefineOptions::fit_stick_creep) after the paper model's
+// fit `paper`; when kept, validated on the held-out runs (its inner fits
+// are not) and widened by the component fits it started from, as the paper
+// fit was.
+RefineResult WithCreepFit(RefineResult paper, const Parameters& start, const Unit& unit,
+                          const FitSpec& spec, const RefineOptions& options) {
+  RefineResult r = WithStickCreep(std::move(paper), start, unit, spec, options);
+  if (Creeps(r.params) && !Creeps(start)) {
+    r.held_out_after = HeldOut(r.params, unit, Select(unit, spec.hold_out, spec, false), options);
+    if (options.start_disagreement_errors && !RefinedBefore(start))
+      WidenByStartDisagreement(start, &r);
+  }
+  if (r.has_values()) r.params.provenance_yaml = WithRefineEntry(r.params.provenance_yaml, r, spec);
   return r;
 }
 
@@ -341,20 +353,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   CheckInputs(spec, given);
   const RefineOptions options = WithLagStarts(start, unit, spec, given);
   RefineResult r = LaterRounds(RefineModel(start, unit, spec, options), start, unit, spec, options);
-  if (!options.fit_stick_creep) {
-    r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
-    return r;
-  }
-  r = WithStickCreep(std::move(r), start, unit, spec, options);
-  if (Creeps(r.params) && !Creeps(start)) {
-    // The creep fit kept: validated on the held-out runs (its inner fits are
-    // not), and widened by the component fits it started from, as the paper
-    // fit was.
-    r.held_out_after = HeldOut(r.params, unit, Select(unit, spec.hold_out, spec, false), options);
-    if (options.start_disagreement_errors && !RefinedBefore(start))
-      WidenByStartDisagreement(start, &r);
-  }
-  if (r.has_values()) r.params.provenance_yaml = WithRefineEntry(r.params.provenance_yaml, r, spec);
+  if (options.fit_stick_creep) r = WithCreepFit(std::move(r), start, unit, spec, options);
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;
 }

@@ -172,6 +172,19 @@ std::string Took(std::chrono::steady_clock::time_point since) {
   return SecondsText(SecondsSince(since));
 }
 
+void FromCallersStart(const RefineResult& first, RefineResult* later) {
+  later->initial_cost = first.initial_cost;
+  for (ExperimentCost& e : later->fitted) {
+    for (const ExperimentCost& f : first.fitted)
+      if (f.id == e.id) e.before = f.before;
+  }
+  for (FittedCoefficient& c : later->coefficients) {
+    for (const FittedCoefficient& f : first.coefficients)
+      if (f.path == c.path) c.start = f.start;
+  }
+  later->held_out_before = first.held_out_before;
+}
+
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept) {
   if (!candidate.has_values()) return "its fit has no values";
   if (kept.explained() && !candidate.explained()) return "the fit kept before is explained";

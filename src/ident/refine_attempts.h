@@ -59,6 +59,12 @@ void JudgeLastStage(const FitStage& last, const Unit& unit, const FitSpec& spec,
 // usable last.
 bool Better(const RefineResult& a, const RefineResult& b);
 
+// What `later`, a fit from another start than the caller's (a later round,
+// the creep fit), says of the caller's start is `first`'s: the whole runs'
+// costs there (by run id), the coefficients' start values (by path) and the
+// held-out runs before.
+void FromCallersStart(const RefineResult& first, RefineResult* later);
+
 // Why Better(candidate, kept) is false, as a report's words.
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept);
 

@@ -85,18 +85,7 @@ std::string Measure(const RefineResult& r) {
 // `creep` told in the frame of the paper fit it replaces: the given start's
 // costs, held-out runs and coefficient values, the paper fit's reports.
 void InPaperFrame(const RefineResult& paper, RefineResult* creep) {
-  creep->initial_cost = paper.initial_cost;
-  for (ExperimentCost& e : creep->fitted) {
-    for (const ExperimentCost& p : paper.fitted) {
-      if (p.id == e.id) e.before = p.before;
-    }
-  }
-  for (FittedCoefficient& c : creep->coefficients) {
-    for (const FittedCoefficient& p : paper.coefficients) {
-      if (p.path == c.path) c.start = p.start;
-    }
-  }
-  creep->held_out_before = paper.held_out_before;
+  FromCallersStart(paper, creep);
   creep->rescue_starts_tried = paper.rescue_starts_tried;
   creep->screen_report = paper.screen_report;
   creep->screened_candidates = paper.screened_candidates;

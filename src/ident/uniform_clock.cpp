@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../util/median.h"
 #include "pneumaid/io/log_notes.h"
 
 namespace pneumaid::internal {
@@ -15,13 +14,6 @@ double UniformPeriod(const std::vector<double>& t) {
     if (std::fabs(t[i] - t[i - 1] - period) > 0.01 * period) return 0;
   }
   return period;
-}
-
-double MedianInterval(const std::vector<double>& t) {
-  if (t.size() < 2) return 0;
-  std::vector<double> intervals(t.size() - 1);
-  for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];
-  return Median(std::move(intervals));
 }
 
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,

@@ -14,10 +14,7 @@ namespace pneumaid::internal {
 // mean, else 0.
 double UniformPeriod(const std::vector<double>& t);
 
-// The median of t's intervals (0 with fewer than two samples).
-double MedianInterval(const std::vector<double>& t);
-
-// `e` on a uniform clock at its median sampling interval: each column
+// `e` on a uniform clock at its median sampling interval (MedianInterval): each column
 // interpolated linearly between its samples, the command (`u`) held from
 // each sample. `in_gap`, when given, marks the clock's samples that lie
 // inside a gap of the log (an interval over kSamplingGapIntervals times the

@@ -42,17 +42,22 @@ std::string SamplingGapNote(const std::vector<double>& t, double time_origin_s) 
 
 }  // namespace
 
+double MedianInterval(const std::vector<double>& t) {
+  if (t.size() < 2) return 0;
+  std::vector<double> intervals(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];
+  return Median(std::move(intervals));
+}
+
 std::vector<std::size_t> SamplingGaps(const std::vector<double>& t, double* median_interval_s) {
   if (median_interval_s != nullptr) *median_interval_s = 0;
   if (t.size() < 3) return {};
-  std::vector<double> intervals(t.size() - 1);
-  for (std::size_t i = 0; i + 1 < t.size(); ++i) intervals[i] = t[i + 1] - t[i];
-  const double median = Median(intervals);
+  const double median = MedianInterval(t);
   if (median_interval_s != nullptr) *median_interval_s = median;
   std::vector<std::size_t> gaps;
   if (!(median > 0)) return gaps;
-  for (std::size_t i = 0; i < intervals.size(); ++i) {
-    if (intervals[i] > kSamplingGapIntervals * median) gaps.push_back(i);
+  for (std::size_t i = 0; i + 1 < t.size(); ++i) {
+    if (t[i + 1] - t[i] > kSamplingGapIntervals * median) gaps.push_back(i);
   }
   return gaps;
 }

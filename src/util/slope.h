@@ -9,19 +9,30 @@
 
 namespace pneumaid::internal {
 
+// The sums of a least-squares line through samples [0, n) of v(t).
+struct LeadingLine {
+  double t_mean = 0, v_mean = 0;
+  double tt = 0, tv = 0;  // sums of (t - t_mean)^2 and (t - t_mean)(v - v_mean)
+  double slope() const { return tt > 0 ? tv / tt : 0.0; }
+};
+
+inline LeadingLine FitLeadingLine(const std::vector<double>& t, const std::vector<double>& v,
+                                  std::size_t n) {
+  LeadingLine line;
+  for (std::size_t i = 0; i < n; ++i) line.t_mean += t[i], line.v_mean += v[i];
+  line.t_mean /= static_cast<double>(n);
+  line.v_mean /= static_cast<double>(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    line.tv += (t[i] - line.t_mean) * (v[i] - line.v_mean);
+    line.tt += (t[i] - line.t_mean) * (t[i] - line.t_mean);
+  }
+  return line;
+}
+
 // d v / d t fitted over samples [0, n) (0 when they span no time).
 inline double LeadingSlope(const std::vector<double>& t, const std::vector<double>& v,
                            std::size_t n) {
-  double t_mean = 0, v_mean = 0;
-  for (std::size_t i = 0; i < n; ++i) t_mean += t[i], v_mean += v[i];
-  t_mean /= static_cast<double>(n);
-  v_mean /= static_cast<double>(n);
-  double tv = 0, tt = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    tv += (t[i] - t_mean) * (v[i] - v_mean);
-    tt += (t[i] - t_mean) * (t[i] - t_mean);
-  }
-  return tt > 0 ? tv / tt : 0.0;
+  return FitLeadingLine(t, v, n).slope();
 }
 
 // |d v / d t| over samples [0, n) in standard errors of the slope (the
@@ -30,21 +41,15 @@ inline double LeadingSlope(const std::vector<double>& t, const std::vector<doubl
 inline double LeadingSlopeSigmas(const std::vector<double>& t, const std::vector<double>& v,
                                  std::size_t n, double floor) {
   if (n < 3) return 0.0;
-  double t_mean = 0, v_mean = 0;
-  for (std::size_t i = 0; i < n; ++i) t_mean += t[i], v_mean += v[i];
-  t_mean /= static_cast<double>(n);
-  v_mean /= static_cast<double>(n);
-  double tt = 0;
-  for (std::size_t i = 0; i < n; ++i) tt += (t[i] - t_mean) * (t[i] - t_mean);
-  if (!(tt > 0)) return 0.0;
-  const double slope = LeadingSlope(t, v, n);
+  const LeadingLine line = FitLeadingLine(t, v, n);
+  if (!(line.tt > 0)) return 0.0;
   double squares = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const double r = v[i] - v_mean - slope * (t[i] - t_mean);
+    const double r = v[i] - line.v_mean - line.slope() * (t[i] - line.t_mean);
     squares += r * r;
   }
   const double variance = std::max(floor * floor, squares / static_cast<double>(n - 2));
-  return std::fabs(slope) / std::sqrt(variance / tt);
+  return std::fabs(line.slope()) / std::sqrt(variance / line.tt);
 }
 
 }  // namespace pneumaid::internal

@@ -4,6 +4,8 @@
 
 #include <vector>
 
+#include "pneumaid/io/log_notes.h"
+
 namespace pneumaid::internal {
 namespace {
 

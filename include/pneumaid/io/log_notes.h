@@ -17,6 +17,9 @@ namespace pneumaid {
 // common and harmless, a longer gap hides what the rod did while it lasted.
 constexpr double kSamplingGapIntervals = 3.5;
 
+// The median of t's intervals (0 with fewer than two samples).
+double MedianInterval(const std::vector<double>& t);
+
 // The sampling's gaps in `t`: the index i of each interval t[i + 1] - t[i]
 // over kSamplingGapIntervals times the median interval, in order (none with
 // fewer than three samples or a median of 0); the median in
