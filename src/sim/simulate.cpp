@@ -156,6 +156,8 @@ class Integrator {
     CheckFlag(CVodeSetLinearSolver(mem, solver_.get(), matrix_.get()), "CVodeSetLinearSolver");
     CheckFlag(CVodeSetJacFn(mem, Jacobian), "CVodeSetJacFn");
     CheckFlag(CVodeSetMaxNumSteps(mem, 100000), "CVodeSetMaxNumSteps");
+    CheckFlag(CVodeSetMaxErrTestFails(mem, options.max_error_test_failures),
+              "CVodeSetMaxErrTestFails");
     if (data_->motion != MotionMode::kRegularized) {
       CheckFlag(CVodeRootInit(
                     mem, 2,
@@ -570,6 +572,7 @@ bool SimulationOptions::IsValid(std::string* error) const {
     return fail("absolute tolerances must be > 0");
   }
   if (max_steps <= 0) return fail("max_steps must be > 0");
+  if (max_error_test_failures < 1) return fail("max_error_test_failures must be >= 1");
   if (!(hysteresis_threshold_V > 0 && hysteresis_threshold_V < 1)) {
     return fail("hysteresis_threshold_V must be in (0, 1)");
   }

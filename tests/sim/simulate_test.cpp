@@ -159,6 +159,38 @@ TEST(SimulateTest, WithStickCreepAHeldRodCreepsAtTheSpeedItsFrictionBalances) {
   }
 }
 
+// A 0.06 kg vertical rod under the smooth stick law, stroked at 0.44 V from
+// stop to stop (robustness sweep, seed 77, unit 25): where it creeps off the
+// retracted stop past the stick velocity, the law's stiffness (time constant
+// m v_stick / 1.5 Fs, 0.1 us) ends at a corner (the saturation is C1 only).
+// CVODE's default of 7 error-test failures on one step gave up there before
+// its order had come down (t = 3.92 s); the synthetic rig could not write
+// the unit, and a fit with stick_creep could not simulate it.
+TEST(SimulateTest, ALightRodCreepingOffAStopUnderTheSmoothStickLawRuns) {
+  Parameters p;  // vertical
+  p.cylinder.load_mass_kg = 0.05927943120365231;
+  for (KvpBranchParams* branch : {&p.valve.increasing, &p.valve.decreasing})
+    branch->u_sat_V = 0.7208306855473684;
+  p.valve.increasing.q_max_kg_per_s = 9.924520520448745e-05;
+  p.valve.decreasing.q_max_kg_per_s = 9.817228406714164e-05;
+  p.pipeline.delta_per_s = 6.6061054974066975;
+  p.friction.positive = {9.185621671430127, 5.6011207060343295, 5.151415798806011,
+                         0.0034289442831488626};
+  p.friction.negative = {5.2381004882206135, 0.37892075916631757, 8.553661691897108,
+                         0.009032419621058281};
+  p.effects["stick_creep"] = {{"v", 2.060858606734631e-05}};
+  const double level = 0.4445631646340774;
+  const CommandSignal command = StepCommand(
+      {{0.05, level}, {0.662, -level}, {1.7514, level}, {2.7456, -level}, {3.8708, level}});
+  const auto times = UniformTimes(0, 5.8708, 5000);
+  const Trajectory run = MustSimulate(p, command, RetractedAtRest(p), times);
+  EXPECT_GT(run.x_m.back(), 0.02);  // extended again after the last step
+  SimulationOptions cvode_default;
+  cvode_default.max_error_test_failures = 7;
+  Trajectory failed;
+  EXPECT_FALSE(Simulate(p, command, RetractedAtRest(p), times, cvode_default, &failed).ok());
+}
+
 TEST(SimulateTest, RodBreaksAwayAboveStaticFriction) {
   Parameters p = HorizontalWithoutTube();
   const double p2 = 2e5;
@@ -318,6 +350,12 @@ TEST(SimulateTest, InvalidInputsAreReportedNotThrown) {
   options.relative_tolerance = 0;
   EXPECT_EQ(Simulate(Parameters{}, CommandSignal{}, InitialState{}, {0.0}, options, &run).status,
             SimulationStatus::kInvalidInput);
+  options = SimulationOptions{};
+  options.max_error_test_failures = 0;
+  const auto no_failures =
+      Simulate(Parameters{}, CommandSignal{}, InitialState{}, {0.0, 1.0}, options, &run);
+  EXPECT_EQ(no_failures.status, SimulationStatus::kInvalidInput);
+  EXPECT_NE(no_failures.message.find("max_error_test_failures"), std::string::npos);
 }
 
 // FrictionUse: a rod held against its negative static friction at 0.7 Fs

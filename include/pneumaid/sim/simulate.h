@@ -43,6 +43,12 @@ struct SimulationOptions {
   double temperature_tolerance_K = 1e-4;
   // Work bound: the run fails (never hangs) past this many solver steps.
   long max_steps = 5'000'000;
+  // Error-test failures CVODE allows on one step before it gives up. Each
+  // failure past the third lowers the order by one: CVODE's default of 7
+  // could end a run where a light rod creeps off a stop under the smooth
+  // stick law, whose stiffness ends at |v| = the stick velocity (its
+  // saturation is C1 only) before the order had come down to 1.
+  int max_error_test_failures = 20;
   // Cooperative stop (a batch unit's time limit): when set and true, the run
   // fails at its next output sample with "stopped". Not owned.
   const std::atomic<bool>* stop = nullptr;
