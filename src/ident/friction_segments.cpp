@@ -34,8 +34,16 @@ namespace {
 // smoothly (the valve filling a closed chamber), so its noise is averaged out
 // by a quadratic fit over the last `window` samples of each stuck run. That
 // matters at breakaway: the first crossing of Fs by the raw noisy force comes
-// early, and a replay driven by it would bias Fs.
-void SmoothStuckForce(const Runs& runs, std::size_t window, std::vector<double>* force) {
+// early, and a replay driven by it would bias Fs. A run whose force the
+// quadratic does not follow within kSmoothStuckMisfit times its noise
+// `sigma_N` per sample (a chamber near its dead volume filled within a few
+// samples, at a stop or on a fast valve) keeps its samples as logged: the
+// fit would cut the rise short, and the replay break away at a fraction of
+// the force the rod held (a 0.11 kg rod at 250 Hz: Fs 0.97 N for 15.6).
+constexpr double kSmoothStuckMisfit = 25.0;
+
+void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
+                      std::vector<double>* force) {
   for (const auto& [begin, end] : runs) {
     // The first samples of a run still carry the arrest's pressure transient.
     const std::size_t first =
@@ -53,6 +61,8 @@ void SmoothStuckForce(const Runs& runs, std::size_t window, std::vector<double>*
       y(i) = (*force)[first + i];
     }
     const Eigen::Vector3d c = design.colPivHouseholderQr().solve(y);
+    const double misfit = (design * c - y).squaredNorm() / static_cast<double>(n - 3);
+    if (misfit > kSmoothStuckMisfit * sigma_N * sigma_N) continue;
     for (std::size_t i = first; i < end; ++i) {
       const double s = (static_cast<double>(i) - centre) / static_cast<double>(n);
       (*force)[i] = c(0) + s * (c(1) + s * c(2));
@@ -347,7 +357,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     std::vector<double> x = e.column("x");
     for (double& value : x) value -= zero_m;
     const Runs runs = internal::StuckRuns(x, stuck);
-    SmoothStuckForce(runs, options.stuck_force_samples, &force);
+    const double force_sigma_N = std::max(
+        std::hypot(p1_sigma_N * gain("p1", period), p2_sigma_N * gain("p2", period)), 1e-3);
+    SmoothStuckForce(runs, options.stuck_force_samples, force_sigma_N, &force);
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
     data.experiments.push_back(&e);
@@ -377,8 +389,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     sampling.period_s = period;
     sampling.mass_kg = rig.load_mass_kg;
     sampling.sigma_x_m = sigma_x_m;
-    sampling.sigma_force_N = std::max(
-        std::hypot(p1_sigma_N * gain("p1", period), p2_sigma_N * gain("p2", period)), 1e-3);
+    sampling.sigma_force_N = force_sigma_N;
     sampling.half_stroke_m = 0.5 * rig.stroke_m;
     sampling.end_zone_m = options.end_margin_m + 4 * sigma_x_m;
     sampling.window_s = options.smoothing_window_s;

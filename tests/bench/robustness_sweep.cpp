@@ -14,9 +14,9 @@
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
-// tolerance on at least K units (issue 12's suite target: 6 units, K = 5,
-// what scripts/test.sh gates on); --min-units-valve-tube K: the same for
-// K_vp and delta only. --start truth: refine from the
+// tolerance on at least K units (issue 12's suite target: 6 units, K = 5;
+// scripts/test.sh gates on 4, docs/identification.md); --min-units-valve-tube
+// K: the same for K_vp and delta only. --start truth: refine from the
 // true parameters instead of identify's (how far starts are the gap).
 // --start rig: refine the rig's own model from the truth: where the rig
 // creeps (its smooth stick), the truth with that creep as `stick_creep` and
