@@ -35,11 +35,12 @@ namespace {
 // by a quadratic fit over the last `window` samples of each stuck run. That
 // matters at breakaway: the first crossing of Fs by the raw noisy force comes
 // early, and a replay driven by it would bias Fs. A run whose force the
-// quadratic does not follow within kSmoothStuckMisfit times its noise
-// `sigma_N` per sample (a chamber near its dead volume filled within a few
-// samples, at a stop or on a fast valve) keeps its samples as logged: the
-// fit would cut the rise short, and the replay break away at a fraction of
-// the force the rod held (a 0.11 kg rod at 250 Hz: Fs 0.97 N for 15.6).
+// quadratic does not follow, a mean square misfit over kSmoothStuckMisfit
+// times the noise variance sigma_N^2 (a chamber near its dead volume filled
+// within a few samples, at a stop or on a fast valve), keeps its samples as
+// logged: the fit would cut the rise short, and the replay break away at a
+// fraction of the force the rod held (a 0.11 kg rod at 250 Hz: Fs 0.97 N for
+// 15.6).
 constexpr double kSmoothStuckMisfit = 25.0;
 
 void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,

@@ -6,6 +6,7 @@
 // honesty of the standard errors, and the median times.
 //
 //   robustness_sweep N [--seed S] [--jobs J] [--min-units K] [--keep DIR]
+//                    [--min-friction-total K]
 //                    [--min-units-valve-tube K]
 //                    [--start-prior on|off] [--start identify|truth|rig]
 //                    [--held-out-probe K] [--error-blocks S]
@@ -16,7 +17,9 @@
 // not measured. --min-units K: exit 1 unless every coefficient is within
 // tolerance on at least K units (issue 12's suite target: 6 units, K = 5;
 // scripts/test.sh gates on 4, docs/identification.md); --min-units-valve-tube
-// K: the same for K_vp and delta only. --start truth: refine from the
+// K: the same for K_vp and delta only; --min-friction-total K: exit 1 unless
+// at least K of the units' friction coefficients (8 per unit) are within
+// tolerance. --start truth: refine from the
 // true parameters instead of identify's (how far starts are the gap).
 // --start rig: refine the rig's own model from the truth: where the rig
 // creeps (its smooth stick), the truth with that creep as `stick_creep` and
@@ -431,7 +434,8 @@ int main(int argc, char** argv) {
   FLAGS_minloglevel = google::GLOG_FATAL;  // as the CLI (src/cli/main.cpp)
   if (argc < 2) {
     std::cerr << "usage: robustness_sweep N [--seed S] [--jobs J] [--min-units K] "
-                 "[--min-units-valve-tube K] [--keep DIR] [--start-prior on|off] "
+                 "[--min-units-valve-tube K] [--min-friction-total K] [--keep DIR] "
+                 "[--start-prior on|off] "
                  "[--start identify|truth|rig] [--held-out-probe K] [--error-blocks S] "
                  "[--cost-resolution-directions K] [--units I,J,...] [--stick-creep on|off] "
                  "[--rig-creep V]\n";
@@ -439,7 +443,7 @@ int main(int argc, char** argv) {
   }
   const int n = std::atoi(argv[1]);
   std::uint64_t seed = 12;
-  int jobs = 1, min_units = -1, min_units_valve_tube = -1, probe_sets = 0;
+  int jobs = 1, min_units = -1, min_units_valve_tube = -1, min_friction_total = -1, probe_sets = 0;
   std::string keep;  // --keep DIR: the units are written there and kept
   RefineOptions refine_options = RefineOptions::ForIdentify();
   double rig_creep = 0;  // --rig-creep
@@ -459,6 +463,8 @@ int main(int argc, char** argv) {
       min_units = std::atoi(argv[i + 1]);
     else if (flag == "--min-units-valve-tube")
       min_units_valve_tube = std::atoi(argv[i + 1]);
+    else if (flag == "--min-friction-total")
+      min_friction_total = std::atoi(argv[i + 1]);
     else if (flag == "--held-out-probe")
       probe_sets = std::atoi(argv[i + 1]);
     else if (flag == "--keep")
@@ -589,6 +595,7 @@ int main(int argc, char** argv) {
       "(after identify alone)\n",
       count, static_cast<unsigned long long>(seed));
   bool enough = true;
+  int friction_total = 0;
   for (const auto& name : kChecked) {
     int good = 0, identify_good = 0;
     for (const auto& r : results) {
@@ -600,7 +607,10 @@ int main(int argc, char** argv) {
     enough = enough && (min_units < 0 || good >= min_units);
     const bool valve_tube = name.rfind("kvp", 0) == 0 || name == "delta";
     enough = enough && (!valve_tube || min_units_valve_tube < 0 || good >= min_units_valve_tube);
+    if (!valve_tube) friction_total += good;
   }
+  std::printf("  friction coefficients within tolerance: %d of %d\n", friction_total, 8 * count);
+  enough = enough && (min_friction_total < 0 || friction_total >= min_friction_total);
   int held = 0, explained = 0;
   ErrorCoverage refined_errors, identify_errors;
   std::vector<double> identify, refine;

@@ -65,8 +65,13 @@ Protocol Strokes(int cycles, double rate_Hz, std::vector<double> levels, double 
   return protocol;
 }
 
-// A unit's stroke logs and their cuts (which point into the unit).
+// A unit's stroke logs and their cuts (which point into the unit: moved,
+// never copied).
 struct CutLogs {
+  CutLogs(Unit u, StrokeData d) : unit(std::move(u)), data(std::move(d)) {}
+  CutLogs(const CutLogs&) = delete;
+  CutLogs& operator=(const CutLogs&) = delete;
+  CutLogs(CutLogs&&) = default;
   Unit unit;
   StrokeData data;
 };
