@@ -1,5 +1,7 @@
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <string>
@@ -16,6 +18,7 @@
 #include "pneumaid/io/units.h"
 #include "pneumaid/sim/simulate.h"
 #include "pneumaid/validate/logged_run.h"
+#include "pneumaid/validate/validate.h"
 
 namespace pneumaid::cli {
 namespace {
@@ -26,6 +29,7 @@ struct SimulateArgs {
   std::string input_path;
   double until_s = NAN;
   double rate_Hz = 1000.0;
+  bool rate_given = false;
   std::string out_path;
 };
 
@@ -77,37 +81,33 @@ struct LoggedRun {
   InitialState initial;
 };
 
-// The command of a log (and its first state, when the log has x, p1, p2). A
-// log of a unit directory is read as its manifest says; any other CSV is
-// taken as pneumaid writes logs (SI, x from mid-stroke, mass flows).
+// The command of a log outside a unit directory (and its first state, when
+// the log has x, p1, p2), taken as pneumaid writes logs (SI, x from
+// mid-stroke, mass flows).
 LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
   std::map<std::string, std::vector<double>> columns;
-  if (const auto experiment = ReadLogOfUnit(path)) {
-    columns = experiment->columns;
-  } else {
-    const CsvTable table = ReadCsv(path);
-    const double p_atm = params.supply.atmospheric_pressure_Pa;
-    columns["t"] = ColumnInSI(table, "t", Quantity::kTime, p_atm, true);
-    columns["u"] = ColumnInSI(table, "u", Quantity::kCommand, p_atm, true);
-    columns["x"] = ColumnInSI(table, "x", Quantity::kLength, p_atm, false);
-    columns["p1"] = ColumnInSI(table, "p1", Quantity::kPressure, p_atm, false);
-    columns["p2"] = ColumnInSI(table, "p2", Quantity::kPressure, p_atm, false);
-    // The format's check of a wrong origin: with no manifest to say it, x is
-    // from mid-stroke, and the set's stroke is the stroke.
-    const double half_m = 0.5 * params.cylinder.stroke_m;
-    for (std::size_t i = 0; i < columns["x"].size(); ++i) {
-      if (std::fabs(columns["x"][i]) > half_m + 1e-3) {
-        throw InputError(path, table.row_lines[i], table.Find("x")->column,
-                         "column 'x': position " + FormatSignificant(columns["x"][i] * 1e3, 6) +
-                             " mm is more than 1 mm outside the stroke; a log outside a unit "
-                             "directory is read with x from mid-stroke (as pneumaid writes logs)");
-      }
+  const CsvTable table = ReadCsv(path);
+  const double p_atm = params.supply.atmospheric_pressure_Pa;
+  columns["t"] = ColumnInSI(table, "t", Quantity::kTime, p_atm, true);
+  columns["u"] = ColumnInSI(table, "u", Quantity::kCommand, p_atm, true);
+  columns["x"] = ColumnInSI(table, "x", Quantity::kLength, p_atm, false);
+  columns["p1"] = ColumnInSI(table, "p1", Quantity::kPressure, p_atm, false);
+  columns["p2"] = ColumnInSI(table, "p2", Quantity::kPressure, p_atm, false);
+  // The format's check of a wrong origin: with no manifest to say it, x is
+  // from mid-stroke, and the set's stroke is the stroke.
+  const double half_m = 0.5 * params.cylinder.stroke_m;
+  for (std::size_t i = 0; i < columns["x"].size(); ++i) {
+    if (std::fabs(columns["x"][i]) > half_m + 1e-3) {
+      throw InputError(path, table.row_lines[i], table.Find("x")->column,
+                       "column 'x': position " + FormatSignificant(columns["x"][i] * 1e3, 6) +
+                           " mm is more than 1 mm outside the stroke; a log outside a unit "
+                           "directory is read with x from mid-stroke (as pneumaid writes logs)");
     }
-    for (std::size_t i = 1; i < columns["t"].size(); ++i) {
-      if (!(columns["t"][i] > columns["t"][i - 1])) {
-        throw InputError(path, table.row_lines[i], 1,
-                         "column 't': expected strictly increasing time");
-      }
+  }
+  for (std::size_t i = 1; i < columns["t"].size(); ++i) {
+    if (!(columns["t"][i] > columns["t"][i - 1])) {
+      throw InputError(path, table.row_lines[i], 1,
+                       "column 't': expected strictly increasing time");
     }
   }
   LoggedRun run;
@@ -138,9 +138,58 @@ LoggedRun ReadLoggedRun(const std::string& path, const Parameters& params) {
   return run;
 }
 
+// The simulation's report, and the run written when it succeeded.
+int Report(const SimulateArgs& args, const Parameters& params, const SimulationSummary& summary,
+           const Trajectory& trajectory) {
+  std::cout << summary.BriefReport() << "\n";
+  if (summary.status == SimulationStatus::kInvalidInput) {
+    throw InputError(args.params_path, 0, 0, summary.message);
+  }
+  if (!summary.ok()) return kNumericalFailure;  // nothing written
+  std::cout << SummarizeStroke(trajectory, 0.5 * params.cylinder.stroke_m).Describe() << "\n";
+  const std::string comment = "pneumaid " PNEUMAID_VERSION " simulate --params " +
+                              args.params_path + "\nunit " + params.unit +
+                              "; SI units, x from mid-stroke, pressures absolute";
+  WriteTrajectoryCsv(trajectory, comment, args.out_path);
+  std::cout << "wrote " << args.out_path << " (" << trajectory.size() << " samples)\n";
+  return kSuccess;
+}
+
+// A log listed in the unit.yaml beside it (`log`) is simulated as `validate`
+// simulates it (SimulateLoggedRun: the unit's rig conditions and position
+// zero, the logger's pauses, a start read where the log begins unsettled,
+// the declared meter lags), at its own sample times up to --until.
+int SimulateLogOfUnit(const SimulateArgs& args, const Parameters& params, const Experiment& log) {
+  if (args.rate_given) {
+    throw InputError("--rate", 0, 0,
+                     "not for a log of a unit directory, which is simulated at its own sample "
+                     "times as validate simulates it");
+  }
+  const std::string directory =
+      std::filesystem::weakly_canonical(args.input_path).parent_path().string();
+  const Unit unit = ReadUnit(directory);
+  const LoggedRunSimulation run = SimulateLoggedRun(params, unit, log.entry.id);
+  for (const std::string& note : run.notes) std::cout << "note: " << note << "\n";
+  Trajectory simulated = run.simulated;
+  if (!std::isnan(args.until_s) && run.simulation.ok()) {
+    const std::vector<double>& t = simulated.t_s;
+    if (!(args.until_s > t.front())) {
+      throw InputError("--until", 0, 0, "expected a time after the log's start");
+    }
+    const auto end = std::upper_bound(t.begin(), t.end(), args.until_s) - t.begin();
+    simulated = Slice(simulated, 0, static_cast<std::size_t>(end));
+  }
+  return Report(args, params, run.simulation, simulated);
+}
+
 int RunSimulate(const SimulateArgs& args) {
   RefuseOverwritingInputs({args.out_path}, {args.params_path, args.input_path});
   const Parameters params = LoadParams(args.params_path);
+  if (!args.input_path.empty()) {
+    if (const auto log = ReadLogOfUnit(args.input_path)) {
+      return SimulateLogOfUnit(args, params, *log);
+    }
+  }
   CommandSignal command;
   InitialState initial = RetractedAtRest(params);
   double t0 = 0.0;
@@ -173,18 +222,7 @@ int RunSimulate(const SimulateArgs& args) {
   const SimulationSummary summary =
       Simulate(params, command, initial, UniformTimes(t0, until, args.rate_Hz), SimulationOptions{},
                &trajectory);
-  std::cout << summary.BriefReport() << "\n";
-  if (summary.status == SimulationStatus::kInvalidInput) {
-    throw InputError(args.params_path, 0, 0, summary.message);
-  }
-  if (!summary.ok()) return kNumericalFailure;  // nothing written
-  std::cout << SummarizeStroke(trajectory, 0.5 * params.cylinder.stroke_m).Describe() << "\n";
-  const std::string comment = "pneumaid " PNEUMAID_VERSION " simulate --params " +
-                              args.params_path + "\nunit " + params.unit +
-                              "; SI units, x from mid-stroke, pressures absolute";
-  WriteTrajectoryCsv(trajectory, comment, args.out_path);
-  std::cout << "wrote " << args.out_path << " (" << trajectory.size() << " samples)\n";
-  return kSuccess;
+  return Report(args, params, summary, trajectory);
 }
 
 }  // namespace
@@ -194,20 +232,25 @@ CommandRunner AddSimulateCommand(CLI::App* app) {
   app->add_option("--params", args->params_path, "parameter set (params-v1 YAML)")->required();
   auto* step = app->add_option("--step", args->steps,
                                "command step U@T0: u = U [V] from T0 [s] on (repeatable)");
-  auto* input = app->add_option("--input", args->input_path,
-                                "log whose command (t, u) drives the run; starts from its first "
-                                "sample's x, p1, p2 when present");
+  auto* input = app->add_option(
+      "--input", args->input_path,
+      "log whose command (t, u) drives the run; starts from its first sample's x, p1, p2 when "
+      "present. A log of a unit directory is simulated as validate simulates it, at its own "
+      "sample times");
   step->excludes(input);
   input->excludes(step);
   app->add_option("--until", args->until_s, "end time [s] (default: end of --input)");
-  app->add_option("--rate", args->rate_Hz, "output rate [Hz]")->capture_default_str();
+  auto* rate = app->add_option("--rate", args->rate_Hz,
+                               "output rate [Hz] (not for a log of a unit directory)")
+                   ->capture_default_str();
   app->add_option("--out", args->out_path, "output CSV (a validation log)")
       ->required()
       ->check(InExistingDirectory);
-  app->callback([step, input]() {
+  app->callback([step, input, rate, args]() {
     if (step->count() == 0 && input->count() == 0) {
       throw CLI::ValidationError("simulate", "one of --step or --input is required");
     }
+    args->rate_given = rate->count() > 0;
   });
   return [args]() { return RunSimulate(*args); };
 }

@@ -88,30 +88,31 @@ void AppendPiece(const Trajectory& piece, Trajectory* whole) {
   }
 }
 
-ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& unit,
-                                        const Experiment& experiment, const PositionZero& zero,
-                                        const ValidationOptions& options) {
-  ExperimentValidation out;
-  out.id = experiment.entry.id;
+// `experiment` simulated under `conditioned` (the unit's rig conditions, on
+// its stroke) as SimulateLoggedRun says.
+LoggedRunSimulation SimulateExperiment(const Parameters& conditioned, const Unit& unit,
+                                       const Experiment& experiment, const PositionZero& zero,
+                                       const std::map<std::string, double>& noise,
+                                       const SimulationOptions& options) {
+  LoggedRunSimulation out;
   out.measured = LoggedTrajectory(experiment, zero);
   const Trajectory& m = out.measured;
   // Piece by piece where the logger paused (PieceStarts), each from its own
   // logged start; the simulated pieces end to end.
   const std::vector<std::size_t> begins = PieceStarts(m);
-  const std::map<std::string, double> noise = ChannelNoises(unit);
   for (std::size_t k = 0; k < begins.size(); ++k) {
     const std::size_t end = k + 1 < begins.size() ? begins[k + 1] : m.size();
     const Trajectory piece = Slice(m, begins[k], end);
-    const InitialState initial = LoggedInitialState(piece, 0.5 * params.cylinder.stroke_m);
+    const InitialState initial = LoggedInitialState(piece, 0.5 * conditioned.cylinder.stroke_m);
     Trajectory simulated;
     const std::optional<double> before =
         k > 0 ? std::optional<double>(m.u_V[begins[k] - 1]) : std::nullopt;
     const CommandSignal command = LoggedCommand(piece, unit.manifest.rig, before);
-    const LagStart lag = ReadLagStart(params, piece, command, initial, noise, options.simulation);
+    const LagStart lag = ReadLagStart(conditioned, piece, command, initial, noise, options);
     if (lag.read) out.notes.push_back(lag.note);
     const SimulationSummary summary =
-        Simulate(params, lag.read ? lag.command : command, lag.read ? lag.initial : initial,
-                 piece.t_s, options.simulation, &simulated);
+        Simulate(conditioned, lag.read ? lag.command : command, lag.read ? lag.initial : initial,
+                 piece.t_s, options, &simulated);
     if (k == 0) {
       out.simulation = summary;
       out.simulated = std::move(simulated);
@@ -122,12 +123,52 @@ ExperimentValidation ValidateExperiment(const Parameters& params, const Unit& un
     if (!out.simulation.ok()) return out;
   }
   ApplyDeclaredLags(unit.manifest, &out.simulated);
+  return out;
+}
+
+ExperimentValidation ValidateExperiment(const Parameters& conditioned, const Unit& unit,
+                                        const Experiment& experiment, const PositionZero& zero,
+                                        const ValidationOptions& options) {
+  const std::map<std::string, double> noise = ChannelNoises(unit);
+  LoggedRunSimulation run =
+      SimulateExperiment(conditioned, unit, experiment, zero, noise, options.simulation);
+  ExperimentValidation out;
+  out.id = experiment.entry.id;
+  out.measured = std::move(run.measured);
+  out.simulated = std::move(run.simulated);
+  out.simulation = run.simulation;
+  out.notes = std::move(run.notes);
+  if (!out.simulation.ok()) return out;
+  const Trajectory& m = out.measured;
   Trajectory comparable = out.simulated;
   if (m.q1_kg_per_s.empty()) comparable.q1_kg_per_s.clear();
   if (m.q2_kg_per_s.empty()) comparable.q2_kg_per_s.clear();
   out.channels = CompareRuns(m, comparable, noise);
   out.missed = MissedThresholds(out.channels, options);
   return out;
+}
+
+// `body(conditioned, unit)`: `params` under `given_unit`'s rig conditions
+// (WithRigConditions), and the unit on the set's stroke (OnTheSetsStroke).
+template <typename Body>
+auto UnderRigConditions(const Parameters& params, const Unit& given_unit, const Body& body) {
+  const Parameters conditioned = WithRigConditions(params, given_unit);
+  const std::optional<Unit> moved = OnTheSetsStroke(given_unit, params);
+  return body(conditioned, moved ? *moved : given_unit);
+}
+
+// The experiment `id` of `unit`, which must be a run the simulator can drive.
+const Experiment& SimulableExperiment(const Unit& unit, const std::string& id) {
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.id != id) continue;
+    if (!IsSimulable(e.entry.kind)) {
+      throw InputError(unit.manifest_path(), e.entry.manifest_line, 0,
+                       "experiment '" + e.entry.id + "' is a " + ToString(e.entry.kind) +
+                           " log; only stroke and validation runs can be simulated");
+    }
+    return e;
+  }
+  throw InputError(unit.manifest_path(), 0, 0, "no experiment '" + id + "'");
 }
 
 }  // namespace
@@ -198,34 +239,37 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& given_unit,
                               const ValidationOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw InputError("validation options", 0, 0, error);
-  const Parameters conditioned = WithRigConditions(params, given_unit);
-  const std::optional<Unit> moved = OnTheSetsStroke(given_unit, params);
-  const Unit& unit = moved ? *moved : given_unit;
-  ValidationReport report;
-  report.unit = unit.manifest.unit;
-  const PositionZero zero = ReadPositionZero(unit);  // once for every run
-  for (const auto& id : options.experiment_ids) {
-    bool found = false;
-    for (const auto& e : unit.experiments) found = found || e.entry.id == id;
-    if (!found) throw InputError(unit.manifest_path(), 0, 0, "no experiment '" + id + "'");
-  }
-  for (const Experiment& e : unit.experiments) {
-    const bool chosen =
-        options.experiment_ids.empty()
-            ? e.entry.kind == ExperimentKind::kValidation
-            : std::count(options.experiment_ids.begin(), options.experiment_ids.end(), e.entry.id);
-    if (!chosen) continue;
-    if (!IsSimulable(e.entry.kind)) {
-      throw InputError(unit.manifest_path(), e.entry.manifest_line, 0,
-                       "experiment '" + e.entry.id + "' is a " + ToString(e.entry.kind) +
-                           " log; only stroke and validation runs can be simulated");
-    }
-    report.experiments.push_back(ValidateExperiment(conditioned, unit, e, zero, options));
-  }
-  if (report.experiments.empty()) {
-    throw InputError(unit.manifest_path(), 0, 0, "no validation experiments to validate");
-  }
-  return report;
+  return UnderRigConditions(
+      params, given_unit, [&](const Parameters& conditioned, const Unit& unit) {
+        ValidationReport report;
+        report.unit = unit.manifest.unit;
+        const PositionZero zero = ReadPositionZero(unit);  // once for every run
+        for (const auto& id : options.experiment_ids) SimulableExperiment(unit, id);
+        for (const Experiment& e : unit.experiments) {
+          const bool chosen = options.experiment_ids.empty()
+                                  ? e.entry.kind == ExperimentKind::kValidation
+                                  : std::count(options.experiment_ids.begin(),
+                                               options.experiment_ids.end(), e.entry.id);
+          if (!chosen) continue;
+          report.experiments.push_back(ValidateExperiment(conditioned, unit, e, zero, options));
+        }
+        if (report.experiments.empty()) {
+          throw InputError(unit.manifest_path(), 0, 0, "no validation experiments to validate");
+        }
+        return report;
+      });
+}
+
+LoggedRunSimulation SimulateLoggedRun(const Parameters& params, const Unit& given_unit,
+                                      const std::string& experiment_id,
+                                      const SimulationOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw InputError("simulation options", 0, 0, error);
+  return UnderRigConditions(
+      params, given_unit, [&](const Parameters& conditioned, const Unit& unit) {
+        return SimulateExperiment(conditioned, unit, SimulableExperiment(unit, experiment_id),
+                                  ReadPositionZero(unit), ChannelNoises(unit), options);
+      });
 }
 
 }  // namespace pneumaid

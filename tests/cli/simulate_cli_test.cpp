@@ -83,6 +83,49 @@ TEST_F(SimulateCliTest, ALogWhoseRodRestsJustBeyondItsStopIsSimulated) {
   EXPECT_GE(ReadCsv(out).Find("x")->values.front(), -0.025);
 }
 
+// A log of a unit directory is simulated as validate simulates it: the
+// unit's rig conditions and position zero, the logger's pauses, a start read
+// where the log begins unsettled, and the flows as its declared meters (tau
+// 30 ms here) read them. Before, simulate read the log's command and first
+// sample only, and its flows were the model's, unlagged.
+TEST_F(SimulateCliTest, ALogOfAUnitIsSimulatedAsValidateSimulatesIt) {
+  const std::string unit = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/fleet/PVQ13-0002";
+  const std::string truth = unit + "/truth.yaml";
+  ASSERT_EQ(Run("validate " + unit + " --params " + truth + " --csv-out " + dir_.string()), 0)
+      << Stderr();
+  const std::string out = (dir_ / "sim.csv").string();
+  ASSERT_EQ(Run("simulate --params " + truth + " --input " + unit + "/step-1.csv --out " + out), 0)
+      << Stderr();
+  const CsvTable validated = ReadCsv((dir_ / "step-1-validation.csv").string());
+  const CsvTable simulated = ReadCsv(out);
+  ASSERT_EQ(simulated.rows(), validated.rows());
+  for (const auto& [mine, theirs] : std::vector<std::pair<std::string, std::string>>{
+           {"t", "t"}, {"x", "x_sim"}, {"p1", "p1_sim"}, {"q1", "q1_sim"}, {"q2", "q2_sim"}}) {
+    const std::vector<double>& a = simulated.Find(mine)->values;
+    const std::vector<double>& b = validated.Find(theirs)->values;
+    double scale = 0;
+    for (double value : b) scale = std::max(scale, std::fabs(value));
+    for (std::size_t i = 0; i < a.size(); ++i)
+      ASSERT_NEAR(a[i], b[i], 1e-6 * scale) << mine << " row " << i;
+  }
+  // --rate does not apply: the run is on the log's own clock.
+  const std::string other = (dir_ / "other.csv").string();
+  EXPECT_EQ(Run("simulate --params " + truth + " --input " + unit +
+                "/step-1.csv --rate 100 --out " + other),
+            2);
+  EXPECT_NE(Stderr().find("--rate: not for a log of a unit directory"), std::string::npos)
+      << Stderr();
+  EXPECT_FALSE(fs::exists(other));
+  // --until cuts the run's rows.
+  ASSERT_EQ(Run("simulate --params " + truth + " --input " + unit +
+                "/step-1.csv --until 0.5 --out " + other),
+            0)
+      << Stderr();
+  const std::vector<double>& t = ReadCsv(other).Find("t")->values;
+  EXPECT_LE(t.back(), 0.5);
+  EXPECT_GT(t.back(), 0.49);
+}
+
 TEST_F(SimulateCliTest, BadInputExitsTwoAndWritesNothing) {
   const std::string out = (dir_ / "sim.csv").string();
   std::ifstream paper(kPaper);

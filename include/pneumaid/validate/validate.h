@@ -54,6 +54,27 @@ struct ValidationReport {
 ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
                               const ValidationOptions& options);
 
+// One logged run of a unit simulated as validation simulates it.
+struct LoggedRunSimulation {
+  Trajectory measured;   // the log, x less the transducer's zero (ReadPositionZero)
+  Trajectory simulated;  // at the log's sample times, flows as the declared meters read them
+  SimulationSummary simulation;
+  std::vector<std::string> notes;  // how a run was started where the log did not say
+};
+
+// The run `experiment_id` (a stroke or validation log) of `unit` under
+// `params`: with the unit's rig conditions (WithRigConditions) on its stroke
+// (OnTheSetsStroke), piece by piece where the logger paused (PieceStarts),
+// each from its logged first sample and command (LoggedInitialState,
+// LoggedCommand), or from a start read off the log where it begins unsettled
+// (ReadLagStart), the declared meter lags applied (ApplyDeclaredLags). The
+// one home of how a logged run is simulated: ValidateUnit compares what it
+// gives. Throws InputError for bad options or an experiment it cannot run;
+// a numerical failure is in `simulation`.
+LoggedRunSimulation SimulateLoggedRun(const Parameters& params, const Unit& unit,
+                                      const std::string& experiment_id,
+                                      const SimulationOptions& options = {});
+
 }  // namespace pneumaid
 
 namespace pneumaid {
