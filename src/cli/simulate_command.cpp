@@ -158,24 +158,30 @@ int Report(const SimulateArgs& args, const Parameters& params, const SimulationS
 // A log listed in the unit.yaml beside it (`log`) is simulated as `validate`
 // simulates it (SimulateLoggedRun: the unit's rig conditions and position
 // zero, the logger's pauses, a start read where the log begins unsettled,
-// the declared meter lags), at its own sample times up to --until.
+// every channel read through its declared lag), at its own sample times up
+// to --until, counted from its first sample.
 int SimulateLogOfUnit(const SimulateArgs& args, const Parameters& params, const Experiment& log) {
   if (args.rate_given) {
     throw InputError("--rate", 0, 0,
                      "not for a log of a unit directory, which is simulated at its own sample "
                      "times as validate simulates it");
   }
+  // A unit's log is read with its time from its first sample (ParseExperiment).
+  if (!std::isnan(args.until_s) && !(args.until_s > 0)) {
+    throw InputError("--until", 0, 0,
+                     "expected a time after the log's first sample, from which it counts");
+  }
+  // The whole unit is read (its other logs show the transducer's zero and the
+  // noise), so none of its files may be the output.
   const std::string directory =
       std::filesystem::weakly_canonical(args.input_path).parent_path().string();
+  RefuseOverwritingInputs({args.out_path}, {directory});
   const Unit unit = ReadUnit(directory);
   const LoggedRunSimulation run = SimulateLoggedRun(params, unit, log.entry.id);
   for (const std::string& note : run.notes) std::cout << "note: " << note << "\n";
   Trajectory simulated = run.simulated;
   if (!std::isnan(args.until_s) && run.simulation.ok()) {
     const std::vector<double>& t = simulated.t_s;
-    if (!(args.until_s > t.front())) {
-      throw InputError("--until", 0, 0, "expected a time after the log's start");
-    }
     const auto end = std::upper_bound(t.begin(), t.end(), args.until_s) - t.begin();
     simulated = Slice(simulated, 0, static_cast<std::size_t>(end));
   }

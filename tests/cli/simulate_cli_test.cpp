@@ -89,10 +89,14 @@ TEST_F(SimulateCliTest, ALogWhoseRodRestsJustBeyondItsStopIsSimulated) {
 // 30 ms here) read them. Before, simulate read the log's command and first
 // sample only, and its flows were the model's, unlagged.
 TEST_F(SimulateCliTest, ALogOfAUnitIsSimulatedAsValidateSimulatesIt) {
-  const std::string unit = std::string(PNEUMAID_SOURCE_DIR) + "/datasets/fleet/PVQ13-0002";
+  // A copy: the test tries to write over one of its logs.
+  const std::string unit = (dir_ / "PVQ13-0002").string();
+  fs::copy(std::string(PNEUMAID_SOURCE_DIR) + "/datasets/fleet/PVQ13-0002", unit,
+           fs::copy_options::recursive);
   const std::string truth = unit + "/truth.yaml";
   ASSERT_EQ(Run("validate " + unit + " --params " + truth + " --csv-out " + dir_.string()), 0)
       << Stderr();
+  const std::string stroke_log = Read(unit + "/stroke-040.csv");
   const std::string out = (dir_ / "sim.csv").string();
   ASSERT_EQ(Run("simulate --params " + truth + " --input " + unit + "/step-1.csv --out " + out), 0)
       << Stderr();
@@ -116,7 +120,13 @@ TEST_F(SimulateCliTest, ALogOfAUnitIsSimulatedAsValidateSimulatesIt) {
   EXPECT_NE(Stderr().find("--rate: not for a log of a unit directory"), std::string::npos)
       << Stderr();
   EXPECT_FALSE(fs::exists(other));
-  // --until cuts the run's rows.
+  // Nor may the output be one of the unit's files, which are all read.
+  EXPECT_EQ(Run("simulate --params " + truth + " --input " + unit + "/step-1.csv --out " + unit +
+                "/stroke-040.csv"),
+            2);
+  EXPECT_NE(Stderr().find("stroke-040.csv"), std::string::npos) << Stderr();
+  EXPECT_EQ(Read(unit + "/stroke-040.csv"), stroke_log);
+  // --until, from the log's first sample, cuts the run's rows.
   ASSERT_EQ(Run("simulate --params " + truth + " --input " + unit +
                 "/step-1.csv --until 0.5 --out " + other),
             0)
