@@ -10,8 +10,10 @@ namespace pneumaid::internal {
 double UniformPeriod(const std::vector<double>& t) {
   if (t.size() < 2) return 0;
   const double period = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  if (!(period > 0)) return 0;
   for (std::size_t i = 1; i < t.size(); ++i) {
-    if (std::fabs(t[i] - t[i - 1] - period) > 0.01 * period) return 0;
+    const double grid = t.front() + static_cast<double>(i) * period;
+    if (std::fabs(t[i] - grid) > kStampJitter * period) return 0;
   }
   return period;
 }

@@ -42,5 +42,24 @@ TEST(UniformClockTest, MarksTheSamplesInsideAGapAndNotBesideADroppedRow) {
   EXPECT_EQ(resampled->column("u")[14], 0.7);
 }
 
+// A logger's clock that stamps rows up to 9 % of an interval off its 1 ms
+// grid: the log is on that grid (its mean interval); a stamp 12 % off is
+// not. One row lost moves the stamps half an interval or more from the grid
+// through the ends, wherever it was.
+TEST(UniformClockTest, StampsWithJitterAreOnTheGridALostRowIsNot) {
+  std::vector<double> t;
+  for (int ms = 0; ms <= 1000; ++ms) t.push_back(ms * 1e-3 + (ms % 7 - 3) * 0.03e-3);
+  t.front() = 0, t.back() = 1.0;
+  EXPECT_DOUBLE_EQ(UniformPeriod(t), 1e-3);
+  std::vector<double> late = t;
+  late[500] = 0.5 + 0.12e-3;  // 12 % of an interval off the grid: over kStampJitter
+  EXPECT_EQ(UniformPeriod(late), 0.0);
+  for (std::size_t k : {std::size_t{1}, std::size_t{500}, std::size_t{999}}) {
+    std::vector<double> lost = t;
+    lost.erase(lost.begin() + static_cast<std::ptrdiff_t>(k));
+    EXPECT_EQ(UniformPeriod(lost), 0.0) << "row " << k << " lost";
+  }
+}
+
 }  // namespace
 }  // namespace pneumaid::internal
