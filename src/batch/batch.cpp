@@ -133,7 +133,7 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
   json << "{\"format\": \"pneumaid-batch-unit/1\", \"unit\": " << JsonString(name)
        << ", \"directory\": " << JsonString(unit_dir.string());
   std::string verdict = "identified";
-  for (const std::string& fit : identified.NotConverged()) verdict += "; " + fit;
+  for (const std::string& fit : identified.NotAccepted()) verdict += "; " + fit;
   if (options.refine) {
     const RefineResult r = Refine(params, unit, options.spec, refine);
     report << r.BriefReport();

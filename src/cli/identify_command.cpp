@@ -92,8 +92,8 @@ int RunIdentify(const IdentifyArgs& args) {
   WriteHtml(args.html_path, html);
   // A fit that did not converge: its best point is written (its provenance
   // says so), and the exit status is the spec's numerical failure.
-  const std::vector<std::string> failed = report.NotConverged();
-  for (const std::string& fit : failed) std::cout << "not converged: " << fit << "\n";
+  const std::vector<std::string> failed = report.NotAccepted();
+  for (const std::string& fit : failed) std::cout << "not accepted: " << fit << "\n";
   return failed.empty() ? kSuccess : kNumericalFailure;
 }
 

@@ -37,7 +37,7 @@ const FittedCoefficient* FitResult::Find(const std::string& path) const {
 std::map<std::string, std::string> FitResult::Held() const {
   std::map<std::string, std::string> held;
   for (const FittedCoefficient& c : coefficients) {
-    if (!c.determined()) held[c.path] = c.held;
+    if (!has_values() || !c.determined()) held[c.path] = c.held.empty() ? reason : c.held;
   }
   return held;
 }

@@ -27,12 +27,14 @@ namespace {
 // fitted, or as from the prior with why.
 void Record(const FitResult& fit, Parameters* params, IdentifyReport* report) {
   fit.ApplyTo(params);
+  const std::map<std::string, std::string> held = fit.Held();
   for (const FittedCoefficient& c : fit.coefficients) {
-    if (fit.has_values() && c.determined()) {
+    const auto why = held.find(c.path);
+    if (why == held.end()) {
       report->fitted.push_back(c.path);
       params->uncertainty[c.path] = c.standard_error;
     } else {
-      report->priors.push_back(c.path + " (" + (c.held.empty() ? fit.reason : c.held) + ")");
+      report->priors.push_back(c.path + " (" + why->second + ")");
     }
   }
 }
@@ -186,7 +188,6 @@ std::string Provenance(const Unit& unit, const IdentifyOptions& options,
   YAML::Node held(YAML::NodeType::Map);
   for (const FitResult* fit :
        std::initializer_list<const FitResult*>{&report.valve, &report.pipeline, &report.friction}) {
-    if (!fit->has_values()) continue;
     for (const auto& [path, why] : fit->Held()) held[path] = why;
   }
   if (held.size() > 0) root["held"] = held;
@@ -263,7 +264,7 @@ bool IdentifyOptions::IsValid(std::string* error) const {
   return valve.IsValid(error) && pipeline.IsValid(error) && friction.IsValid(error);
 }
 
-std::vector<std::string> IdentifyReport::NotConverged() const {
+std::vector<std::string> IdentifyReport::NotAccepted() const {
   std::vector<std::string> out;
   using Named = std::pair<const char*, const FitResult*>;
   for (const auto& [name, fit] :

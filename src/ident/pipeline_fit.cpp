@@ -299,6 +299,11 @@ void FitLaw(double rig_length_m, double initial_delta_per_s, PipelineFitResult* 
   const double det = s * sxx - sx * sx;
   if (count == 0) {
     result->reason = result->tubes.empty() ? "no tube log" : "no tube could be fitted";
+    for (std::size_t k = 0; k < result->tubes.size(); ++k) {
+      const TubeFit& tube = result->tubes[k];
+      result->reason += (k == 0 ? " (" : "; ") + tube.experiment + ": " + tube.reason +
+                        (k + 1 == result->tubes.size() ? ")" : "");
+    }
     delta.held = result->reason;
   } else if (count == 1 || det <= 1e-12 * s * sxx) {  // one length: a flat law
     result->law_intercept_per_s = sy / s;
@@ -333,17 +338,35 @@ bool PipelineFitOptions::IsValid(std::string* error) const {
   if (max_levels < 2) return fail("max_levels must be >= 2");
   if (!(determined_relative_error > 0)) return fail("determined_relative_error must be > 0");
   if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!(max_reduced_chi_square >= 1)) return fail("max_reduced_chi_square must be >= 1");
   return true;
 }
 
 PipelineFitResult FitPipeline(const Unit& unit, const PipelineFitOptions& options) {
   PipelineFitResult result;
+  std::string unexplained;
   for (const Experiment& e : unit.experiments) {
-    if (e.entry.kind == ExperimentKind::kPipeline) {
-      result.tubes.push_back(FitTube(e, unit.manifest, options));
+    if (e.entry.kind != ExperimentKind::kPipeline) continue;
+    TubeFit tube = FitTube(e, unit.manifest, options);
+    // The verdict: a misfit the noise and the acceptable model error do not
+    // explain. Its delta is still the best point found, and still written.
+    if (tube.status == FitStatus::kConverged &&
+        tube.reduced_chi_square > options.max_reduced_chi_square) {
+      char reason[200];
+      std::snprintf(reason, sizeof(reason),
+                    "the tube model does not explain this log (reduced chi-square %.3g, "
+                    "accepted up to %.3g)",
+                    tube.reduced_chi_square, options.max_reduced_chi_square);
+      tube.status = FitStatus::kNotExplained;
+      tube.reason = reason;
+      unexplained += (unexplained.empty() ? "" : "; ") + tube.experiment + ": " + reason;
     }
+    result.tubes.push_back(std::move(tube));
   }
   FitLaw(unit.manifest.rig.tube_length_m, options.initial_delta_per_s, &result);
+  if (!unexplained.empty()) {
+    result.reason = unexplained + (result.reason.empty() ? "" : "; " + result.reason);
+  }
   return result;
 }
 
@@ -364,7 +387,9 @@ std::string PipelineFitResult::BriefReport() const {
                   tube.experiment.c_str(), tube.tube_length_m, tube.delta_per_s(),
                   tube.delta_standard_error(), tube.levels, tube.iterations,
                   tube.reduced_chi_square,
-                  tube.status == FitStatus::kConverged ? "" : ", NOT converged");
+                  tube.status == FitStatus::kConverged      ? ""
+                  : tube.status == FitStatus::kNotExplained ? ", not explained (below)"
+                                                            : ", NOT converged");
     out << line;
   }
   if (has_values()) {

@@ -9,9 +9,11 @@
 #include <map>
 #include <string>
 
+#include "../synth/synth_test_util.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/provenance.h"
+#include "pneumaid/synth/synthetic_rig.h"
 
 namespace pneumaid {
 namespace {
@@ -142,6 +144,30 @@ TEST(IdentifyTest, TheProvenanceNamesTheHeldCoefficientsWithWhy) {
   EXPECT_EQ(held.count("friction.positive.Fs"), 0u);  // not requested: no fit ran
 }
 
+// A fit that ran and fitted nothing (a tube test whose command never
+// changes) names what it held, and why, in the provenance's `held` as well:
+// before, only a fit with values did, so the set did not say that its delta
+// was the prior's.
+TEST(IdentifyTest, AFitThatRanAndFittedNothingNamesWhatItHeld) {
+  Protocol protocol;
+  protocol.tube_lengths_m = {0.38};
+  protocol.pipeline_schedule = {{0.0, 1.0}};
+  const Unit unit =
+      testing::WriteAndReadUnit(Synthesize(Parameters{}, protocol, 5, "P"), "identify_flat_tube");
+  IdentifyOptions options;
+  options.components = {Component::kPipeline};
+  IdentifyReport report;
+  const Parameters p = Identify(unit, Parameters{}, options, &report);
+  ASSERT_EQ(report.pipeline.status, FitStatus::kNotFitted);
+  const std::map<std::string, std::string> held = ProvenanceStrings(p.provenance_yaml, "", "held");
+  ASSERT_EQ(held.count("pipeline.delta"), 1u) << p.provenance_yaml;
+  EXPECT_NE(held.at("pipeline.delta").find("pipe-038: "), std::string::npos)
+      << held.at("pipeline.delta");
+  EXPECT_NE(held.at("pipeline.delta").find("never changes"), std::string::npos)
+      << held.at("pipeline.delta");
+  EXPECT_EQ(held.count("valve.increasing.q_max"), 0u);  // not requested: no fit ran
+}
+
 // The provenance names the unit and its directory as an absolute path (a
 // relative one names nothing once the set leaves the shell it was made in).
 TEST(IdentifyTest, TheProvenanceNamesTheUnitAndItsAbsoluteDirectory) {
@@ -165,13 +191,13 @@ TEST(IdentifyTest, AFitThatDidNotConvergeSaysSoInTheReportAndTheProvenance) {
   options.components = {Component::kValve, Component::kFriction};
   IdentifyReport report;
   Parameters p = Identify(unit, Parameters{}, options, &report);
-  EXPECT_TRUE(report.NotConverged().empty()) << report.BriefReport();
+  EXPECT_TRUE(report.NotAccepted().empty()) << report.BriefReport();
   EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "friction").at("status"), "converged");
   options.friction.max_iterations = 1;
   p = Identify(unit, Parameters{}, options, &report);
-  ASSERT_EQ(report.NotConverged().size(), 1u) << report.BriefReport();
-  EXPECT_EQ(report.NotConverged().front().rfind("friction: NOT converged (", 0), 0u)
-      << report.NotConverged().front();
+  ASSERT_EQ(report.NotAccepted().size(), 1u) << report.BriefReport();
+  EXPECT_EQ(report.NotAccepted().front().rfind("friction: NOT converged (", 0), 0u)
+      << report.NotAccepted().front();
   EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "friction").at("status"), "NOT converged");
   EXPECT_EQ(ProvenanceStrings(p.provenance_yaml, "", "valve_increasing").at("status"), "converged");
 }

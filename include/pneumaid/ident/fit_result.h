@@ -58,7 +58,9 @@ struct FitResult {
 
   // There are values to write (every status but kNotFitted).
   bool has_values() const { return status != FitStatus::kNotFitted; }
-  // The coefficients not determined (path -> why).
+  // The coefficients not determined (path -> why): every one of a fit with
+  // no values (why: its own word, else the fit's reason); none of a fit that
+  // did not run (it has no coefficients).
   std::map<std::string, std::string> Held() const;
   // nullptr when no coefficient has this path.
   const FittedCoefficient* Find(const std::string& path) const;

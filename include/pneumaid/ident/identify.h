@@ -48,11 +48,11 @@ struct IdentifyReport {
   // from the logs that the fits used, and the declared ones whose logs show
   // far more (ChannelNoiseNote); empty when neither.
   std::string noise_note;
-  // Each component fit that ran and did not converge (or whose misfit its
-  // verdict does not accept), "friction: NOT converged (why)"; empty when
-  // every one did. Its values are written all the same, and the provenance
+  // Each component fit that ran and did not converge, or whose misfit its
+  // verdict does not accept ("pipeline: the model does not explain these
+  // logs (why)", "friction: NOT converged (why)"); empty when every one did. Its values are written all the same, and the provenance
   // says so (status per fit); the CLI then exits 3.
-  std::vector<std::string> NotConverged() const;
+  std::vector<std::string> NotAccepted() const;
   std::string BriefReport() const;
 };
 
