@@ -50,6 +50,25 @@ TEST(ParamsYamlTest, RoundTripIsExact) {
   EXPECT_NE(ParamsToYaml(back).find("seed paper, Section 3"), std::string::npos);
 }
 
+// A unit id that another YAML reader would take for a number, a bool or null
+// is written quoted (PyYAML read `unit: 0001` as the integer 1); any other
+// stays plain. Each reads back as written.
+TEST(ParamsYamlTest, AUnitIdThatReadsAsANumberIsQuoted) {
+  Parameters p = LoadParams(kConfigs + "paper.yaml");
+  for (const char* id : {"0001", "1e3", ".nan", "-5", "true", "No", "null", "y"}) {
+    p.unit = id;
+    const std::string text = ParamsToYaml(p);
+    EXPECT_NE(text.find(std::string("\nunit: \"") + id + "\"\n"), std::string::npos) << text;
+    EXPECT_EQ(ParamsFromYaml(text, "quoted").unit, id);
+  }
+  for (const char* id : {"PVQ13-0001", "sweep-07", "unit_1.a", "nano"}) {
+    p.unit = id;
+    const std::string text = ParamsToYaml(p);
+    EXPECT_NE(text.find(std::string("\nunit: ") + id + "\n"), std::string::npos) << text;
+    EXPECT_EQ(ParamsFromYaml(text, "plain").unit, id);
+  }
+}
+
 // A set built in code may carry provenance that is free text, or not YAML at
 // all: it is written under `given` (it used to be dropped, or to throw
 // yaml-cpp's parser error out of SaveParams), and what the loader reads back
