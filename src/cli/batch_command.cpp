@@ -54,6 +54,9 @@ Shard ParseShard(const std::string& text) {
 }
 
 int RunBatchCommand(const BatchArgs& args) {
+  // The page may replace neither a unit's file nor a result it reads.
+  RefuseOverwritingInputs({args.html_path}, {args.fleet_dir, args.out_dir});
+  RefuseDirectoryInAUnit(args.out_dir);
   BatchOptions options;
   options.prior = LoadParams(args.prior_path);
   options.identify.tool_version = PNEUMAID_VERSION;
@@ -126,13 +129,16 @@ CommandRunner AddMergeCommand(CLI::App* app) {
       ->check(DirectoryToWrite);
   AddHtmlOption(app, html.get());
   return [dirs, out, html]() {
+    const std::string csv = out->empty() ? "" : *out + "/fleet-summary.csv";
+    const std::string markdown = out->empty() ? "" : *out + "/fleet-summary.md";
+    RefuseOverwritingInputs({csv, markdown, *html}, *dirs);
     const FleetSummary summary = MergeResults(*dirs);
     const std::string page = html->empty() ? "" : FleetReportHtml(summary, ReportOptions{});
     if (out->empty()) {
       std::cout << summary.Markdown();
     } else {
-      WriteFileAtomically(*out + "/fleet-summary.csv", summary.Csv());
-      WriteFileAtomically(*out + "/fleet-summary.md", summary.Markdown());
+      WriteFileAtomically(csv, summary.Csv());
+      WriteFileAtomically(markdown, summary.Markdown());
       std::cout << summary.Markdown().substr(0, summary.Markdown().find("## Units")) << "wrote "
                 << *out << "/fleet-summary.csv and fleet-summary.md\n";
     }

@@ -64,9 +64,12 @@ std::string InExistingDirectory(const std::string& file);
 std::string DirectoryToWrite(const std::string& directory);
 // InputError naming the first of `outputs` that is one of `inputs` (files,
 // or directories whose files are inputs: a unit directory's manifest and
-// logs), before the command writes anything.
+// logs; a fleet's units; every file of a results directory), or that another
+// of `outputs` names already, before the command writes anything.
 void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
                              const std::vector<std::string>& inputs);
+// InputError when `directory` (an output directory) lies in a unit directory.
+void RefuseDirectoryInAUnit(const std::string& directory);
 // The files of a diagnose output directory that `report --diagnose` reads
 // back (diagnose writes them, with its CSVs).
 inline constexpr const char* kDiagnoseOutputFiles[] = {"report.md", "params.yaml", "report.json"};

@@ -28,31 +28,72 @@ std::string DirectoryToWrite(const std::string& directory) {
   return InExistingDirectory(named.string());
 }
 
-void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
-                             const std::vector<std::string>& inputs) {
+namespace {
+
+// The files an input names: a file itself; a unit directory's manifest and
+// logs (in its subdirectories too; not a set written beside them, which a
+// rerun replaces); a unit's batch result (params.yaml and stamp.txt) every
+// file in it; any other directory (a fleet, a results directory) the units
+// and results in it and the summaries that merge reads (summary*.csv,
+// failures*.csv), not a page or a merged summary written there before.
+void AddInputFiles(const std::filesystem::path& input, std::vector<std::filesystem::path>* files) {
   namespace fs = std::filesystem;
-  // Every input file: a unit directory's manifest and logs (in its
-  // subdirectories too; not a set written beside them, which a rerun
-  // replaces). Other directories are named by their files.
-  std::vector<fs::path> files;
-  for (const std::string& input : inputs) {
-    std::error_code error;
-    if (input.empty()) continue;
-    if (!fs::is_directory(input, error)) {
-      if (fs::exists(input, error)) files.push_back(input);
-      continue;
-    }
-    if (!fs::exists(fs::path(input) / "unit.yaml", error)) continue;
-    files.push_back(fs::path(input) / "unit.yaml");
+  std::error_code error;
+  if (!fs::is_directory(input, error)) {
+    if (fs::exists(input, error)) files->push_back(input);
+    return;
+  }
+  if (fs::exists(input / "unit.yaml", error)) {
+    files->push_back(input / "unit.yaml");
     for (fs::recursive_directory_iterator it(input, error), end; !error && it != end;
          it.increment(error)) {
       if (it->path().extension() == ".csv" && it->is_regular_file(error))
-        files.push_back(it->path());
+        files->push_back(it->path());
+    }
+    return;
+  }
+  const bool result =
+      fs::exists(input / "params.yaml", error) && fs::exists(input / "stamp.txt", error);
+  for (fs::directory_iterator it(input, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (it->is_directory(error)) {
+      if (!result) AddInputFiles(it->path(), files);
+    } else if (result || ((name.rfind("summary", 0) == 0 || name.rfind("failures", 0) == 0) &&
+                          it->path().extension() == ".csv")) {
+      files->push_back(it->path());
     }
   }
-  for (const std::string& output : outputs) {
+}
+
+// `path` as the file system would resolve it, also where it does not exist yet.
+std::filesystem::path Resolved(const std::string& path) {
+  std::error_code error;
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, error);
+  return error ? std::filesystem::absolute(path).lexically_normal() : resolved;
+}
+
+}  // namespace
+
+void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
+                             const std::vector<std::string>& inputs) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> files;
+  for (const std::string& input : inputs) {
+    if (!input.empty()) AddInputFiles(input, &files);
+  }
+  for (std::size_t k = 0; k < outputs.size(); ++k) {
+    const std::string& output = outputs[k];
+    if (output.empty()) continue;
+    // Two outputs of one command at one path: the second would replace the first.
+    for (std::size_t j = 0; j < k; ++j) {
+      if (!outputs[j].empty() && Resolved(outputs[j]) == Resolved(output)) {
+        throw InputError(output, 0, 0,
+                         "named for two outputs of this command (also as " + outputs[j] +
+                             "): expected another path");
+      }
+    }
     std::error_code error;
-    if (output.empty() || !fs::exists(output, error)) continue;
+    if (!fs::exists(output, error)) continue;
     for (const fs::path& file : files) {
       if (fs::equivalent(output, file, error)) {
         throw InputError(output, 0, 0,
@@ -60,6 +101,20 @@ void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
                              "): expected another path");
       }
     }
+  }
+}
+
+void RefuseDirectoryInAUnit(const std::string& directory) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  for (fs::path at = Resolved(directory); !at.empty(); at = at.parent_path()) {
+    if (fs::exists(at / "unit.yaml", error)) {
+      throw InputError(directory, 0, 0,
+                       "inside the unit directory " + at.string() +
+                           ", whose logs it would mix with results: expected a directory outside "
+                           "any unit");
+    }
+    if (at == at.parent_path()) break;
   }
 }
 

@@ -41,7 +41,7 @@ DiagnoseReportInput ReadDiagnoseOutput(const std::string& dir, const Parameters&
 }
 
 int RunReport(const ReportArgs& args) {
-  std::vector<std::string> inputs = {args.params_path, args.unit_dir};
+  std::vector<std::string> inputs = {args.params_path, args.unit_dir, args.results_dir};
   if (!args.diagnose_dir.empty()) {
     for (const char* name : kDiagnoseOutputFiles) inputs.push_back(args.diagnose_dir + "/" + name);
   }

@@ -42,9 +42,22 @@ int RunValidate(const ValidateArgs& args) {
   RefuseOverwritingInputs({args.json_path, args.html_path}, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
   const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
+  // Each run's comparison CSV, named by its id, may not replace a log either.
+  const auto csv_path = [&args](const std::string& id) {
+    return args.csv_dir + "/" + FileNameOfId(id) + "-validation.csv";
+  };
+  if (!args.csv_dir.empty()) {
+    std::vector<std::string> outputs = {args.json_path, args.html_path};
+    for (const Experiment& e : unit.experiments) outputs.push_back(csv_path(e.entry.id));
+    RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
+  }
   ValidationOptions options;
-  if (!args.min_fit.empty()) options.min_fit_percent = Thresholds(args.min_fit, "--min-fit");
-  if (!args.max_rmse.empty()) options.max_rmse = Thresholds(args.max_rmse, "--max-rmse");
+  // A threshold given replaces that channel's default only; the other
+  // channels keep theirs (before, one --max-rmse dropped p2's check).
+  for (const auto& [channel, value] : Thresholds(args.min_fit, "--min-fit"))
+    options.min_fit_percent[channel] = value;
+  for (const auto& [channel, value] : Thresholds(args.max_rmse, "--max-rmse"))
+    options.max_rmse[channel] = value;
   options.experiment_ids = args.experiments;
   const ValidationReport report = ValidateUnit(params, unit, options);
   std::cout << report.BriefReport();
@@ -62,8 +75,7 @@ int RunValidate(const ValidateArgs& args) {
   if (!args.csv_dir.empty()) {
     for (const auto& e : report.experiments) {
       if (!e.simulation.ok()) continue;
-      WriteFileAtomically(args.csv_dir + "/" + FileNameOfId(e.id) + "-validation.csv",
-                          ComparisonToCsv(e));
+      WriteFileAtomically(csv_path(e.id), ComparisonToCsv(e));
     }
   }
   WriteHtml(args.html_path, html);
@@ -83,10 +95,11 @@ CommandRunner AddValidateCommand(CLI::App* app) {
                   "write measured-vs-simulated CSVs into this directory")
       ->check(DirectoryToWrite);
   app->add_option("--min-fit", args->min_fit,
-                  "CHANNEL=PERCENT: lowest NRMSE fit accepted (default x=95; repeatable)");
-  app->add_option(
-      "--max-rmse", args->max_rmse,
-      "CHANNEL=VALUE: highest RMSE accepted, SI (default p1=1e4 p2=1e4 Pa; repeatable)");
+                  "CHANNEL=PERCENT: lowest NRMSE fit accepted (default x=95; repeatable; "
+                  "replaces that channel's default only)");
+  app->add_option("--max-rmse", args->max_rmse,
+                  "CHANNEL=VALUE: highest RMSE accepted, SI (default p1=1e4 p2=1e4 Pa; "
+                  "repeatable; replaces that channel's default only)");
   app->add_option("--experiment", args->experiments,
                   "validate these experiment ids (default: every validation run; repeatable)");
   AddHtmlOption(app, &args->html_path);

@@ -101,5 +101,18 @@ TEST_F(ValidateCliTest, BadInputExitsTwoAndWritesNothing) {
   EXPECT_EQ(Read(dir_ / "unit" / "unit.yaml"), manifest);
 }
 
+// A threshold given replaces that channel's default only: the paper's set
+// on a fleet unit misses the position's fit and p2's RMSE (0.33 bar), and a
+// looser p1 leaves both checked (before, one --max-rmse dropped p2's).
+TEST_F(ValidateCliTest, AThresholdGivenKeepsTheOtherChannelsDefaults) {
+  const std::string unit = testing::Source("datasets/fleet/PVQ13-0001");
+  EXPECT_EQ(Run("validate " + unit + " --params " + testing::Source("configs/paper.yaml") +
+                " --max-rmse p1=1e9"),
+            4);
+  EXPECT_NE(Stdout().find("MISSED: p2 RMSE"), std::string::npos) << Stdout();
+  EXPECT_NE(Stdout().find("MISSED: x fit"), std::string::npos) << Stdout();
+  EXPECT_EQ(Stdout().find("MISSED: p1 RMSE"), std::string::npos) << Stdout();
+}
+
 }  // namespace
 }  // namespace pneumaid
