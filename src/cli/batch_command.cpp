@@ -105,7 +105,7 @@ CommandRunner AddBatchCommand(CLI::App* app) {
                   "array, Open MPI or PMI variables");
   app->add_flag("--resume", args->resume,
                 "skip units whose result is complete and whose inputs and options are unchanged");
-  app->add_flag("--refine", args->refine, "refine each identified set (see --spec)");
+  auto* refine = app->add_flag("--refine", args->refine, "refine each identified set (see --spec)");
   app->add_flag("--validate", args->validate, "validate each final set on its validation runs");
   app->add_flag("--diagnose", args->diagnose, "diagnose each final set (one effect at most)");
   app->add_option("--effects", args->effects,
@@ -115,7 +115,9 @@ CommandRunner AddBatchCommand(CLI::App* app) {
                   "seconds after which a unit's work stops (0: none)")
       ->check(CLI::NonNegativeNumber);
   app->add_option("--prior", args->prior_path, "identify's prior")->capture_default_str();
-  app->add_option("--spec", args->spec_path, "fit spec for --refine")->capture_default_str();
+  app->add_option("--spec", args->spec_path, "fit spec for --refine")
+      ->capture_default_str()
+      ->needs(refine);
   AddHtmlOption(app, &args->html_path);
   return [args]() { return RunBatchCommand(*args); };
 }

@@ -84,6 +84,10 @@ std::string DefaultConfig(const std::string& name);
 // and the columns of each log that are ignored (the format's promise that
 // the tool says so; `check` lists them with the rest).
 Unit ReadUnitSayingWhatItAssumed(const std::string& directory);
+// On stderr, when the set read from `params_path` names another unit than
+// `unit`'s logs (a fleet's sets mixed up; the paper's set says "paper").
+void NoteASetOfAnotherUnit(const std::string& params_path, const Parameters& params,
+                           const Unit& unit);
 
 // The current time, UTC, ISO 8601 (for provenance).
 std::string UtcNow();

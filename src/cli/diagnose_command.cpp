@@ -53,6 +53,7 @@ int RunDiagnose(const DiagnoseArgs& args) {
   RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
   const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
+  NoteASetOfAnotherUnit(args.params_path, params, unit);
   DiagnoseOptions options;
   options.max_effects = args.max_effects;
   options.effects = SplitList(args.effects);

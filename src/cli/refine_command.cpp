@@ -26,6 +26,7 @@ int RunRefine(const RefineArgs& args) {
                           {args.unit_dir, args.params_path, args.spec_path});
   const Parameters start = LoadParams(args.params_path);
   const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
+  NoteASetOfAnotherUnit(args.params_path, start, unit);
   const FitSpec spec = LoadFitSpec(args.spec_path);
   RefineOptions options = RefineOptions::ForIdentify();
   options.fit_stick_creep = !args.no_stick_creep;

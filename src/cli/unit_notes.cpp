@@ -27,4 +27,11 @@ Unit ReadUnitSayingWhatItAssumed(const std::string& directory) {
   return unit;
 }
 
+void NoteASetOfAnotherUnit(const std::string& params_path, const Parameters& params,
+                           const Unit& unit) {
+  if (params.unit.empty() || params.unit == unit.manifest.unit) return;
+  std::cerr << "note: " << params_path << " names unit " << params.unit << "; the logs are unit "
+            << unit.manifest.unit << "\n";
+}
+
 }  // namespace pneumaid::cli

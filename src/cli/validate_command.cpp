@@ -42,6 +42,7 @@ int RunValidate(const ValidateArgs& args) {
   RefuseOverwritingInputs({args.json_path, args.html_path}, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
   const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
+  NoteASetOfAnotherUnit(args.params_path, params, unit);
   // Each run's comparison CSV, named by its id, may not replace a log either.
   const auto csv_path = [&args](const std::string& id) {
     return args.csv_dir + "/" + FileNameOfId(id) + "-validation.csv";

@@ -193,6 +193,10 @@ class FitSpecReader : internal::YamlReader {
         if (spec->FindParameter(stage.parameters[i]) == nullptr) {
           Fail(parameters[i], "stages: '" + stage.parameters[i] + "' is not under parameters");
         }
+        if (std::count(stage.parameters.begin(), stage.parameters.begin() + i,
+                       stage.parameters[i]) > 0) {
+          Fail(parameters[i], "stages: '" + stage.parameters[i] + "' listed twice in one stage");
+        }
       }
       if (stage.parameters.empty()) Fail(parameters, "stages: an empty stage");
       spec->stages.push_back(stage);
@@ -254,9 +258,14 @@ bool FitSpec::IsValid(std::string* error) const {
     if (stage.friction_replay && (stage.windows || !stage.parameters.empty())) {
       return fail("stages: friction_replay stands alone (no parameters, no windows)");
     }
-    for (const std::string& path : stage.parameters) {
+    for (std::size_t k = 0; k < stage.parameters.size(); ++k) {
+      const std::string& path = stage.parameters[k];
       if (FindParameter(path) == nullptr) {
         return fail("stages: '" + path + "' is not under parameters");
+      }
+      if (std::find(stage.parameters.begin(), stage.parameters.begin() + k, path) !=
+          stage.parameters.begin() + k) {
+        return fail("stages: '" + path + "' listed twice in one stage");
       }
     }
   }

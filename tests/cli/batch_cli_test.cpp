@@ -47,6 +47,11 @@ TEST_F(BatchCliTest, AFleetWithACorruptUnitExitsThreeAndMergeFlagsTheOutlier) {
             2);
   EXPECT_NE(Stderr().find("--effects"), std::string::npos) << Stderr();
   EXPECT_NE(Stderr().find("unknown effect 'warp_drive'"), std::string::npos) << Stderr();
+  // A spec is for --refine (it was ignored without it), as identify says.
+  EXPECT_EQ(Run("batch " + testing::Source("datasets/fleet") + " --out " + fresh + " --spec " +
+                testing::Source("configs/fit-default.yaml")),
+            2);
+  EXPECT_NE(Stderr().find("--spec requires --refine"), std::string::npos) << Stderr();
   EXPECT_FALSE(fs::exists(fresh));
 }
 

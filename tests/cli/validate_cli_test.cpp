@@ -114,5 +114,17 @@ TEST_F(ValidateCliTest, AThresholdGivenKeepsTheOtherChannelsDefaults) {
   EXPECT_EQ(Stdout().find("MISSED: p1 RMSE"), std::string::npos) << Stdout();
 }
 
+// A set that names another unit than the logs' is validated, with a note:
+// a fleet's sets are easily mixed up (the helper's PVQ13-0099 ran silently).
+TEST_F(ValidateCliTest, ASetOfAnotherUnitIsNoted) {
+  const std::string fleet = testing::Source("datasets/fleet");
+  Run("validate " + fleet + "/PVQ13-0001 --params " + fleet + "/PVQ13-0002/truth.yaml");
+  EXPECT_NE(Stderr().find("truth.yaml names unit PVQ13-0002; the logs are unit PVQ13-0001"),
+            std::string::npos)
+      << Stderr();
+  Run("validate " + fleet + "/PVQ13-0001 --params " + fleet + "/PVQ13-0001/truth.yaml");
+  EXPECT_EQ(Stderr().find("names unit"), std::string::npos) << Stderr();
+}
+
 }  // namespace
 }  // namespace pneumaid

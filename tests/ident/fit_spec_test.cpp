@@ -133,6 +133,10 @@ INSTANTIATE_TEST_SUITE_P(
                 "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
                 "stages:\n  - [valve.increasing.q_max]\n",
                 4, "not under parameters"},
+        BadSpec{"a parameter listed twice in one stage",
+                "format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n"
+                "stages:\n  - [pipeline.delta, pipeline.delta]\n",
+                4, "'pipeline.delta' listed twice in one stage"},
         BadSpec{"a last stage that leaves a free parameter out",
                 "format: pneumaid-fit/1\nparameters:\n  pipeline.delta: {min: 1, max: 9}\n"
                 "  valve.increasing.q_max: {min: 1e-4, max: 1e-2}\n"
@@ -206,6 +210,11 @@ TEST(FitSpecTest, IsValidNamesTheBadFieldOfASpecBuiltInCode) {
       {"nothing to fit", [](FitSpec* s) { s->fit.clear(); }, "experiments.fit"},
       {"stage names a fixed parameter", [](FitSpec* s) { s->stages[0].parameters = {"gas.T"}; },
        "stages: 'gas.T' is not under parameters"},
+      {"stage names a parameter twice",
+       [](FitSpec* s) {
+         s->stages[0].parameters = {"pipeline.delta", "pipeline.delta"};
+       },
+       "stages: 'pipeline.delta' listed twice in one stage"},
       {"last stage leaves one out",
        [](FitSpec* s) { s->stages.back().parameters = {"pipeline.delta"}; },
        "the last stage must fit every free parameter ("},
