@@ -90,8 +90,9 @@ int RunIdentify(const IdentifyArgs& args) {
   SaveParams(identified, args.out_path);
   std::cout << "wrote " << args.out_path << "\n";
   WriteHtml(args.html_path, html);
-  // A fit that did not converge: its best point is written (its provenance
-  // says so), and the exit status is the spec's numerical failure.
+  // A fit that did not converge or whose verdict does not accept its misfit:
+  // its best point is written (its provenance says so), and the exit status
+  // is the spec's numerical failure.
   const std::vector<std::string> failed = report.NotAccepted();
   for (const std::string& fit : failed) std::cout << "not accepted: " << fit << "\n";
   return failed.empty() ? kSuccess : kNumericalFailure;

@@ -2,6 +2,7 @@
 // that a long fit does not end in "cannot write", and no output replaces one
 // of the command's inputs.
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -32,17 +33,21 @@ namespace {
 
 // The files an input names: a file itself; a unit directory's manifest and
 // logs (in its subdirectories too; not a set written beside them, which a
-// rerun replaces); a unit's batch result (params.yaml and stamp.txt) every
-// file in it; any other directory (a fleet, a results directory) the units
-// and results in it and the summaries that merge reads (summary*.csv,
-// failures*.csv), not a page or a merged summary written there before.
-void AddInputFiles(const std::filesystem::path& input, std::vector<std::filesystem::path>* files) {
+// rerun replaces); a unit's batch result (a directory with params.yaml and
+// stamp.txt) every file in it; any other directory (a fleet, a results
+// directory) the units and results in it and the summaries merge reads
+// (summary*.csv, failures*.csv), not a page or a merged summary written
+// there before. `visited` keeps a directory linked into itself from being
+// walked again.
+void AddInputFiles(const std::filesystem::path& input, std::vector<std::filesystem::path>* files,
+                   std::set<std::filesystem::path>* visited) {
   namespace fs = std::filesystem;
   std::error_code error;
   if (!fs::is_directory(input, error)) {
     if (fs::exists(input, error)) files->push_back(input);
     return;
   }
+  if (!visited->insert(fs::canonical(input, error)).second || error) return;
   if (fs::exists(input / "unit.yaml", error)) {
     files->push_back(input / "unit.yaml");
     for (fs::recursive_directory_iterator it(input, error), end; !error && it != end;
@@ -57,7 +62,7 @@ void AddInputFiles(const std::filesystem::path& input, std::vector<std::filesyst
   for (fs::directory_iterator it(input, error), end; !error && it != end; it.increment(error)) {
     const std::string name = it->path().filename().string();
     if (it->is_directory(error)) {
-      if (!result) AddInputFiles(it->path(), files);
+      if (!result) AddInputFiles(it->path(), files, visited);
     } else if (result || ((name.rfind("summary", 0) == 0 || name.rfind("failures", 0) == 0) &&
                           it->path().extension() == ".csv")) {
       files->push_back(it->path());
@@ -65,11 +70,15 @@ void AddInputFiles(const std::filesystem::path& input, std::vector<std::filesyst
   }
 }
 
-// `path` as the file system would resolve it, also where it does not exist yet.
+// `path` as the file system would resolve it, also where it does not exist
+// yet (absolute first: weakly_canonical leaves a relative path that does not
+// exist as it is).
 std::filesystem::path Resolved(const std::string& path) {
   std::error_code error;
-  const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, error);
-  return error ? std::filesystem::absolute(path).lexically_normal() : resolved;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+  if (error) return std::filesystem::path(path).lexically_normal();
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(absolute, error);
+  return error ? absolute.lexically_normal() : resolved;
 }
 
 }  // namespace
@@ -78,8 +87,9 @@ void RefuseOverwritingInputs(const std::vector<std::string>& outputs,
                              const std::vector<std::string>& inputs) {
   namespace fs = std::filesystem;
   std::vector<fs::path> files;
+  std::set<fs::path> visited;
   for (const std::string& input : inputs) {
-    if (!input.empty()) AddInputFiles(input, &files);
+    if (!input.empty()) AddInputFiles(input, &files, &visited);
   }
   for (std::size_t k = 0; k < outputs.size(); ++k) {
     const std::string& output = outputs[k];

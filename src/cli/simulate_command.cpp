@@ -177,6 +177,7 @@ int SimulateLogOfUnit(const SimulateArgs& args, const Parameters& params, const 
       std::filesystem::weakly_canonical(args.input_path).parent_path().string();
   RefuseOverwritingInputs({args.out_path}, {directory});
   const Unit unit = ReadUnit(directory);
+  NoteASetOfAnotherUnit(args.params_path, params, unit);
   const LoggedRunSimulation run = SimulateLoggedRun(params, unit, log.entry.id);
   for (const std::string& note : run.notes) std::cout << "note: " << note << "\n";
   Trajectory simulated = run.simulated;

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -49,7 +50,13 @@ int RunValidate(const ValidateArgs& args) {
   };
   if (!args.csv_dir.empty()) {
     std::vector<std::string> outputs = {args.json_path, args.html_path};
-    for (const Experiment& e : unit.experiments) outputs.push_back(csv_path(e.entry.id));
+    for (const Experiment& e : unit.experiments) {
+      const bool chosen =
+          args.experiments.empty()
+              ? e.entry.kind == ExperimentKind::kValidation
+              : std::count(args.experiments.begin(), args.experiments.end(), e.entry.id) > 0;
+      if (chosen) outputs.push_back(csv_path(e.entry.id));
+    }
     RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
   }
   ValidationOptions options;

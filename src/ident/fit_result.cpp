@@ -37,7 +37,8 @@ const FittedCoefficient* FitResult::Find(const std::string& path) const {
 std::map<std::string, std::string> FitResult::Held() const {
   std::map<std::string, std::string> held;
   for (const FittedCoefficient& c : coefficients) {
-    if (!has_values() || !c.determined()) held[c.path] = c.held.empty() ? reason : c.held;
+    if (has_values() && c.determined()) continue;
+    held[c.path] = !c.held.empty() ? c.held : !reason.empty() ? reason : ToString(status);
   }
   return held;
 }

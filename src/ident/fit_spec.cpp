@@ -12,6 +12,13 @@
 namespace pneumaid {
 namespace {
 
+// Whether names[i] is one of the names before it (a stage lists each free
+// parameter once).
+bool ListedBefore(const std::vector<std::string>& names, std::size_t i) {
+  return std::find(names.begin(), names.begin() + static_cast<std::ptrdiff_t>(i), names[i]) !=
+         names.begin() + static_cast<std::ptrdiff_t>(i);
+}
+
 // The last stage's fit is the result (values, covariance): a parameter an
 // earlier stage alone fits would move without a standard error. Why the
 // spec's last stage breaks that (empty: it does not).
@@ -193,8 +200,7 @@ class FitSpecReader : internal::YamlReader {
         if (spec->FindParameter(stage.parameters[i]) == nullptr) {
           Fail(parameters[i], "stages: '" + stage.parameters[i] + "' is not under parameters");
         }
-        if (std::count(stage.parameters.begin(), stage.parameters.begin() + i,
-                       stage.parameters[i]) > 0) {
+        if (ListedBefore(stage.parameters, i)) {
           Fail(parameters[i], "stages: '" + stage.parameters[i] + "' listed twice in one stage");
         }
       }
@@ -263,8 +269,7 @@ bool FitSpec::IsValid(std::string* error) const {
       if (FindParameter(path) == nullptr) {
         return fail("stages: '" + path + "' is not under parameters");
       }
-      if (std::find(stage.parameters.begin(), stage.parameters.begin() + k, path) !=
-          stage.parameters.begin() + k) {
+      if (ListedBefore(stage.parameters, k)) {
         return fail("stages: '" + path + "' listed twice in one stage");
       }
     }

@@ -358,8 +358,8 @@ PipelineFitResult FitPipeline(const Unit& unit, const PipelineFitOptions& option
                     "accepted up to %.3g)",
                     tube.reduced_chi_square, options.max_reduced_chi_square);
       tube.status = FitStatus::kNotExplained;
-      tube.reason = reason;
-      unexplained += (unexplained.empty() ? "" : "; ") + tube.experiment + ": " + reason;
+      tube.reason = tube.reason.empty() ? reason : std::string(reason) + "; " + tube.reason;
+      unexplained += (unexplained.empty() ? "" : "; ") + tube.experiment + ": " + tube.reason;
     }
     result.tubes.push_back(std::move(tube));
   }

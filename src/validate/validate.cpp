@@ -157,18 +157,22 @@ auto UnderRigConditions(const Parameters& params, const Unit& given_unit, const 
   return body(conditioned, moved ? *moved : given_unit);
 }
 
-// The experiment `id` of `unit`, which must be a run the simulator can drive.
-const Experiment& SimulableExperiment(const Unit& unit, const std::string& id) {
+// The experiment `id` of `unit`.
+const Experiment& FindExperiment(const Unit& unit, const std::string& id) {
   for (const Experiment& e : unit.experiments) {
-    if (e.entry.id != id) continue;
-    if (!IsSimulable(e.entry.kind)) {
-      throw InputError(unit.manifest_path(), e.entry.manifest_line, 0,
-                       "experiment '" + e.entry.id + "' is a " + ToString(e.entry.kind) +
-                           " log; only stroke and validation runs can be simulated");
-    }
-    return e;
+    if (e.entry.id == id) return e;
   }
   throw InputError(unit.manifest_path(), 0, 0, "no experiment '" + id + "'");
+}
+
+// `e`, which must be a run the simulator can drive.
+const Experiment& Simulable(const Unit& unit, const Experiment& e) {
+  if (!IsSimulable(e.entry.kind)) {
+    throw InputError(unit.manifest_path(), e.entry.manifest_line, 0,
+                     "experiment '" + e.entry.id + "' is a " + ToString(e.entry.kind) +
+                         " log; only stroke and validation runs can be simulated");
+  }
+  return e;
 }
 
 }  // namespace
@@ -244,14 +248,16 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& given_unit,
         ValidationReport report;
         report.unit = unit.manifest.unit;
         const PositionZero zero = ReadPositionZero(unit);  // once for every run
-        for (const auto& id : options.experiment_ids) SimulableExperiment(unit, id);
+        // Every id first, then each chosen run's kind.
+        for (const auto& id : options.experiment_ids) FindExperiment(unit, id);
         for (const Experiment& e : unit.experiments) {
           const bool chosen = options.experiment_ids.empty()
                                   ? e.entry.kind == ExperimentKind::kValidation
                                   : std::count(options.experiment_ids.begin(),
                                                options.experiment_ids.end(), e.entry.id);
           if (!chosen) continue;
-          report.experiments.push_back(ValidateExperiment(conditioned, unit, e, zero, options));
+          report.experiments.push_back(
+              ValidateExperiment(conditioned, unit, Simulable(unit, e), zero, options));
         }
         if (report.experiments.empty()) {
           throw InputError(unit.manifest_path(), 0, 0, "no validation experiments to validate");
@@ -267,7 +273,8 @@ LoggedRunSimulation SimulateLoggedRun(const Parameters& params, const Unit& give
   if (!options.IsValid(&error)) throw InputError("simulation options", 0, 0, error);
   return UnderRigConditions(
       params, given_unit, [&](const Parameters& conditioned, const Unit& unit) {
-        return SimulateExperiment(conditioned, unit, SimulableExperiment(unit, experiment_id),
+        return SimulateExperiment(conditioned, unit,
+                                  Simulable(unit, FindExperiment(unit, experiment_id)),
                                   ReadPositionZero(unit), ChannelNoises(unit), options);
       });
 }

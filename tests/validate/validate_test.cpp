@@ -121,5 +121,25 @@ TEST(ValidateTest, UnknownExperimentAndReportFormats) {
             csv.find('\n') + 1);
 }
 
+// Every id is looked up before any chosen run's kind is judged: a tube test
+// named first and an unknown id after it says the id is unknown; a tube
+// test alone, that it cannot be simulated.
+TEST(ValidateTest, AnUnknownIdIsNamedBeforeAnotherRunsKind) {
+  const Unit unit = ReadUnit(kUnit);
+  ValidationOptions options;
+  const auto message = [&]() -> std::string {
+    try {
+      ValidateUnit(Parameters{}, unit, options);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  options.experiment_ids = {"pipe-038", "nope"};
+  EXPECT_NE(message().find("no experiment 'nope'"), std::string::npos) << message();
+  options.experiment_ids = {"pipe-038"};
+  EXPECT_NE(message().find("'pipe-038' is a pipeline log"), std::string::npos) << message();
+}
+
 }  // namespace
 }  // namespace pneumaid

@@ -19,7 +19,8 @@ namespace pneumaid {
 enum class FitStatus {
   kConverged,     // the solver stopped and, where the fit judges its misfit, the verdict holds
   kNotExplained,  // the best point found leaves more misfit than the noise and the acceptable
-                  // model error explain (refinement's verdict); its values are still written
+                  // model error explain (refinement's and the tube fit's verdicts); its values
+                  // are still written
   kNotConverged,  // the solver ran out of iterations; its values are its best point
   kNotFitted,     // nothing fitted: every coefficient keeps its start (reason says why)
 };
@@ -59,8 +60,8 @@ struct FitResult {
   // There are values to write (every status but kNotFitted).
   bool has_values() const { return status != FitStatus::kNotFitted; }
   // The coefficients not determined (path -> why): every one of a fit with
-  // no values (why: its own word, else the fit's reason); none of a fit that
-  // did not run (it has no coefficients).
+  // no values (why: its own word, else the fit's reason, else its status);
+  // none of a fit that did not run (it has no coefficients).
   std::map<std::string, std::string> Held() const;
   // nullptr when no coefficient has this path.
   const FittedCoefficient* Find(const std::string& path) const;

@@ -50,8 +50,9 @@ struct IdentifyReport {
   std::string noise_note;
   // Each component fit that ran and did not converge, or whose misfit its
   // verdict does not accept ("pipeline: the model does not explain these
-  // logs (why)", "friction: NOT converged (why)"); empty when every one did. Its values are written all the same, and the provenance
-  // says so (status per fit); the CLI then exits 3.
+  // logs (why)", "friction: NOT converged (why)"); empty when every one did.
+  // Its values are written all the same, and the provenance says so (status
+  // per fit); the CLI then exits 3.
   std::vector<std::string> NotAccepted() const;
   std::string BriefReport() const;
 };

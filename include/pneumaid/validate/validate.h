@@ -49,15 +49,16 @@ struct ValidationReport {
   std::string BriefReport() const;  // a table of the metrics in display units
 };
 
-// Throws InputError for an unknown experiment id or a unit without validation
-// runs; numerical failures are reported in the result.
+// Throws InputError for an unknown experiment id (every id checked first), a
+// chosen experiment the simulator cannot run (a valve or tube test) or a unit
+// without validation runs; numerical failures are reported in the result.
 ValidationReport ValidateUnit(const Parameters& params, const Unit& unit,
                               const ValidationOptions& options);
 
 // One logged run of a unit simulated as validation simulates it.
 struct LoggedRunSimulation {
   Trajectory measured;   // the log, x less the transducer's zero (ReadPositionZero)
-  Trajectory simulated;  // at the log's sample times, flows as the declared meters read them
+  Trajectory simulated;  // at the log's sample times, read through the declared lags
   SimulationSummary simulation;
   std::vector<std::string> notes;  // how a run was started where the log did not say
 };
@@ -67,7 +68,8 @@ struct LoggedRunSimulation {
 // (OnTheSetsStroke), piece by piece where the logger paused (PieceStarts),
 // each from its logged first sample and command (LoggedInitialState,
 // LoggedCommand), or from a start read off the log where it begins unsettled
-// (ReadLagStart), the declared meter lags applied (ApplyDeclaredLags). The
+// (ReadLagStart), every channel read through its declared lag
+// (ApplyDeclaredLags). The
 // one home of how a logged run is simulated: ValidateUnit compares what it
 // gives. Throws InputError for bad options or an experiment it cannot run;
 // a numerical failure is in `simulation`.
