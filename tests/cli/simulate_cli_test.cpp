@@ -131,7 +131,8 @@ TEST_F(SimulateCliTest, ALogOfAUnitIsSimulatedAsValidateSimulatesIt) {
                 "/step-1.csv --until 0.5 --out " + other),
             0)
       << Stderr();
-  const std::vector<double>& t = ReadCsv(other).Find("t")->values;
+  const CsvTable cut = ReadCsv(other);
+  const std::vector<double>& t = cut.Find("t")->values;
   EXPECT_LE(t.back(), 0.5);
   EXPECT_GT(t.back(), 0.49);
 }
