@@ -1,4 +1,3 @@
-#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -40,33 +39,27 @@ std::map<std::string, double> Thresholds(const std::vector<std::string>& items,
 }
 
 int RunValidate(const ValidateArgs& args) {
-  RefuseOverwritingInputs({args.json_path, args.html_path}, {args.unit_dir, args.params_path});
   const Parameters params = LoadParams(args.params_path);
   const Unit unit = ReadUnitSayingWhatItAssumed(args.unit_dir);
   NoteASetOfAnotherUnit(args.params_path, params, unit);
-  // Each run's comparison CSV, named by its id, may not replace a log either.
+  ValidationOptions options;
+  options.experiment_ids = args.experiments;
+  // No output may replace an input, each run's comparison CSV (named by its
+  // id) included.
   const auto csv_path = [&args](const std::string& id) {
     return args.csv_dir + "/" + FileNameOfId(id) + "-validation.csv";
   };
-  if (!args.csv_dir.empty()) {
-    std::vector<std::string> outputs = {args.json_path, args.html_path};
-    for (const Experiment& e : unit.experiments) {
-      const bool chosen =
-          args.experiments.empty()
-              ? e.entry.kind == ExperimentKind::kValidation
-              : std::count(args.experiments.begin(), args.experiments.end(), e.entry.id) > 0;
-      if (chosen) outputs.push_back(csv_path(e.entry.id));
-    }
-    RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
+  std::vector<std::string> outputs = {args.json_path, args.html_path};
+  for (const Experiment& e : unit.experiments) {
+    if (!args.csv_dir.empty() && options.Chooses(e)) outputs.push_back(csv_path(e.entry.id));
   }
-  ValidationOptions options;
+  RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
   // A threshold given replaces that channel's default only; the other
   // channels keep theirs (before, one --max-rmse dropped p2's check).
   for (const auto& [channel, value] : Thresholds(args.min_fit, "--min-fit"))
     options.min_fit_percent[channel] = value;
   for (const auto& [channel, value] : Thresholds(args.max_rmse, "--max-rmse"))
     options.max_rmse[channel] = value;
-  options.experiment_ids = args.experiments;
   const ValidationReport report = ValidateUnit(params, unit, options);
   std::cout << report.BriefReport();
   ReportOptions page;

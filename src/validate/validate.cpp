@@ -177,6 +177,12 @@ const Experiment& Simulable(const Unit& unit, const Experiment& e) {
 
 }  // namespace
 
+bool ValidationOptions::Chooses(const Experiment& e) const {
+  if (experiment_ids.empty()) return e.entry.kind == ExperimentKind::kValidation;
+  return std::find(experiment_ids.begin(), experiment_ids.end(), e.entry.id) !=
+         experiment_ids.end();
+}
+
 bool ValidationOptions::IsValid(std::string* error) const {
   for (const auto& [channel, value] : min_fit_percent) {
     if (!(value <= 100.0) || !std::isfinite(value)) {
@@ -251,11 +257,7 @@ ValidationReport ValidateUnit(const Parameters& params, const Unit& given_unit,
         // Every id first, then each chosen run's kind.
         for (const auto& id : options.experiment_ids) FindExperiment(unit, id);
         for (const Experiment& e : unit.experiments) {
-          const bool chosen = options.experiment_ids.empty()
-                                  ? e.entry.kind == ExperimentKind::kValidation
-                                  : std::count(options.experiment_ids.begin(),
-                                               options.experiment_ids.end(), e.entry.id);
-          if (!chosen) continue;
+          if (!options.Chooses(e)) continue;
           report.experiments.push_back(
               ValidateExperiment(conditioned, unit, Simulable(unit, e), zero, options));
         }

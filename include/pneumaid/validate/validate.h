@@ -27,6 +27,9 @@ struct ValidationOptions {
   std::vector<std::string> experiment_ids;
 
   bool IsValid(std::string* error) const;
+  // Whether `e` is one of the runs to validate (experiment_ids, or every
+  // validation run when it is empty).
+  bool Chooses(const Experiment& e) const;
 };
 
 struct ExperimentValidation {
