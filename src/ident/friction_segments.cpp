@@ -9,6 +9,7 @@
 
 #include "meter_lag.h"
 #include "pneumaid/io/channel_noise.h"
+#include "pneumaid/io/log_notes.h"
 #include "pneumaid/model/load.h"
 #include "pneumaid/validate/logged_run.h"
 #include "uniform_clock.h"
@@ -20,6 +21,7 @@ RodReplayInput ReplayOf(const Segment& s, double mass_kg, const FrictionFitOptio
   replay.force_N = s.force_N->data() + s.begin;
   replay.samples = s.end - s.begin;
   replay.period_s = s.period_s;
+  if (s.time_s != nullptr) replay.time_s = s.time_s->data() + s.begin;
   replay.mass_kg = mass_kg;
   replay.initial_position_m = s.initial_position_m;
   // The 1e-9 keeps an interval of exactly k steps from rounding up to k + 1.
@@ -43,8 +45,10 @@ namespace {
 // 15.6).
 constexpr double kSmoothStuckMisfit = 25.0;
 
+// `t`, when not empty, holds the sample times of a log sampled at irregular
+// intervals: the quadratic is then in time.
 void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
-                      std::vector<double>* force) {
+                      const std::vector<double>& t, std::vector<double>* force) {
   for (const auto& [begin, end] : runs) {
     // The first samples of a run still carry the arrest's pressure transient.
     const std::size_t first =
@@ -56,8 +60,13 @@ void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
     Eigen::MatrixXd design(n, 3);
     Eigen::VectorXd y(n);
     const double centre = 0.5 * static_cast<double>(first + end - 1);
+    // Where sample i lies in the run's window, about -0.5 .. 0.5.
+    const auto coordinate = [&](std::size_t i) {
+      if (t.empty()) return (static_cast<double>(i) - centre) / static_cast<double>(n);
+      return (t[i] - 0.5 * (t[first] + t[end - 1])) / (t[end - 1] - t[first]);
+    };
     for (std::size_t i = 0; i < n; ++i) {
-      const double s = (static_cast<double>(first + i) - centre) / static_cast<double>(n);
+      const double s = coordinate(first + i);
       for (int power = 0; power < 3; ++power) design(i, power) = std::pow(s, power);
       y(i) = (*force)[first + i];
     }
@@ -65,7 +74,7 @@ void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
     const double misfit = (design * c - y).squaredNorm() / static_cast<double>(n - 3);
     if (misfit > kSmoothStuckMisfit * sigma_N * sigma_N) continue;
     for (std::size_t i = first; i < end; ++i) {
-      const double s = (static_cast<double>(i) - centre) / static_cast<double>(n);
+      const double s = coordinate(i);
       (*force)[i] = c(0) + s * (c(1) + s * c(2));
     }
   }
@@ -107,13 +116,23 @@ void LeaveOutWhatFollowsAGap(const std::vector<bool>& in_gap, Segment* s) {
   }
 }
 
+// The time from the first sample of `s` to sample `whole` + `fraction` (in
+// [-1, 1]) of its log, the interval there taken as linear.
+double SinceBegin(const Segment& s, std::size_t whole, double fraction) {
+  if (s.time_s == nullptr) return (static_cast<double>(whole - s.begin) + fraction) * s.period_s;
+  const std::vector<double>& t = *s.time_s;
+  const double interval = fraction >= 0 ? t[std::min(whole + 1, t.size() - 1)] - t[whole]
+                                        : t[whole] - t[whole > 0 ? whole - 1 : 0];
+  return t[whole] + fraction * interval - t[s.begin];
+}
+
 // The slide of `s` ends in the stuck run `next`: where it stopped, when
 // (a guess and bounds for the nuisance parameter), and its fastest sample.
 // A slide that turned back before it stopped (beyond `band`) arrives in the
 // other direction, which a backward replay in the slide's direction cannot
 // follow: it stays one-sided, replayed forward through its reversal.
 void MarkArrest(const std::vector<double>& x, std::size_t slide_begin, internal::Run next,
-                double period_s, double band, Segment* s) {
+                double band, Segment* s) {
   const auto [arrest, next_end] = next;
   double farthest = s->direction * x[arrest];
   for (std::size_t j = slide_begin; j < arrest; ++j)
@@ -128,10 +147,10 @@ void MarkArrest(const std::vector<double>& x, std::size_t slide_begin, internal:
   s->stop_position_m = std::accumulate(x.begin() + arrest + 1, x.begin() + settled_end, 0.0) /
                        static_cast<double>(settled_end - arrest - 1);
   s->split = split;
-  s->stop_time_min_s = (static_cast<double>(split - s->begin) + 0.05) * period_s;
-  s->stop_time_max_s = static_cast<double>(s->end - 1 - s->begin) * period_s;
-  s->stop_time_guess_s = std::clamp((static_cast<double>(arrest - s->begin) - 0.5) * period_s,
-                                    s->stop_time_min_s, s->stop_time_max_s);
+  s->stop_time_min_s = SinceBegin(*s, split, 0.05);
+  s->stop_time_max_s = SinceBegin(*s, s->end - 1, 0.0);
+  s->stop_time_guess_s =
+      std::clamp(SinceBegin(*s, arrest, -0.5), s->stop_time_min_s, s->stop_time_max_s);
   s->two_sided = settled_end > arrest + 1;
   s->arrest = arrest;
 }
@@ -167,7 +186,8 @@ double EscapeVelocityError(const std::vector<double>& x, std::size_t at, std::si
 struct StrokeLog {
   const std::vector<double>& force_N;  // smoothed where stuck (SmoothStuckForce)
   const std::vector<double>& x;
-  double period_s;
+  double period_s;                    // the median interval when irregular
+  const std::vector<double>* time_s;  // the sample times when irregular, else null
   internal::StuckRule stuck;  // its noise: internal::PositionNoise, times the lag inverse's gain
   double half_stroke_m;       // the stroke ends at +-half_stroke_m
   double contact_m;           // within this of an end the rod may touch the stop
@@ -251,6 +271,7 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
     s.force_N = &log.force_N;
     s.position_m = &x;
     s.period_s = log.period_s;
+    s.time_s = log.time_s;
     s.begin = std::max(stuck_begin + 1,
                        stuck_end - std::min<std::size_t>(stuck_end, options.max_stuck_samples));
     const int contact = EndContact(x[stuck_end - 1], log.half_stroke_m, log.contact_m);
@@ -285,7 +306,7 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
           EscapeVelocityError(x, at, s.end, log.period_s, options.breakaway_timing_per_s);
     }
     if (s.direction != 0 && k + 1 < runs.size() && !cut)
-      MarkArrest(x, stuck_end, runs[k + 1], log.period_s, log.stuck.band_m, &s);
+      MarkArrest(x, stuck_end, runs[k + 1], log.stuck.band_m, &s);
     SetWeights(log.stuck.sigma_x_m, log.drift_m, escape_error_m_per_s, &s);
     data->segments.push_back(s);
   }
@@ -327,12 +348,17 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
   // Segments point into these vectors: reserve so that they never move.
   data.force_N.reserve(count);
   data.position_m.reserve(count);
+  data.time_s.reserve(count);
   for (const Experiment& logged : unit.experiments) {
     if (!selected(logged)) continue;
     const Experiment* log = &logged;
     double period = internal::UniformPeriod(logged.column("t"));
+    bool irregular = false;    // replayed from sample to sample at the logged times
     std::vector<bool> in_gap;  // samples interpolated across rows the logger lost
-    if (period <= 0) {         // read on a uniform clock instead
+    if (period <= 0 && internal::IrregularClock(logged.column("t"))) {
+      period = MedianInterval(logged.column("t"));
+      irregular = true;
+    } else if (period <= 0) {  // read on a uniform clock instead
       data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap));
       log = data.resampled.back().get();
       period = internal::UniformPeriod(log->column("t"));
@@ -360,7 +386,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     const Runs runs = internal::StuckRuns(x, stuck);
     const double force_sigma_N = std::max(
         std::hypot(p1_sigma_N * gain("p1", period), p2_sigma_N * gain("p2", period)), 1e-3);
-    SmoothStuckForce(runs, options.stuck_force_samples, force_sigma_N, &force);
+    data.time_s.push_back(irregular ? e.column("t") : std::vector<double>{});
+    const std::vector<double>* time_s = irregular ? &data.time_s.back() : nullptr;
+    SmoothStuckForce(runs, options.stuck_force_samples, force_sigma_N, data.time_s.back(), &force);
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
     data.experiments.push_back(&e);
@@ -369,6 +397,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     const StrokeLog stroke_log{data.force_N.back(),
                                data.position_m.back(),
                                period,
+                               time_s,
                                stuck,
                                0.5 * rig.stroke_m,
                                options.end_margin_m + 4 * sigma_x_m,
@@ -388,6 +417,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     }
     internal::SlideSampling sampling;
     sampling.period_s = period;
+    sampling.time_s = time_s;
     sampling.mass_kg = rig.load_mass_kg;
     sampling.sigma_x_m = sigma_x_m;
     sampling.sigma_force_N = force_sigma_N;

@@ -51,7 +51,10 @@ struct Segment {
   const std::vector<double>* force_N;
   const std::vector<double>* position_m;
   std::size_t begin, end;  // samples [begin, end)
-  double period_s;         // of its log
+  double period_s;         // of its log (the median interval when irregular)
+  // The times of its log's samples when they are irregular (else null): the
+  // replays step from sample to sample as logged.
+  const std::vector<double>* time_s = nullptr;
   double initial_position_m;
   int direction;  // of the slide: +1, -1, or 0 (stays stuck)
   // A slide that ends in a logged arrest is replayed from both of its ends:
@@ -78,6 +81,8 @@ using Runs = internal::Runs;
 // position, and the segments cut from them.
 struct StrokeData {
   std::vector<std::vector<double>> force_N, position_m;
+  // Per log its sample times when irregular (IrregularClock), else empty.
+  std::vector<std::vector<double>> time_s;
   std::vector<const Experiment*> experiments;  // the log of each
   // Logs read otherwise than written: on a uniform clock when not sampled
   // uniformly (ResampledUniformly), with the declared lags of p1 and p2

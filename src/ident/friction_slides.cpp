@@ -1,5 +1,6 @@
 #include "friction_slides.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 
@@ -19,6 +20,31 @@ double QuadraticMisfit(const std::vector<double>& x_m, std::size_t i, int k, dou
     squares += r * r;
   }
   return std::sqrt(squares / (2 * k + 1 - 3));
+}
+
+// v, a and the RMS misfit of the least-squares quadratic in time through
+// x over samples i - k .. i + k of a log sampled at the times `t`.
+struct WindowFit {
+  double v, a, misfit;
+};
+WindowFit QuadraticInTime(const std::vector<double>& x_m, const std::vector<double>& t,
+                          std::size_t i, int k) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d right = Eigen::Vector3d::Zero();
+  for (int j = -k; j <= k; ++j) {
+    const double tau = t[i + j] - t[i];
+    const Eigen::Vector3d row(1.0, tau, tau * tau);
+    normal += row * row.transpose();
+    right += row * (x_m[i + j] - x_m[i]);
+  }
+  const Eigen::Vector3d c = normal.ldlt().solve(right);
+  double squares = 0;
+  for (int j = -k; j <= k; ++j) {
+    const double tau = t[i + j] - t[i];
+    const double r = x_m[i + j] - x_m[i] - c(0) - tau * (c(1) + tau * c(2));
+    squares += r * r;
+  }
+  return {c(1), 2 * c(2), std::sqrt(squares / (2 * k + 1 - 3))};
 }
 
 }  // namespace
@@ -81,8 +107,14 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
       // A window the quadratic does not follow is no smooth slide: stick-slip
       // cycles shorter than a stuck phase can be (at 250 Hz the paper rod's
       // 4 to 40 ms sticks) read as a steady speed there, and F - M a swings.
-      if (usable && QuadraticMisfit(x_m, i, k, m, v * h, 0.5 * a * h * h) > max_misfit)
+      if (usable && sampling.time_s != nullptr) {
+        const WindowFit fit = QuadraticInTime(x_m, *sampling.time_s, i, k);
+        v = fit.v;
+        a = fit.a;
+        usable = fit.misfit <= max_misfit;
+      } else if (usable && QuadraticMisfit(x_m, i, k, m, v * h, 0.5 * a * h * h) > max_misfit) {
         usable = false;
+      }
     }
     const int direction = v > 0 ? +1 : -1;
     if (!usable || std::fabs(v) < min_speed ||

@@ -31,7 +31,10 @@ struct SlideCluster {
 };
 
 struct SlideSampling {
-  double period_s = 1e-3;
+  double period_s = 1e-3;  // the median interval when irregular
+  // The sample times of a log sampled at irregular intervals (else null): v
+  // and a are then a least-squares quadratic in time over each window.
+  const std::vector<double>* time_s = nullptr;
   double mass_kg = 0.15;
   double sigma_x_m = 5e-6;     // position noise
   double sigma_force_N = 0.1;  // the driving force's noise

@@ -18,6 +18,15 @@ double UniformPeriod(const std::vector<double>& t) {
   return period;
 }
 
+bool IrregularClock(const std::vector<double>& t) {
+  if (t.size() < 2 || UniformPeriod(t) > 0) return false;
+  const double longest = kIrregularClockStretch * MedianInterval(t);
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (t[i] - t[i - 1] > longest) return false;
+  }
+  return true;
+}
+
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
                                                      std::vector<bool>* in_gap) {
   const auto& t = e.column("t");

@@ -27,8 +27,8 @@ class ProtocolReader : internal::YamlReader {
     const YAML::Node root =
         LoadMapping(text, "expected a mapping starting with format: pneumaid-protocol/1");
     Keys(root, "",
-         {"format", "sample_rate", "dropped_samples", "position_origin", "units", "sensors",
-          "valve", "pipeline", "stroke", "validation", "mismatch"});
+         {"format", "sample_rate", "dropped_samples", "clock_jitter", "position_origin", "units",
+          "sensors", "valve", "pipeline", "stroke", "validation", "mismatch"});
     if (!root["format"] || Text(root["format"]) != kProtocolFormat) {
       Fail(root, std::string("expected format: ") + kProtocolFormat);
     }
@@ -38,6 +38,11 @@ class ProtocolReader : internal::YamlReader {
       p.dropped_samples = Number(dropped, "dropped_samples");
       if (!(p.dropped_samples >= 0 && p.dropped_samples < 0.5))
         Fail(dropped, "expected dropped_samples in [0, 0.5)");
+    }
+    if (const YAML::Node jitter = root["clock_jitter"]) {
+      p.clock_jitter = Number(jitter, "clock_jitter");
+      if (!(p.clock_jitter >= 0 && p.clock_jitter < 0.5))
+        Fail(jitter, "expected clock_jitter in [0, 0.5)");
     }
     if (const YAML::Node origin = root["position_origin"]) {
       const std::string text = Text(origin);

@@ -25,6 +25,8 @@ const double kAirDensity_kg_per_m3 = RigConstants{}.air_density_kg_per_m3;
 constexpr double kHysteresisThreshold_V = 0.01;
 // Offset of the dropped-rows streams from the experiments' noise streams.
 constexpr std::uint64_t kDroppedRowsStream = 1000003;
+// And of the irregular clocks' streams (Protocol::clock_jitter).
+constexpr std::uint64_t kClockStream = 2000003;
 
 // One random stream per experiment, derived from the seed and the experiment
 // index, so adding an experiment does not change the noise of the others.
@@ -37,14 +39,56 @@ double EffectValue(const Parameters& p, const char* name, const char* key) {
   return effect == p.effects.end() ? 0.0 : effect->second.at(key);
 }
 
-std::vector<double> SampleTimes(double duration_s, double rate_Hz) {
-  return UniformTimes(0.0, duration_s, rate_Hz);
-}
+// The times at which one log's rows are taken: the protocol's rate, or an
+// irregular clock (Protocol::clock_jitter). The rig's controller acts on
+// these instants, as a loop that reads the sensors, writes the command and
+// logs a row does.
+struct LoggerClock {
+  double rate_Hz = 1e3;
+  double period_s = 1e-3;  // the nominal interval, 1 / rate_Hz
+  bool uniform = true;
+  std::vector<double> t_s;  // irregular: from 0 to beyond any run of the log
 
-// First-order lag of a signal sampled every period_s and held between samples.
-std::vector<double> Lag(const std::vector<double>& signal, double period_s, double tau_s) {
+  // The time from sample i - 1 to sample i.
+  double Interval(std::size_t i) const { return uniform ? period_s : t_s[i] - t_s[i - 1]; }
+
+  // The sample times from 0 to duration_s (inclusive, to round-off).
+  std::vector<double> Until(double duration_s) const {
+    if (uniform) return UniformTimes(0.0, duration_s, rate_Hz);
+    std::vector<double> out;
+    for (double t : t_s) {
+      if (t > duration_s + 1e-9 * period_s) break;
+      out.push_back(t);
+    }
+    return out;
+  }
+
+  // The first sample time at or after t. A t within round-off of a sample
+  // time is kept when at or before it (that sample logs the new value either
+  // way; the simulator applies a knot at or before an output time), else
+  // moved onto it.
+  double At(double t) const {
+    const double round_off = 1e-6 * period_s;
+    if (uniform) {
+      const double rate = rate_Hz;
+      const double nearest = std::round(t * rate);
+      if (std::fabs(t * rate - nearest) < 1e-6) {
+        const double sample_s = nearest / rate;
+        return t <= sample_s ? t : sample_s;
+      }
+      return std::ceil(t * rate) / rate;
+    }
+    const auto at = std::lower_bound(t_s.begin(), t_s.end(), t - round_off);
+    if (at == t_s.end()) return t;
+    return std::fabs(*at - t) < round_off ? std::min(t, *at) : *at;
+  }
+};
+
+// First-order lag of a signal sampled on `clock` and held between samples.
+std::vector<double> Lag(const std::vector<double>& signal, const LoggerClock& clock, double tau_s) {
   std::vector<double> out = signal;
-  if (tau_s > 0) ApplyFirstOrderLag([period_s](std::size_t) { return period_s; }, tau_s, &out);
+  if (tau_s > 0)
+    ApplyFirstOrderLag([&clock](std::size_t i) { return clock.Interval(i); }, tau_s, &out);
   return out;
 }
 
@@ -115,29 +159,47 @@ class RigBuilder {
  private:
   double Period() const { return 1.0 / protocol_.sample_rate_Hz; }
 
-  // The first sample time at or after t, as SampleTimes writes it. A t within
-  // round-off of a sample time is kept when at or before it (that sample
-  // logs the new value either way; the simulator applies a knot at or before
-  // an output time), else moved onto it.
-  double SampleClock(double t_s) const {
-    const double rate = protocol_.sample_rate_Hz;
-    const double nearest = std::round(t_s * rate);
-    if (std::fabs(t_s * rate - nearest) < 1e-6) {
-      const double sample_s = nearest / rate;
-      return t_s <= sample_s ? t_s : sample_s;
+  // The clock of log `index`, long enough for duration_s: uniform, or each
+  // interval the nominal one times 1 + U(-clock_jitter, clock_jitter) (its
+  // own random stream: the noise is unchanged), stamped to 10 us.
+  LoggerClock ClockOf(double duration_s, std::size_t index) const {
+    LoggerClock clock;
+    clock.rate_Hz = protocol_.sample_rate_Hz;
+    clock.period_s = Period();
+    if (!(protocol_.clock_jitter > 0)) return clock;
+    clock.uniform = false;
+    std::mt19937_64 rng(StreamSeed(seed_, index + kClockStream));
+    std::uniform_real_distribution<double> stretch(1 - protocol_.clock_jitter,
+                                                   1 + protocol_.clock_jitter);
+    clock.t_s = {0.0};
+    // Stamped to 10 us, which the logs' 7 significant digits write exactly
+    // up to 100 s, so that a log's times are those the rig ran at.
+    while (clock.t_s.back() <= duration_s + Period()) {
+      const double next = clock.t_s.back() + Period() * stretch(rng);
+      clock.t_s.push_back(std::max(std::round(next * 1e5), std::round(clock.t_s.back() * 1e5) + 1) /
+                          1e5);
     }
-    return std::ceil(t_s * rate) / rate;
+    return clock;
+  }
+
+  // A signal through an instrument: its lag on the log's clock, then its
+  // noise and ADC step (MeasureSignal).
+  std::vector<double> Measure(const std::vector<double>& si, const LoggerClock& clock,
+                              SensorModel sensor, std::uint64_t* rng) const {
+    const std::vector<double> lagged = Lag(si, clock, sensor.tau_s);
+    sensor.tau_s = 0;
+    return MeasureSignal(lagged, clock.period_s, sensor, rng);
   }
 
   // The rig's controller changes its output at sample instants only (as it
   // ends a stroke leg on the next sample): a command time is moved to the
   // first sample at or after it, so that the logged u changes where the
   // command did. A knot moved onto the sample of an earlier one replaces it.
-  CommandSignal OnSampleClock(const CommandSignal& command) const {
+  CommandSignal OnSampleClock(const CommandSignal& command, const LoggerClock& clock) const {
     CommandSignal out;
     out.initial_V = command.initial_V;
     for (std::size_t i = 0; i < command.time_s.size(); ++i) {
-      const double t = SampleClock(command.time_s[i]);
+      const double t = clock.At(command.time_s[i]);
       if (!out.time_s.empty() && t <= out.time_s.back()) {
         out.value_V.back() = command.value_V[i];
         continue;
@@ -155,11 +217,12 @@ class RigBuilder {
 
   // The sensor model for a flow channel, in mass flow, plus any hidden meter lag.
   std::vector<double> MeasureFlow(const std::string& name, const std::vector<double>& mass_flow,
-                                  double hidden_tau_s, std::uint64_t* rng) const {
+                                  const LoggerClock& clock, double hidden_tau_s,
+                                  std::uint64_t* rng) const {
     SensorModel sensor = Sensor(name);
     sensor.sigma *= kAirDensity_kg_per_m3;  // declared as standard volumetric flow
     sensor.quantization *= kAirDensity_kg_per_m3;
-    return MeasureSignal(Lag(mass_flow, Period(), hidden_tau_s), Period(), sensor, rng);
+    return Measure(Lag(mass_flow, clock, hidden_tau_s), clock, sensor, rng);
   }
 
   // A column in the protocol's units for its quantity.
@@ -196,10 +259,10 @@ class RigBuilder {
 
   // The valve test's command: the staircase 0 -> 1 -> 0 V, or the ramp up and
   // down (a continuous command) when the protocol asks for one.
-  std::pair<std::vector<double>, std::vector<double>> ValveCommand() const {
+  std::pair<std::vector<double>, std::vector<double>> ValveCommand(const LoggerClock& clock) const {
     const double ramp_s = protocol_.valve_ramp_s;
     if (ramp_s > 0) {
-      const auto t = SampleTimes(2 * ramp_s, protocol_.sample_rate_Hz);
+      const auto t = clock.Until(2 * ramp_s);
       std::vector<double> u(t.size());
       for (std::size_t i = 0; i < t.size(); ++i)
         u[i] = std::clamp(1.0 - std::fabs(t[i] - ramp_s) / ramp_s, 0.0, 1.0);
@@ -209,7 +272,7 @@ class RigBuilder {
     const int steps = static_cast<int>(std::lround(1.0 / protocol_.valve_step_V));
     for (int i = 0; i <= steps; ++i) levels.push_back(std::min(1.0, i * protocol_.valve_step_V));
     for (int i = steps - 1; i >= 0; --i) levels.push_back(i * protocol_.valve_step_V);
-    const auto t = SampleTimes(levels.size() * protocol_.valve_hold_s, protocol_.sample_rate_Hz);
+    const auto t = clock.Until(levels.size() * protocol_.valve_hold_s);
     std::vector<double> u(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) {
       const auto level = std::min<std::size_t>(
@@ -221,8 +284,13 @@ class RigBuilder {
 
   RigLog ValveTest(const Manifest& manifest, std::size_t index) const {
     std::uint64_t rng = StreamSeed(seed_, index);
-    const auto [t, u] = ValveCommand();
-    const std::vector<double> opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
+    const double duration_s =
+        protocol_.valve_ramp_s > 0
+            ? 2 * protocol_.valve_ramp_s
+            : (2 * std::lround(1.0 / protocol_.valve_step_V) + 1) * protocol_.valve_hold_s;
+    const LoggerClock clock = ClockOf(duration_s, index);
+    const auto [t, u] = ValveCommand(clock);
+    const std::vector<double> opening = Lag(u, clock, EffectValue(truth_, "valve_lag", "tau"));
     const double p_up = truth_.supply.supply_pressure_Pa,
                  p_down = truth_.supply.atmospheric_pressure_Pa;
     BranchLatch latch(kHysteresisThreshold_V);
@@ -236,14 +304,13 @@ class RigBuilder {
     AddColumn(&log, "t", "s", t, manifest);
     AddColumn(&log, "u", "V", u, manifest);
     AddColumn(&log, "p_up", protocol_.pressure_unit,
-              MeasureSignal(std::vector<double>(t.size(), p_up), Period(), Sensor("p_up"), &rng),
+              Measure(std::vector<double>(t.size(), p_up), clock, Sensor("p_up"), &rng), manifest);
+    AddColumn(&log, "p_down", protocol_.pressure_unit,
+              Measure(std::vector<double>(t.size(), p_down), clock, Sensor("p_down"), &rng),
               manifest);
-    AddColumn(
-        &log, "p_down", protocol_.pressure_unit,
-        MeasureSignal(std::vector<double>(t.size(), p_down), Period(), Sensor("p_down"), &rng),
-        manifest);
     AddColumn(&log, "q", protocol_.flow_unit,
-              MeasureFlow("q", q, EffectValue(truth_, "flow_sensor_lag", "tau"), &rng), manifest);
+              MeasureFlow("q", q, clock, EffectValue(truth_, "flow_sensor_lag", "tau"), &rng),
+              manifest);
     return log;
   }
 
@@ -278,19 +345,20 @@ class RigBuilder {
 
   RigLog PipelineTest(const Manifest& manifest, double length_m, std::size_t index) const {
     std::uint64_t rng = StreamSeed(seed_, index);
-    const auto t = SampleTimes(protocol_.pipeline_duration_s, protocol_.sample_rate_Hz);
+    const LoggerClock clock = ClockOf(protocol_.pipeline_duration_s, index);
+    const auto t = clock.Until(protocol_.pipeline_duration_s);
     std::vector<double> u(t.size()), q_in(t.size());
     const double p_up = truth_.supply.supply_pressure_Pa,
                  p_down = truth_.supply.atmospheric_pressure_Pa;
     for (std::size_t i = 0; i < t.size(); ++i) u[i] = PipelineCommand(t[i]);
-    const auto opening = Lag(u, Period(), EffectValue(truth_, "valve_lag", "tau"));
+    const auto opening = Lag(u, clock, EffectValue(truth_, "valve_lag", "tau"));
     BranchLatch latch(kHysteresisThreshold_V);
     for (std::size_t i = 0; i < t.size(); ++i) {
       latch.Update(u[i]);
       q_in[i] = ValveFlow(opening[i], latch.decreasing(), p_up, p_down);
     }
     // Eq. 5 between the tube's ends, exact for the flow held between samples.
-    const std::vector<double> q_out = Lag(q_in, Period(), 1.0 / DeltaAt(length_m));
+    const std::vector<double> q_out = Lag(q_in, clock, 1.0 / DeltaAt(length_m));
     char id[32];
     std::snprintf(id, sizeof(id), "pipe-%03d", static_cast<int>(std::lround(length_m * 100)));
     RigLog log = NewLog(id, ExperimentKind::kPipeline);
@@ -298,8 +366,9 @@ class RigBuilder {
     const double hidden = EffectValue(truth_, "flow_sensor_lag", "tau");
     AddColumn(&log, "t", "s", t, manifest);
     AddColumn(&log, "u", "V", u, manifest);
-    AddColumn(&log, "q_in", protocol_.flow_unit, MeasureFlow("q_in", q_in, hidden, &rng), manifest);
-    AddColumn(&log, "q_out", protocol_.flow_unit, MeasureFlow("q_out", q_out, hidden, &rng),
+    AddColumn(&log, "q_in", protocol_.flow_unit, MeasureFlow("q_in", q_in, clock, hidden, &rng),
+              manifest);
+    AddColumn(&log, "q_out", protocol_.flow_unit, MeasureFlow("q_out", q_out, clock, hidden, &rng),
               manifest);
     return log;
   }
@@ -332,7 +401,7 @@ class RigBuilder {
     return command;
   }
 
-  Trajectory Run(const CommandSignal& command, double duration_s) const {
+  Trajectory Run(const CommandSignal& command, const LoggerClock& clock, double duration_s) const {
     Trajectory run;
     SimulationOptions options;
     options.relative_tolerance = protocol_.mismatch.relative_tolerance;
@@ -341,8 +410,7 @@ class RigBuilder {
       options.regularization.stick_velocity_m_per_s = protocol_.mismatch.stick_velocity_m_per_s;
     }
     const SimulationSummary summary =
-        Simulate(truth_, command, RetractedAtRest(truth_),
-                 SampleTimes(duration_s, protocol_.sample_rate_Hz), options, &run);
+        Simulate(truth_, command, RetractedAtRest(truth_), clock.Until(duration_s), options, &run);
     if (summary.status == SimulationStatus::kInvalidInput) {
       throw InputError("truth parameter set", 0, 0, summary.message);
     }
@@ -353,53 +421,60 @@ class RigBuilder {
   // Holds each leg until the rod is `margin` before the end it drives to (the
   // rig's controller acts on the next sample) or max_leg has passed, then the
   // next leg; 0 V for 0.3 s at the end.
-  Trajectory RunLegs(const std::vector<double>& levels, CommandSignal* command) const {
+  Trajectory RunLegs(const std::vector<double>& levels, const LoggerClock& clock,
+                     CommandSignal* command) const {
     const double half = 0.5 * truth_.cylinder.stroke_m;
     const double limit = half - protocol_.stroke_margin_m;
-    std::vector<std::pair<double, double>> knots = {{SampleClock(0.05), levels.front()}};
+    std::vector<std::pair<double, double>> knots = {{clock.At(0.05), levels.front()}};
     for (std::size_t leg = 0; leg < levels.size(); ++leg) {
       const double start = knots.back().first;
-      const double horizon = SampleClock(start + protocol_.stroke_max_leg_s);
-      const Trajectory run = Run(StepCommand(knots), horizon);
+      const double horizon = clock.At(start + protocol_.stroke_max_leg_s);
+      const Trajectory run = Run(StepCommand(knots), clock, horizon);
       double end = horizon;
       for (std::size_t i = 0; i < run.size(); ++i) {
         const bool reached = levels[leg] > 0 ? run.x_m[i] >= limit : run.x_m[i] <= -limit;
         if (run.t_s[i] > start && reached) {
           // a sample time exactly (the controller acts on the next sample)
-          const double dwell = std::round(protocol_.stroke_dwell_s * protocol_.sample_rate_Hz);
-          end = std::min(horizon, static_cast<double>(i + 1 + dwell) / protocol_.sample_rate_Hz);
+          const auto dwell =
+              static_cast<std::size_t>(std::round(protocol_.stroke_dwell_s * clock.rate_Hz));
+          if (i + 1 + dwell < run.size()) end = std::min(horizon, run.t_s[i + 1 + dwell]);
           break;
         }
       }
       knots.push_back({end, leg + 1 < levels.size() ? levels[leg + 1] : 0.0});
     }
     *command = StepCommand(knots);
-    return Run(*command, knots.back().first + 0.3);
+    return Run(*command, clock, knots.back().first + 0.3);
   }
 
   RigLog ActuatorRun(const Manifest& manifest, const std::string& id, ExperimentKind kind,
                      const ActuatorCommand& spec, std::size_t index) const {
     std::uint64_t rng = StreamSeed(seed_, index);
-    CommandSignal command = OnSampleClock(spec.fixed);
-    const Trajectory run = spec.leg_levels_V.empty() ? Run(command, spec.duration_s)
-                                                     : RunLegs(spec.leg_levels_V, &command);
+    // Long enough for every leg held its longest, and the 0 V after.
+    const double longest_s =
+        spec.duration_s +
+        static_cast<double>(spec.leg_levels_V.size()) * (protocol_.stroke_max_leg_s + 0.01) + 0.5;
+    const LoggerClock clock = ClockOf(longest_s, index);
+    CommandSignal command = OnSampleClock(spec.fixed, clock);
+    const Trajectory run = spec.leg_levels_V.empty() ? Run(command, clock, spec.duration_s)
+                                                     : RunLegs(spec.leg_levels_V, clock, &command);
     const double half = 0.5 * truth_.cylinder.stroke_m;
     const double origin_shift =
         protocol_.position_origin == PositionOrigin::kRetracted ? half : 0.0;
-    std::vector<double> x = MeasureSignal(run.x_m, Period(), Sensor("x"), &rng);
+    std::vector<double> x = Measure(run.x_m, clock, Sensor("x"), &rng);
     for (double& value : x) value += origin_shift;
     RigLog log = NewLog(id, kind);
     AddColumn(&log, "t", "s", run.t_s, manifest);
     AddColumn(&log, "u", "V", run.u_V, manifest);
     AddColumn(&log, "x", protocol_.length_unit, x, manifest);
-    AddColumn(&log, "p1", protocol_.pressure_unit,
-              MeasureSignal(run.p1_Pa, Period(), Sensor("p1"), &rng), manifest);
-    AddColumn(&log, "p2", protocol_.pressure_unit,
-              MeasureSignal(run.p2_Pa, Period(), Sensor("p2"), &rng), manifest);
-    // The simulator already applied any hidden flow_sensor_lag to q1, q2.
-    AddColumn(&log, "q1", protocol_.flow_unit, MeasureFlow("q1", run.q1_kg_per_s, 0.0, &rng),
+    AddColumn(&log, "p1", protocol_.pressure_unit, Measure(run.p1_Pa, clock, Sensor("p1"), &rng),
               manifest);
-    AddColumn(&log, "q2", protocol_.flow_unit, MeasureFlow("q2", run.q2_kg_per_s, 0.0, &rng),
+    AddColumn(&log, "p2", protocol_.pressure_unit, Measure(run.p2_Pa, clock, Sensor("p2"), &rng),
+              manifest);
+    // The simulator already applied any hidden flow_sensor_lag to q1, q2.
+    AddColumn(&log, "q1", protocol_.flow_unit, MeasureFlow("q1", run.q1_kg_per_s, clock, 0.0, &rng),
+              manifest);
+    AddColumn(&log, "q2", protocol_.flow_unit, MeasureFlow("q2", run.q2_kg_per_s, clock, 0.0, &rng),
               manifest);
     DropRows(StreamSeed(seed_, index + kDroppedRowsStream), &log);
     return log;
@@ -446,7 +521,9 @@ bool PathMatches(const std::string& pattern, const std::string& path) {
 
 std::vector<double> MeasureSignal(const std::vector<double>& si, double sample_period_s,
                                   const SensorModel& sensor, std::uint64_t* rng_state) {
-  std::vector<double> out = Lag(si, sample_period_s, sensor.tau_s);
+  LoggerClock clock;
+  clock.period_s = sample_period_s;
+  std::vector<double> out = Lag(si, clock, sensor.tau_s);
   if (rng_state == nullptr) return out;  // lag only
   std::mt19937_64 rng(*rng_state);
   std::normal_distribution<double> noise(0.0, 1.0);

@@ -12,6 +12,7 @@
 //                    [--held-out-probe K] [--error-blocks S]
 //                    [--cost-resolution-directions K] [--relative-tolerance R]
 //                    [--units I,J,...] [--stick-creep on|off] [--rig-creep V]
+//                    [--clock-jitter J]
 //
 // Every unit is synthetic (pneumaid's synthetic rig, drawn from the seed),
 // not measured. --min-units K: exit 1 unless every coefficient is within
@@ -36,6 +37,9 @@
 // simulations' (RefineOptions::simulation.relative_tolerance, 1e-5 by
 // default). --units I,J: only those units of the N
 // (each unit's draw depends on the seed and its index alone).
+// --clock-jitter J: every unit's logger keeps no time, each interval the
+// nominal one times 1 + U(-J, J) (Protocol::clock_jitter; the other draws
+// unchanged).
 // --stick-creep off: the refinement without its creep fit
 // (RefineOptions::fit_stick_creep, on as in `identify --refine`).
 // --rig-creep V: every unit's rig sticks by the smooth law with creep speed
@@ -341,7 +345,7 @@ enum class Start { kIdentify, kTruth, kRig };
 
 UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& scratch, bool keep,
                    const RefineOptions& refine_options, Start start, int probe_sets,
-                   double rig_creep_m_per_s) {
+                   double rig_creep_m_per_s, double clock_jitter) {
   UnitResult out;
   char id[32];
   std::snprintf(id, sizeof(id), "sweep-%02d", index);
@@ -353,6 +357,12 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     char creep[48];
     std::snprintf(creep, sizeof(creep), " (rig creep %.2g m/s)", rig_creep_m_per_s);
     d.summary += creep;
+  }
+  if (clock_jitter > 0) {
+    d.protocol.clock_jitter = clock_jitter;
+    char clock[48];
+    std::snprintf(clock, sizeof(clock), " (clock +-%.0f %%)", 100 * clock_jitter);
+    d.summary += clock;
   }
   out.summary = d.summary;
   try {
@@ -438,7 +448,7 @@ int main(int argc, char** argv) {
                  "[--start-prior on|off] "
                  "[--start identify|truth|rig] [--held-out-probe K] [--error-blocks S] "
                  "[--cost-resolution-directions K] [--units I,J,...] [--stick-creep on|off] "
-                 "[--rig-creep V]\n";
+                 "[--rig-creep V] [--clock-jitter J]\n";
     return 2;
   }
   const int n = std::atoi(argv[1]);
@@ -446,7 +456,8 @@ int main(int argc, char** argv) {
   int jobs = 1, min_units = -1, min_units_valve_tube = -1, min_friction_total = -1, probe_sets = 0;
   std::string keep;  // --keep DIR: the units are written there and kept
   RefineOptions refine_options = RefineOptions::ForIdentify();
-  double rig_creep = 0;  // --rig-creep
+  double rig_creep = 0;     // --rig-creep
+  double clock_jitter = 0;  // --clock-jitter
   Start start = Start::kIdentify;
   std::vector<int> indices;  // --units: the units to run (default: all N)
   if (argc % 2 != 0) {
@@ -493,7 +504,7 @@ int main(int argc, char** argv) {
     else if (flag == "--stick-creep" && (value == "on" || value == "off"))
       refine_options.fit_stick_creep = value == "on";
     else if (flag == "--error-blocks" || flag == "--cost-resolution-directions" ||
-             flag == "--relative-tolerance" || flag == "--rig-creep") {
+             flag == "--relative-tolerance" || flag == "--rig-creep" || flag == "--clock-jitter") {
       char* end = nullptr;
       const double number = std::strtod(value.c_str(), &end);
       if (end == value.c_str() || *end != '\0') {
@@ -510,6 +521,12 @@ int main(int argc, char** argv) {
           return 2;
         }
         rig_creep = number;
+      } else if (flag == "--clock-jitter") {
+        if (!(number >= 0 && number < 0.5)) {
+          std::cerr << "--clock-jitter: a share in [0, 0.5), not " << value << "\n";
+          return 2;
+        }
+        clock_jitter = number;
       } else
         refine_options.cost_resolution_directions = static_cast<int>(number);
     } else if (flag == "--start" || flag == "--start-prior" || flag == "--stick-creep") {
@@ -553,7 +570,7 @@ int main(int argc, char** argv) {
     workers.emplace_back([&] {
       for (int k = next++; k < count; k = next++) {
         results[k] = RunUnit(seed, indices[k], scratch, !keep.empty(), refine_options, start,
-                             probe_sets, rig_creep);
+                             probe_sets, rig_creep, clock_jitter);
         const UnitResult& r = results[k];
         std::lock_guard<std::mutex> lock(print);
         std::printf("%s: %s\n", r.id.c_str(), r.summary.c_str());

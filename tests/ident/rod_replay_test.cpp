@@ -113,6 +113,44 @@ TEST(RodReplayTest, BackwardFromTheArrestMatchesUniformDeceleration) {
   }
 }
 
+// Sample times at irregular intervals: 0.6 to 1.4 ms, drawn once.
+std::vector<double> IrregularTimes(std::size_t n) {
+  std::vector<double> t = {0.0};
+  for (std::size_t j = 1; j < n; ++j)
+    t.push_back(t.back() + (1.0 + 0.4 * std::sin(2.7 * j)) * 1e-3);
+  return t;
+}
+
+TEST(RodReplayTest, AtIrregularTimesTheBreakawayAndSlideAreTheClosedForm) {
+  // As above, F = k t crossing Fs at t_b = 2.35 ms, sampled at irregular times.
+  const double k = 2.0 / 2.35e-3;
+  const std::vector<double> t = IrregularTimes(30);
+  std::vector<double> force;
+  for (double time : t) force.push_back(k * time);
+  RodReplayInput input = Input(force);
+  input.time_s = t.data();
+  std::vector<double> x(force.size());
+  ReplayRod(input, Coulomb(2.0), Coulomb(2.0), x.data());
+  for (std::size_t j = 0; j < x.size(); ++j) {
+    const double after = std::max(0.0, t[j] - 2.35e-3);
+    EXPECT_NEAR(x[j], 0.002 + k * after * after * after / (6 * kMass), 1e-12) << j;
+  }
+}
+
+TEST(RodReplayTest, AtIrregularTimesTheBackwardArrestIsTheClosedForm) {
+  const std::vector<double> t = IrregularTimes(20);
+  const std::vector<double> force(t.size(), 0.0);
+  RodReplayInput input = Input(force);
+  input.time_s = t.data();
+  std::vector<double> x(force.size());
+  const double stop_time = 14.3e-3, stop_x = 0.004;
+  ReplayArrestBackward(input, stop_time, stop_x, +1, 3, Coulomb(2.0), Coulomb(2.0), x.data());
+  for (std::size_t j = 3; j < x.size(); ++j) {
+    const double before = std::max(0.0, stop_time - t[j]);
+    EXPECT_NEAR(x[j], stop_x - 2.0 / kMass * before * before / 2, 1e-12) << j;
+  }
+}
+
 // x at every sample for the paper's friction under a stick-slip force.
 template <typename T>
 std::vector<T> Replay(const std::vector<double>& force, const T* theta) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include "pneumaid/io/log_notes.h"
@@ -59,6 +60,24 @@ TEST(UniformClockTest, StampsWithJitterAreOnTheGridALostRowIsNot) {
     lost.erase(lost.begin() + static_cast<std::ptrdiff_t>(k));
     EXPECT_EQ(UniformPeriod(lost), 0.0) << "row " << k << " lost";
   }
+}
+
+// A clock whose intervals spread over 0.6 to 1.4 ms is irregular (replayed
+// as logged); a uniform grid is not, nor a clock that lost a row (an
+// interval of twice the median), nor one with stamps off by 12 % only.
+TEST(UniformClockTest, AnIrregularClockIsNeitherUniformNorLossy) {
+  std::vector<double> t = {0.0};
+  for (int k = 1; k <= 1000; ++k) t.push_back(t.back() + (1.0 + 0.4 * std::sin(2.7 * k)) * 1e-3);
+  EXPECT_TRUE(IrregularClock(t));
+  std::vector<double> lost = t;
+  lost.erase(lost.begin() + 500);
+  EXPECT_FALSE(IrregularClock(lost));
+  std::vector<double> grid;
+  for (int ms = 0; ms <= 1000; ++ms) grid.push_back(ms * 1e-3);
+  EXPECT_FALSE(IrregularClock(grid));
+  grid[500] += 0.12e-3;
+  EXPECT_TRUE(IrregularClock(grid));  // off the grid, no interval over 1.5 ms
+  EXPECT_FALSE(IrregularClock({0.0}));
 }
 
 }  // namespace

@@ -53,15 +53,17 @@ TEST(ProtocolTest, ATubeScheduleAStrokeDwellAndAMismatchAreRead) {
   EXPECT_EQ(p.mismatch.relative_tolerance, 1.0e-9);
 }
 
-TEST(ProtocolTest, AValveRampAndALossyLoggerAreRead) {
+TEST(ProtocolTest, AValveRampALossyLoggerAndAnIrregularClockAreRead) {
   const Protocol p = ParseProtocol(
       "format: pneumaid-protocol/1\n"
       "dropped_samples: 0.01\n"
+      "clock_jitter: 0.3\n"
       "valve: {ramp: 6}\n",
       "p");
   EXPECT_TRUE(p.valve);
   EXPECT_EQ(p.valve_ramp_s, 6.0);
   EXPECT_EQ(p.dropped_samples, 0.01);
+  EXPECT_EQ(p.clock_jitter, 0.3);
   EXPECT_EQ(ParseProtocol("format: pneumaid-protocol/1\nvalve: {step: 0.1}\n", "p").valve_ramp_s,
             0.0);  // a staircase by default
 }
@@ -71,7 +73,7 @@ TEST(ProtocolTest, ABadScheduleOrMismatchNamesItsLine) {
        {"pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5, 1], [0.2, 0]]}\n",
         "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5]]}\n",
         "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n",
-        "\ndropped_samples: 0.5\n", "valve:\n  ramp: -1\n",
+        "\ndropped_samples: 0.5\n", "\nclock_jitter: 0.5\n", "valve:\n  ramp: -1\n",
         // Protocols the rig cannot run: a command above 1 V, a knot after the test.
         "stroke:\n  levels: [0.5, 1.2]\n", "pipeline: {tube_lengths: [0.38],\n  command: 1.5}\n",
         "pipeline: {tube_lengths: [0.38], duration: 2,\n  schedule: [[0.1, 1], [3.0, 0]]}\n",

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <numeric>
 
+#include "pneumaid/eval/lag.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/rig_data.h"
 #include "pneumaid/sim/simulate.h"
@@ -198,6 +199,41 @@ TEST(SyntheticRigTest, DroppedRowsAreRowsOfTheCompleteLogAndARampIsARamp) {
   EXPECT_EQ(*std::max_element(u.begin(), u.end()), 1.0);
   EXPECT_NEAR(u[u.size() / 4], 0.5, 0.01);
   EXPECT_NEAR(u.back(), 0.0, 1e-9);
+}
+
+// A logger with an irregular clock (a loop that reads the sensors, writes the
+// command and logs a row, on an operating system that is not real-time):
+// every log's intervals spread over 0.7 to 1.3 of the nominal 1 ms, and each
+// row holds the signals at its own time, so the truth simulated at the
+// logged times under the logged command is the log, through the sensors.
+TEST(SyntheticRigTest, AnIrregularClocksRowsAreTheRigAtTheirOwnTimes) {
+  const Parameters truth;
+  Protocol protocol = SmallProtocol(0.0);
+  protocol.clock_jitter = 0.3;
+  const Unit unit = WriteAndReadUnit(Synthesize(truth, protocol, 7, "J"), "synth_jitter");
+  for (const Experiment& e : unit.experiments) {
+    const auto& t = e.column("t");
+    double shortest = 1, longest = 0;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      shortest = std::min(shortest, t[i] - t[i - 1]);
+      longest = std::max(longest, t[i] - t[i - 1]);
+    }
+    EXPECT_GT(shortest, 0.7e-3 - 1e-9) << e.entry.id;
+    EXPECT_LT(shortest, 0.72e-3) << e.entry.id;
+    EXPECT_LT(longest, 1.3e-3 + 1e-9) << e.entry.id;
+    EXPECT_GT(longest, 1.28e-3) << e.entry.id;
+  }
+  const Experiment& step = Find(unit, "step-1");
+  const Trajectory run = TruthRun(truth, step);
+  const auto& t = step.column("t");
+  std::vector<double> q1_lagged = run.q1_kg_per_s;
+  ApplyFirstOrderLag([&t](std::size_t i) { return t[i] - t[i - 1]; }, 0.03, &q1_lagged);
+  for (std::size_t i = 0; i < run.size(); ++i) {
+    EXPECT_NEAR(step.column("x")[i], run.x_m[i], 0.5e-5 + 1e-9) << i;
+    EXPECT_NEAR(step.column("p1")[i], run.p1_Pa[i], 1.0) << i;
+    EXPECT_NEAR(step.column("q1")[i], q1_lagged[i], 1e-9) << i;
+  }
+  EXPECT_GT(*std::max_element(run.x_m.begin(), run.x_m.end()), 0.025 - 1.1e-3);
 }
 
 TEST(SyntheticRigTest, DeterministicPerSeed) {

@@ -29,12 +29,24 @@ struct RodReplayInput {
   const double* force_N = nullptr;  // F at samples 0 .. samples-1
   std::size_t samples = 0;
   double period_s = 1e-3;
+  // The times of samples 0 .. samples-1 [s, any origin] of a log sampled at
+  // irregular intervals; null: every period_s.
+  const double* time_s = nullptr;
   double mass_kg = 0.15;
   double initial_position_m = 0;
   int substeps = 8;  // RK4 substeps per sample interval while sliding
   // Stick/slip switches followed inside one sample interval at most (bounded
   // work; a Zeno sequence would be cut there and stay stuck).
   int max_switches = 4;
+
+  // The interval from sample i to sample i + 1.
+  double Interval(std::size_t i) const {
+    return time_s == nullptr ? period_s : time_s[i + 1] - time_s[i];
+  }
+  // The time of sample i after sample 0.
+  double Elapsed(std::size_t i) const {
+    return time_s == nullptr ? static_cast<double>(i) * period_s : time_s[i] - time_s[0];
+  }
 };
 
 // Which directions a replay slid in, so that a caller can tell which
@@ -163,9 +175,9 @@ void ReplayRod(const RodReplayInput& input, const StribeckCoefficients<T>& posit
   using namespace rod_replay_detail;
   if (input.samples == 0) return;
   RodState<T> s{T(input.initial_position_m), T(0.0), 0};
-  const double h = input.period_s;
   position[0] = s.x;
   for (std::size_t i = 0; i + 1 < input.samples; ++i) {
+    const double h = input.Interval(i);
     const double force_a = input.force_N[i], force_b = input.force_N[i + 1];
     T t(0.0);
     for (int switches = 0; switches <= input.max_switches; ++switches) {
@@ -195,25 +207,30 @@ void ReplayArrestBackward(const RodReplayInput& input, const T& stop_time_s, dou
                           int direction, std::size_t first, const StribeckCoefficients<T>& positive,
                           const StribeckCoefficients<T>& negative, T* position) {
   using namespace rod_replay_detail;
-  const double h = input.period_s;
-  const double stop = ScalarPart(stop_time_s) / h;
-  std::size_t k = stop <= 0 ? 0 : static_cast<std::size_t>(stop);
+  // The interval k that holds the arrest.
+  std::size_t k = 0;
+  if (input.time_s == nullptr) {
+    const double stop = ScalarPart(stop_time_s) / input.period_s;
+    k = stop <= 0 ? 0 : static_cast<std::size_t>(stop);
+  } else {
+    while (k + 1 < input.samples && input.Elapsed(k + 1) <= ScalarPart(stop_time_s)) ++k;
+  }
   if (k >= input.samples - 1) k = input.samples - 2;
   // Samples before `first` belong to the forward replay: never overwritten.
   for (std::size_t j = std::max(k + 1, first); j < input.samples; ++j) {
     position[j] = T(stop_position_m);
   }
   RodState<T> s{T(stop_position_m), T(0.0), direction};
-  T from = stop_time_s - T(static_cast<double>(k) * h);
+  T from = stop_time_s - T(input.Elapsed(k));
   for (std::size_t j = k + 1; j-- > first;) {
     const double force_a = input.force_N[j], force_b = input.force_N[j + 1];
     if (s.direction != 0) {
-      Slide(from, T(0.0), force_a, (force_b - force_a) / h,
+      Slide(from, T(0.0), force_a, (force_b - force_a) / input.Interval(j),
             SubstepsAt(s, positive, negative, input.substeps), positive, negative, input.mass_kg,
             &s);
     }
     position[j] = s.x;
-    from = T(h);
+    if (j > 0) from = T(input.Interval(j - 1));
   }
 }
 

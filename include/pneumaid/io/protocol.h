@@ -28,6 +28,11 @@ struct Protocol {
   // logs (independently per row, never the first or last): their sampling is
   // then not uniform.
   double dropped_samples = 0.0;
+  // A logger whose clock is irregular: each interval between two rows is the
+  // nominal one (1 / sample_rate_Hz) times 1 + U(-clock_jitter, clock_jitter),
+  // stamped to 10 us, in every log; each row holds the signals at its own
+  // time, and the command changes at rows only. In [0, 0.5); 0: uniform.
+  double clock_jitter = 0.0;
   PositionOrigin position_origin = PositionOrigin::kRetracted;
   std::string length_unit = "mm";
   std::string pressure_unit = "bar_g";
