@@ -353,11 +353,17 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     if (!selected(logged)) continue;
     const Experiment* log = &logged;
     double period = internal::UniformPeriod(logged.column("t"));
-    bool irregular = false;    // replayed from sample to sample at the logged times
-    std::vector<bool> in_gap;  // samples interpolated across rows the logger lost
+    bool irregular = false;  // replayed from sample to sample at the logged times
+    // Samples interpolated across rows the logger lost (a uniform clock), or
+    // either end of a gap (irregular).
+    std::vector<bool> in_gap;
     if (period <= 0 && internal::IrregularClock(logged.column("t"))) {
       period = MedianInterval(logged.column("t"));
       irregular = true;
+      for (std::size_t j : SamplingGaps(logged.column("t"))) {
+        in_gap.resize(logged.column("t").size(), false);
+        in_gap[j] = in_gap[j + 1] = true;
+      }
     } else if (period <= 0) {  // read on a uniform clock instead
       data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap));
       log = data.resampled.back().get();

@@ -174,8 +174,8 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   fit.levels = log.levels = static_cast<int>(held.size());
   if (n < 20) return not_fitted("fewer than 20 samples");
   if (held.size() < 2) return not_fitted("the command never changes: a step response is needed");
-  log.sigma_in = std::max(NoiseOf(manifest, "q_in", {log.q_in}).sigma, 1e-12);
-  log.sigma_out = std::max(NoiseOf(manifest, "q_out", {log.q_out}).sigma, 1e-12);
+  log.sigma_in = std::max(NoiseOf(manifest, "q_in", {log.q_in}, {log.t}).sigma, 1e-12);
+  log.sigma_out = std::max(NoiseOf(manifest, "q_out", {log.q_out}, {log.t}).sigma, 1e-12);
   if (log.levels > options.max_levels) {
     internal::FitTubeFromMeters(e, manifest, options, log.sigma_in, log.sigma_out, &fit);
     return fit;

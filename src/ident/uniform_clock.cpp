@@ -20,11 +20,14 @@ double UniformPeriod(const std::vector<double>& t) {
 
 bool IrregularClock(const std::vector<double>& t) {
   if (t.size() < 2 || UniformPeriod(t) > 0) return false;
-  const double longest = kIrregularClockStretch * MedianInterval(t);
+  const double median = MedianInterval(t);
   for (std::size_t i = 1; i < t.size(); ++i) {
-    if (t[i] - t[i - 1] > longest) return false;
+    const double interval = t[i] - t[i - 1];
+    if (interval < kLostRowIntervals * median &&
+        std::fabs(interval - median) > kStampJitter * median)
+      return true;
   }
-  return true;
+  return false;
 }
 
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,

@@ -24,18 +24,22 @@ inline constexpr double kStampJitter = 0.1;
 // else 0.
 double UniformPeriod(const std::vector<double>& t);
 
-// The longest interval of an irregular clock [median intervals]: a lost row
-// makes one of twice the median, or more.
-inline constexpr double kIrregularClockStretch = 1.5;
+// Intervals this many times the median or longer are rows lost (one lost row
+// makes one of twice the median), not the clock's spread.
+inline constexpr double kLostRowIntervals = 1.5;
 
-// Whether `t` (not on a uniform grid: UniformPeriod 0) is a clock whose
-// intervals vary, none over kIrregularClockStretch times the median: a logger
-// whose loop does not keep time. The friction fit replays such a log from
-// sample to sample as logged. A log that lost rows it reads on a uniform
-// clock instead (ResampledUniformly), gaps marked: replayed at its logged
-// times, a 1 kHz log with 2 % of its rows lost gave the negative vs 0.0079 +-
-// 0.00035 for 0.01, where the uniform clock gave 0.0089 +- 0.0011 and the
-// complete log 0.0089 +- 0.0011 (session 51, not understood).
+// Whether `t` is a clock that does not keep time: its intervals shorter than
+// kLostRowIntervals times the median (those of no lost row) spread beyond
+// kStampJitter of the median. A logger whose loop does not keep time; it may
+// also lose rows. The friction fit replays such a log from sample to sample
+// as logged (a lost row an interval twice as long; gaps marked, SamplingGaps).
+// A uniform clock that lost rows is read on that clock (ResampledUniformly):
+// replayed at its logged times instead, a 1 kHz log with 2 % of its rows lost
+// gave the negative vs 0.0079 +- 0.00035 for 0.01, where the uniform clock
+// gave 0.0089 +- 0.0011 and the complete log 0.0089 +- 0.0011 (session 51,
+// not understood); a jittery clock that lost 1 % of its rows, read on the
+// uniform clock, took the negative vs 41 % low over 10 units, 5 of them out
+// of tolerance.
 bool IrregularClock(const std::vector<double>& t);
 
 // `e` on a uniform clock at its median sampling interval (MedianInterval): each column

@@ -63,20 +63,23 @@ TEST(UniformClockTest, StampsWithJitterAreOnTheGridALostRowIsNot) {
 }
 
 // A clock whose intervals spread over 0.6 to 1.4 ms is irregular (replayed
-// as logged); a uniform grid is not, nor a clock that lost a row (an
-// interval of twice the median), nor one with stamps off by 12 % only.
-TEST(UniformClockTest, AnIrregularClockIsNeitherUniformNorLossy) {
+// as logged), also where it lost rows; a uniform grid is not, nor a uniform
+// grid that lost rows, stamped with jitter or not (read on the grid's clock).
+TEST(UniformClockTest, AClockThatKeepsNoTimeIsIrregularALossyGridIsNot) {
   std::vector<double> t = {0.0};
   for (int k = 1; k <= 1000; ++k) t.push_back(t.back() + (1.0 + 0.4 * std::sin(2.7 * k)) * 1e-3);
   EXPECT_TRUE(IrregularClock(t));
   std::vector<double> lost = t;
   lost.erase(lost.begin() + 500);
-  EXPECT_FALSE(IrregularClock(lost));
+  EXPECT_TRUE(IrregularClock(lost));
   std::vector<double> grid;
-  for (int ms = 0; ms <= 1000; ++ms) grid.push_back(ms * 1e-3);
-  EXPECT_FALSE(IrregularClock(grid));
-  grid[500] += 0.12e-3;
-  EXPECT_TRUE(IrregularClock(grid));  // off the grid, no interval over 1.5 ms
+  for (int ms = 0; ms <= 1000; ++ms) grid.push_back(ms * 1e-3 + (ms % 7 - 3) * 0.01e-3);
+  EXPECT_FALSE(IrregularClock(grid));  // on the grid (UniformPeriod)
+  grid.erase(grid.begin() + 500);
+  grid.erase(grid.begin() + 300);
+  EXPECT_FALSE(IrregularClock(grid));  // a lossy grid
+  grid[200] += 0.12e-3;
+  EXPECT_TRUE(IrregularClock(grid));  // a stamp 12 % off the grid
   EXPECT_FALSE(IrregularClock({0.0}));
 }
 

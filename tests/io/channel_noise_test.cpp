@@ -47,6 +47,25 @@ TEST(ChannelNoiseTest, WhiteNoiseIsReadThroughRampsCurvesAndSteps) {
   }
 }
 
+// A rod sliding at 0.1 m/s, logged by a loop that keeps no time (intervals
+// 0.6 to 1.4 ms): read by index its fourth differences see the clock's
+// jitter times the speed (tens of um), divided by the logged times they
+// cancel the slide as on a uniform clock.
+TEST(ChannelNoiseTest, OnAClockThatKeepsNoTimeTheDifferencesAreInTime) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> stretch(0.6, 1.4);
+  std::normal_distribution<double> noise(0.0, 5e-6);
+  std::vector<double> t = {0.0}, x;
+  while (t.size() < 4000) t.push_back(t.back() + 1e-3 * stretch(rng));
+  for (double time : t) x.push_back(0.1 * time - 0.3 * time * time + noise(rng));
+  EXPECT_NEAR(EstimateNoise({&x}, {&t}).sigma, 5e-6, 0.05 * 5e-6);
+  EXPECT_GT(EstimateNoise({&x}).sigma, 2 * 5e-6);  // by index: 2.4 times
+  const std::vector<double> uniform = Position(5e-6, 0, 1);
+  std::vector<double> grid;
+  for (std::size_t i = 0; i < uniform.size(); ++i) grid.push_back(1e-3 * static_cast<double>(i));
+  EXPECT_EQ(EstimateNoise({&uniform}, {&grid}).sigma, EstimateNoise({&uniform}).sigma);
+}
+
 // Noise and rounding add: the estimate is within 15 % of how far the
 // readings are from the signal, from a noise of a quarter of the step to one
 // above it.

@@ -33,13 +33,17 @@ struct ChannelNoise {
 // spread is within twice the 10th percentile's, their differences pooled)
 // show less than half of it, their noise is taken instead, within 5 % when a
 // third of the log is quiet. 0 for fewer than 5 samples or a column that
-// never changes.
-ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& columns);
+// never changes. `times`, when given, holds each column's sample times (null
+// or missing: uniform): on a clock that keeps no time the differences are
+// divided by the logged times (a smooth signal then cancels as well).
+ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& columns,
+                           const std::vector<const std::vector<double>*>& times = {});
 
 // The noise `manifest` declares for `column`, or the estimate from `logs` (the
-// column's samples in some of the unit's logs).
+// column's samples in some of the unit's logs, sampled at `times`).
 ChannelNoise NoiseOf(const Manifest& manifest, const std::string& column,
-                     const std::vector<const std::vector<double>*>& logs);
+                     const std::vector<const std::vector<double>*>& logs,
+                     const std::vector<const std::vector<double>*>& times = {});
 
 // NoiseOf the column, estimated from every log of the unit that has it.
 ChannelNoise NoiseOf(const Unit& unit, const std::string& column);
