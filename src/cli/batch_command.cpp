@@ -139,6 +139,7 @@ CommandRunner AddMergeCommand(CLI::App* app) {
     if (out->empty()) {
       std::cout << summary.Markdown();
     } else {
+      MakeOutputDirectory(*out);
       WriteFileAtomically(csv, summary.Csv());
       WriteFileAtomically(markdown, summary.Markdown());
       std::cout << summary.Markdown().substr(0, summary.Markdown().find("## Units")) << "wrote "

@@ -62,6 +62,9 @@ std::string InExistingDirectory(const std::string& file);
 // An output directory's check: an existing directory, or one that can be
 // made in an existing one (not a file).
 std::string DirectoryToWrite(const std::string& directory);
+// Makes the output directory DirectoryToWrite accepted (InputError naming it
+// when it cannot be made), once everything is computed.
+void MakeOutputDirectory(const std::string& directory);
 // InputError naming the first of `outputs` that is one of `inputs` (files,
 // or directories whose files are inputs: a unit directory's manifest and
 // logs; a fleet's units; every file of a results directory), or that another

@@ -29,6 +29,12 @@ std::string DirectoryToWrite(const std::string& directory) {
   return InExistingDirectory(named.string());
 }
 
+void MakeOutputDirectory(const std::string& directory) {
+  std::error_code error;
+  std::filesystem::create_directories(directory, error);
+  if (error) throw InputError(directory, 0, 0, "cannot create: " + error.message());
+}
+
 namespace {
 
 // The files an input names: a file itself; a unit directory's manifest and

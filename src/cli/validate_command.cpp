@@ -67,11 +67,7 @@ int RunValidate(const ValidateArgs& args) {
   const std::string html =
       args.html_path.empty() ? "" : UnitReportHtml(params, unit, page, &report);
   // Everything is computed before anything is written; each file is atomic.
-  if (!args.csv_dir.empty()) {
-    std::error_code error;
-    std::filesystem::create_directories(args.csv_dir, error);
-    if (error) throw InputError(args.csv_dir, 0, 0, "cannot create: " + error.message());
-  }
+  if (!args.csv_dir.empty()) MakeOutputDirectory(args.csv_dir);
   if (!args.json_path.empty()) WriteFileAtomically(args.json_path, ReportToJson(report));
   if (!args.csv_dir.empty()) {
     for (const auto& e : report.experiments) {

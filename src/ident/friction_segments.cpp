@@ -352,12 +352,12 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
   for (const Experiment& logged : unit.experiments) {
     if (!selected(logged)) continue;
     const Experiment* log = &logged;
-    double period = internal::UniformPeriod(logged.column("t"));
+    double period = UniformPeriod(logged.column("t"));
     bool irregular = false;  // replayed from sample to sample at the logged times
     // Samples interpolated across rows the logger lost (a uniform clock), or
     // either end of a gap (irregular).
     std::vector<bool> in_gap;
-    if (period <= 0 && internal::IrregularClock(logged.column("t"))) {
+    if (period <= 0 && IrregularClock(logged.column("t"))) {
       period = MedianInterval(logged.column("t"));
       irregular = true;
       for (std::size_t j : SamplingGaps(logged.column("t"))) {
@@ -367,7 +367,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     } else if (period <= 0) {  // read on a uniform clock instead
       data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap));
       log = data.resampled.back().get();
-      period = internal::UniformPeriod(log->column("t"));
+      period = UniformPeriod(log->column("t"));
     }
     if (period <= 0) {
       data.skipped += logged.entry.id + " (too few samples) ";
@@ -412,7 +412,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     for (std::size_t k = first_segment; k < data.segments.size() && !in_gap.empty(); ++k)
       LeaveOutWhatFollowsAGap(in_gap, &data.segments[k]);
     if (!options.force_balance) continue;
-    // Nor is a smooth slide read off the line drawn across a gap.
+    // Nor is a smooth slide read off the line drawn across a gap (or,
+    // irregular, a window across one).
     std::vector<bool> covered = in_gap.empty() ? std::vector<bool>(x.size(), false) : in_gap;
     for (const auto& [begin, end] : runs)
       std::fill(covered.begin() + begin, covered.begin() + end, true);

@@ -84,9 +84,9 @@ struct StrokeData {
   // Per log its sample times when irregular (IrregularClock), else empty.
   std::vector<std::vector<double>> time_s;
   std::vector<const Experiment*> experiments;  // the log of each
-  // Logs read otherwise than written: on a uniform clock when not sampled
-  // uniformly (ResampledUniformly), with the declared lags of p1 and p2
-  // undone (WithLagsUndone).
+  // Logs read otherwise than written: a uniform clock that lost rows on that
+  // clock (ResampledUniformly), with the declared lags of x, p1 and p2 undone
+  // (WithLagsUndone).
   std::vector<std::shared_ptr<const Experiment>> resampled;
   std::vector<Segment> segments;
   std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers

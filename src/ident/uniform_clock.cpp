@@ -7,29 +7,6 @@
 
 namespace pneumaid::internal {
 
-double UniformPeriod(const std::vector<double>& t) {
-  if (t.size() < 2) return 0;
-  const double period = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
-  if (!(period > 0)) return 0;
-  for (std::size_t i = 1; i < t.size(); ++i) {
-    const double grid = t.front() + static_cast<double>(i) * period;
-    if (std::fabs(t[i] - grid) > kStampJitter * period) return 0;
-  }
-  return period;
-}
-
-bool IrregularClock(const std::vector<double>& t) {
-  if (t.size() < 2 || UniformPeriod(t) > 0) return false;
-  const double median = MedianInterval(t);
-  for (std::size_t i = 1; i < t.size(); ++i) {
-    const double interval = t[i] - t[i - 1];
-    if (interval < kLostRowIntervals * median &&
-        std::fabs(interval - median) > kStampJitter * median)
-      return true;
-  }
-  return false;
-}
-
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
                                                      std::vector<bool>* in_gap) {
   const auto& t = e.column("t");

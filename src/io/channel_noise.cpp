@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "../util/median.h"
+#include "pneumaid/io/log_notes.h"
 
 namespace pneumaid {
 namespace {
@@ -79,14 +80,12 @@ struct Differencer {
                         : FourthDividedDifference(y.data() + i, t->data() + i);
   }
 
-  // Times that exist for every value and whose intervals differ from the
-  // first's by more than round-off.
+  // Times that exist for every value and lie on no uniform grid (a clock
+  // that keeps no time, or one that lost rows: across a lost row the index
+  // does not cancel a slide either). A grid stamped with jitter is sampled
+  // on the grid: by index.
   static bool Irregular(const std::vector<double>* t, std::size_t n) {
-    if (t == nullptr || t->size() != n || n < 2) return false;
-    const double first = (*t)[1] - (*t)[0];
-    for (std::size_t i = 2; i < n; ++i)
-      if (std::fabs((*t)[i] - (*t)[i - 1] - first) > 1e-6 * first) return true;
-    return false;
+    return t != nullptr && t->size() == n && n >= 5 && UniformPeriod(*t) <= 0;
   }
 };
 

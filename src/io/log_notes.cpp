@@ -49,6 +49,32 @@ double MedianInterval(const std::vector<double>& t) {
   return Median(std::move(intervals));
 }
 
+double UniformPeriod(const std::vector<double>& t) {
+  if (t.size() < 2) return 0;
+  const double period = (t.back() - t.front()) / static_cast<double>(t.size() - 1);
+  if (!(period > 0)) return 0;
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    const double grid = t.front() + static_cast<double>(i) * period;
+    if (std::fabs(t[i] - grid) > kStampJitter * period) return 0;
+  }
+  return period;
+}
+
+bool IrregularClock(const std::vector<double>& t) {
+  if (t.size() < 3 || UniformPeriod(t) > 0) return false;
+  const double median = MedianInterval(t);
+  if (!(median > 0)) return false;
+  // Each stamp's place on a grid that lost rows: the whole intervals so far.
+  std::vector<double> place(t.size(), 0.0);
+  for (std::size_t i = 1; i < t.size(); ++i)
+    place[i] = place[i - 1] + std::max(1.0, std::round((t[i] - t[i - 1]) / median));
+  const double period = (t.back() - t.front()) / place.back();
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (std::fabs(t[i] - t.front() - place[i] * period) > kStampJitter * period) return true;
+  }
+  return false;
+}
+
 std::vector<std::size_t> SamplingGaps(const std::vector<double>& t, double* median_interval_s) {
   if (median_interval_s != nullptr) *median_interval_s = 0;
   if (t.size() < 3) return {};

@@ -22,11 +22,12 @@ TEST_F(BatchCliTest, AFleetWithACorruptUnitExitsThreeAndMergeFlagsTheOutlier) {
   EXPECT_EQ(Run("batch " + testing::Source("datasets/fleet") + " --out " + results + " -j 2"), 3)
       << Stderr();
   EXPECT_NE(Stdout().find("PVQ13-0014: failed"), std::string::npos) << Stdout();
-  EXPECT_EQ(Run("merge " + results + " --out " + dir_.string()), 0) << Stderr();
-  const std::string summary = Read(dir_ / "fleet-summary.md");
+  // A new directory for the summary is made (it had to exist: exit 2).
+  EXPECT_EQ(Run("merge " + results + " --out " + (dir_ / "merged").string()), 0) << Stderr();
+  const std::string summary = Read(dir_ / "merged" / "fleet-summary.md");
   EXPECT_NE(summary.find("**PVQ13-0013**"), std::string::npos) << summary;
   EXPECT_NE(summary.find("PVQ13-0014: "), std::string::npos);
-  EXPECT_TRUE(fs::exists(dir_ / "fleet-summary.csv"));
+  EXPECT_TRUE(fs::exists(dir_ / "merged" / "fleet-summary.csv"));
   // Bad input: exit 2, nothing written.
   EXPECT_EQ(Run("batch " + (dir_ / "nothing").string() + " --out " + results), 2);
   EXPECT_EQ(

@@ -15,6 +15,7 @@
 
 #include "../synth/synth_test_util.h"
 #include "friction_test_util.h"
+#include "pneumaid/io/log_notes.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/protocol.h"
 #include "pneumaid/io/rig_data.h"
@@ -86,6 +87,15 @@ void ExpectRecoveryFrom(const Unit& unit, const Parameters& truth,
   EXPECT_LT(fit.position_rms_m, 20e-6);
 }
 
+// Whether every stroke log of `unit` is on a clock that keeps no time (the
+// friction fit replays it at its logged times) or not.
+void ExpectStrokeClocks(const Unit& unit, bool irregular) {
+  for (const Experiment& e : unit.experiments) {
+    if (e.entry.kind != ExperimentKind::kStroke) continue;
+    EXPECT_EQ(IrregularClock(e.column("t")), irregular) << e.entry.id;
+  }
+}
+
 void ExpectRecovery(const Parameters& truth, std::uint64_t seed) {
   ExpectRecoveryFrom(SyntheticStrokes(truth, seed), truth);
 }
@@ -139,6 +149,7 @@ TEST(FrictionFitTest, ALoggerThatDropsRowsIsReadOnAUniformClock) {
     for (std::size_t i = 2; i < t.size(); ++i) gaps += t[i] - t[i - 1] > 1.5 * (t[1] - t[0]);
   }
   EXPECT_GT(gaps, 100u);
+  ExpectStrokeClocks(unit, false);  // a uniform clock that lost rows
   FrictionFitResult fit;
   ExpectRecoveryFrom(unit, truth, &fit);
   EXPECT_EQ(fit.reason.find("not used"), std::string::npos) << fit.reason;
@@ -154,8 +165,10 @@ TEST(FrictionFitTest, AnIrregularClockIsReplayedAtItsLoggedTimes) {
   const Parameters truth;
   Protocol protocol = testing::StrokeProtocol(3);
   protocol.clock_jitter = 0.4;
-  ExpectRecoveryFrom(
-      testing::WriteAndReadUnit(Synthesize(truth, protocol, 21, "J"), "friction_jitter_21"), truth);
+  const Unit unit =
+      testing::WriteAndReadUnit(Synthesize(truth, protocol, 21, "J"), "friction_jitter_21");
+  ExpectStrokeClocks(unit, true);
+  ExpectRecoveryFrom(unit, truth);
 }
 
 // The same logger losing 1 % of its rows: still replayed at its logged times
@@ -167,9 +180,10 @@ TEST(FrictionFitTest, AnIrregularClockThatLosesRowsIsReplayedAtItsLoggedTimes) {
   Protocol protocol = testing::StrokeProtocol(3);
   protocol.clock_jitter = 0.4;
   protocol.dropped_samples = 0.01;
-  ExpectRecoveryFrom(
-      testing::WriteAndReadUnit(Synthesize(truth, protocol, 8, "J"), "friction_jitter_lossy_8"),
-      truth);
+  const Unit unit =
+      testing::WriteAndReadUnit(Synthesize(truth, protocol, 8, "J"), "friction_jitter_lossy_8");
+  ExpectStrokeClocks(unit, true);
+  ExpectRecoveryFrom(unit, truth);
 }
 
 TEST(FrictionFitTest, StandardErrorsAreHonestOverTenSeeds) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "pneumaid/io/log_notes.h"
@@ -81,6 +82,13 @@ TEST(UniformClockTest, AClockThatKeepsNoTimeIsIrregularALossyGridIsNot) {
   grid[200] += 0.12e-3;
   EXPECT_TRUE(IrregularClock(grid));  // a stamp 12 % off the grid
   EXPECT_FALSE(IrregularClock({0.0}));
+  // A clock whose intervals spread by +-5 % only drifts off any grid.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> stretch(0.95, 1.05);
+  std::vector<double> drifting = {0.0};
+  for (int k = 1; k <= 1000; ++k) drifting.push_back(drifting.back() + stretch(rng) * 1e-3);
+  EXPECT_EQ(UniformPeriod(drifting), 0.0);
+  EXPECT_TRUE(IrregularClock(drifting));
 }
 
 }  // namespace

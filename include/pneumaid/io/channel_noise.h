@@ -34,7 +34,8 @@ struct ChannelNoise {
 // show less than half of it, their noise is taken instead, within 5 % when a
 // third of the log is quiet. 0 for fewer than 5 samples or a column that
 // never changes. `times`, when given, holds each column's sample times (null
-// or missing: uniform): on a clock that keeps no time the differences are
+// or missing: uniform): where they lie on no uniform grid (UniformPeriod 0:
+// a clock that keeps no time, or one that lost rows) the differences are
 // divided by the logged times (a smooth signal then cancels as well).
 ChannelNoise EstimateNoise(const std::vector<const std::vector<double>*>& columns,
                            const std::vector<const std::vector<double>*>& times = {});

@@ -24,9 +24,38 @@ double MedianInterval(const std::vector<double>& t);
 // over kSamplingGapIntervals times the median interval, in order (none with
 // fewer than three samples or a median of 0); the median in
 // `median_interval_s` when given. The one rule that `check` notes, the
-// friction fit's uniform clock leaves unmeasured and validation cuts a run at.
+// friction fit leaves unmeasured and validation cuts a run at.
 std::vector<std::size_t> SamplingGaps(const std::vector<double>& t,
                                       double* median_interval_s = nullptr);
+
+// How far a time stamp may lie from a uniform grid [intervals] for the log
+// to be read as sampled on that grid: a logger's clock stamps with jitter,
+// and a log whose stamps jitter by 1 % of an interval, read on a clock at its
+// median interval instead, took the columns' interpolation into the friction
+// fit (a negative vs 16 to 37 % low at +-8 to 20 us on a 1 kHz log, session
+// 50). A lost row moves the stamps by half an interval or more from the
+// grid through the first and last.
+inline constexpr double kStampJitter = 0.1;
+
+// The sampling interval of `t` (the mean) when every stamp lies within
+// kStampJitter intervals of the uniform grid through the first and the last,
+// else 0.
+double UniformPeriod(const std::vector<double>& t);
+
+// Whether `t` is a clock that keeps no time: not on a uniform grid
+// (UniformPeriod 0), nor on one that lost rows (each interval a whole number
+// of the grid's, the stamps within kStampJitter of it). A logger loop on an
+// operating system that does not keep its time; it may lose rows too. The
+// friction fit replays such a log at its logged times; a uniform clock that
+// lost rows it reads on that clock (src/ident/uniform_clock.h). Replayed at
+// its logged times instead, a 1 kHz log with 2 % of its rows lost gave the
+// negative vs 0.0079 +- 0.00035 for 0.01, where the uniform clock gave 0.0089
+// +- 0.0011 and the complete log 0.0089 +- 0.0011 (session 51, not
+// understood); a jittery clock that lost 1 % of its rows, read on the uniform
+// clock, took the negative vs 41 % low over 10 units, 5 out of tolerance.
+// A channel's noise estimate divides its differences by the logged times of
+// any log not on a uniform grid (channel_noise.h).
+bool IrregularClock(const std::vector<double>& t);
 
 // A valve log's median p_up further than this fraction from the manifest's
 // supply_pressure, or the higher chamber pressure above the supply by more
