@@ -27,6 +27,10 @@ RodReplayInput ReplayOf(const Segment& s, double mass_kg, const FrictionFitOptio
   // The 1e-9 keeps an interval of exactly k steps from rounding up to k + 1.
   const double steps = std::ceil(s.period_s / options.replay_step_s - 1e-9);
   replay.substeps = static_cast<int>(std::clamp(steps, 1.0, double(options.max_substeps)));
+  if (s.time_s != nullptr) {  // each logged interval in steps of at most replay_step_s
+    replay.step_s = options.replay_step_s;
+    replay.max_substeps = options.max_substeps;
+  }
   return replay;
 }
 
@@ -49,7 +53,8 @@ constexpr double kSmoothStuckMisfit = 25.0;
 // intervals: the quadratic is then in time.
 void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
                       const std::vector<double>& t, std::vector<double>* force) {
-  for (const auto& [begin, end] : runs) {
+  for (const internal::Run& run : runs) {
+    const std::size_t begin = run.first, end = run.second;  // (a lambda below reads `end`)
     // The first samples of a run still carry the arrest's pressure transient.
     const std::size_t first =
         end - std::min(window, end - begin - std::min<std::size_t>(3, end - begin));
@@ -90,7 +95,9 @@ void SetWeights(double sigma_x_m, double drift_m, double escape_error_m_per_s, S
     const bool backward = s->two_sided && i > s->split;
     double n = i > s->slide_begin ? static_cast<double>(i - s->slide_begin) : 0.0;
     if (backward) n = s->arrest > i ? static_cast<double>(s->arrest - i) : 0.0;
-    const double escape_m = backward ? 0.0 : escape_error_m_per_s * n * s->period_s;
+    double escape_m = backward ? 0.0 : escape_error_m_per_s * n * s->period_s;
+    if (!backward && s->time_s != nullptr && i > s->slide_begin)  // the time since, as logged
+      escape_m = escape_error_m_per_s * ((*s->time_s)[i] - (*s->time_s)[s->slide_begin]);
     const double variance =
         sigma_x_m * sigma_x_m + drift_m * drift_m * n * n * n / 3.0 + escape_m * escape_m;
     s->weight[i - s->begin] = 1.0 / std::sqrt(variance);
@@ -138,9 +145,15 @@ void MarkArrest(const std::vector<double>& x, std::size_t slide_begin, internal:
   for (std::size_t j = slide_begin; j < arrest; ++j)
     farthest = std::max(farthest, s->direction * x[j]);
   if (farthest - s->direction * x[arrest] > band) return;
+  // The step of most speed: by index on a uniform clock, per logged interval
+  // otherwise (a longer interval is no faster step).
+  const auto step = [&](std::size_t j) {
+    const double moved = std::fabs(x[j + 1] - x[j]);
+    return s->time_s == nullptr ? moved : moved / ((*s->time_s)[j + 1] - (*s->time_s)[j]);
+  };
   std::size_t split = slide_begin - 1;
   for (std::size_t j = slide_begin - 1; j + 1 < arrest; ++j) {
-    if (std::fabs(x[j + 1] - x[j]) > std::fabs(x[split + 1] - x[split])) split = j;
+    if (step(j) > step(split)) split = j;
   }
   if (split + 2 >= s->end || split < s->begin + 1) return;
   const std::size_t settled_end = std::min(next_end, arrest + 21);
@@ -171,13 +184,14 @@ int EndContact(double x, double half_stroke_m, double contact_m) {
 // (FrictionFitOptions::breakaway_timing_per_s): a timing error tau leaves the
 // velocity wrong by the rod's acceleration after breakaway times tau, read
 // off the log over the first 4 ms of the slide (at least 2 samples).
-double EscapeVelocityError(const std::vector<double>& x, std::size_t at, std::size_t end,
-                           double period_s, double timing_per_s) {
+double EscapeVelocityError(const std::vector<double>& x, const std::vector<double>* time_s,
+                           std::size_t at, std::size_t end, double period_s, double timing_per_s) {
   if (!(timing_per_s > 0) || at + 2 >= end) return 0.0;
   const std::size_t samples =
       std::max<std::size_t>(2, static_cast<std::size_t>(std::lround(0.004 / period_s)));
   const std::size_t j = std::min(at + samples, end - 1);
-  const double t = static_cast<double>(j - at) * period_s;
+  const double t =
+      time_s == nullptr ? static_cast<double>(j - at) * period_s : (*time_s)[j] - (*time_s)[at];
   const double acceleration = 2.0 * std::fabs(x[j] - x[at]) / (t * t);
   return acceleration * timing_per_s * period_s * period_s;
 }
@@ -302,8 +316,8 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
     if (s.direction != 0) {
       const std::size_t at = internal::BreakawaySample(x, runs[k], log.stuck);
       s.breakaway_force_N = s.direction * log.force_N[at];
-      escape_error_m_per_s =
-          EscapeVelocityError(x, at, s.end, log.period_s, options.breakaway_timing_per_s);
+      escape_error_m_per_s = EscapeVelocityError(x, log.time_s, at, s.end, log.period_s,
+                                                 options.breakaway_timing_per_s);
     }
     if (s.direction != 0 && k + 1 < runs.size() && !cut)
       MarkArrest(x, stuck_end, runs[k + 1], log.stuck.band_m, &s);

@@ -105,9 +105,8 @@ struct FrictionFitOptions {
   // within tolerance of 320 (0: 184). 0: no such error.
   double breakaway_timing_per_s = 125.0;
   // RK4 steps while sliding near the Stribeck region: a sample interval is
-  // split into ceil(h / replay_step_s) steps (h the median interval of a
-  // clock that keeps no time: its longer intervals take longer steps), at
-  // most max_substeps (8 at
+  // split into ceil(h / replay_step_s) steps (on a clock that keeps no time
+  // each logged interval by its own h), at most max_substeps (8 at
   // 500 Hz and below, 4 at 1 kHz, 2 at 2 kHz, 1 at 5 kHz). Above 4 vs a
   // quarter of them (rod_replay.h). A fixed 8 per interval made a 5 kHz
   // log's fit 5x slower for the same coefficients (within 0.3 %); 16 at

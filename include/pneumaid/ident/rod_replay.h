@@ -35,6 +35,11 @@ struct RodReplayInput {
   double mass_kg = 0.15;
   double initial_position_m = 0;
   int substeps = 8;  // RK4 substeps per sample interval while sliding
+  // With time_s: the longest RK4 step [s], so that an interval longer than
+  // the median (up to twice it and more where a row was lost) takes more
+  // substeps, at most max_substeps; 0: `substeps` in every interval.
+  double step_s = 0;
+  int max_substeps = 8;
   // Stick/slip switches followed inside one sample interval at most (bounded
   // work; a Zeno sequence would be cut there and stay stuck).
   int max_switches = 4;
@@ -42,6 +47,12 @@ struct RodReplayInput {
   // The interval from sample i to sample i + 1.
   double Interval(std::size_t i) const {
     return time_s == nullptr ? period_s : time_s[i + 1] - time_s[i];
+  }
+  // RK4 substeps while sliding over the interval from sample i.
+  int SubstepsOver(std::size_t i) const {
+    if (time_s == nullptr || !(step_s > 0)) return substeps;
+    const double steps = std::ceil(Interval(i) / step_s - 1e-9);
+    return static_cast<int>(std::clamp(steps, 1.0, static_cast<double>(max_substeps)));
   }
   // The time of sample i after sample 0.
   double Elapsed(std::size_t i) const {
@@ -187,7 +198,7 @@ void ReplayRod(const RodReplayInput& input, const StribeckCoefficients<T>& posit
       }
       if (trace != nullptr) trace->Record(s.direction);
       t = Slide(t, T(h), force_a, (force_b - force_a) / h,
-                SubstepsAt(s, positive, negative, input.substeps), positive, negative,
+                SubstepsAt(s, positive, negative, input.SubstepsOver(i)), positive, negative,
                 input.mass_kg, &s);
       if (s.direction != 0) break;  // still sliding at the interval's end
     }
@@ -226,8 +237,8 @@ void ReplayArrestBackward(const RodReplayInput& input, const T& stop_time_s, dou
     const double force_a = input.force_N[j], force_b = input.force_N[j + 1];
     if (s.direction != 0) {
       Slide(from, T(0.0), force_a, (force_b - force_a) / input.Interval(j),
-            SubstepsAt(s, positive, negative, input.substeps), positive, negative, input.mass_kg,
-            &s);
+            SubstepsAt(s, positive, negative, input.SubstepsOver(j)), positive, negative,
+            input.mass_kg, &s);
     }
     position[j] = s.x;
     if (j > 0) from = T(input.Interval(j - 1));
