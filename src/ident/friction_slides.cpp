@@ -23,16 +23,17 @@ double QuadraticMisfit(const std::vector<double>& x_m, std::size_t i, int k, dou
 }
 
 // v, a and the RMS misfit of the least-squares quadratic in time through
-// x over samples i - k .. i + k of a log sampled at the times `t`.
+// x over samples i - k .. i + k of a log sampled at the times `t` (time in
+// units of the median interval `h` for the normal equations).
 struct WindowFit {
   double v, a, misfit;
 };
 WindowFit QuadraticInTime(const std::vector<double>& x_m, const std::vector<double>& t,
-                          std::size_t i, int k) {
+                          std::size_t i, int k, double h) {
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
   Eigen::Vector3d right = Eigen::Vector3d::Zero();
   for (int j = -k; j <= k; ++j) {
-    const double tau = t[i + j] - t[i];
+    const double tau = (t[i + j] - t[i]) / h;
     const Eigen::Vector3d row(1.0, tau, tau * tau);
     normal += row * row.transpose();
     right += row * (x_m[i + j] - x_m[i]);
@@ -40,11 +41,11 @@ WindowFit QuadraticInTime(const std::vector<double>& x_m, const std::vector<doub
   const Eigen::Vector3d c = normal.ldlt().solve(right);
   double squares = 0;
   for (int j = -k; j <= k; ++j) {
-    const double tau = t[i + j] - t[i];
+    const double tau = (t[i + j] - t[i]) / h;
     const double r = x_m[i + j] - x_m[i] - c(0) - tau * (c(1) + tau * c(2));
     squares += r * r;
   }
-  return {c(1), 2 * c(2), std::sqrt(squares / (2 * k + 1 - 3))};
+  return {c(1) / h, 2 * c(2) / (h * h), std::sqrt(squares / (2 * k + 1 - 3))};
 }
 
 }  // namespace
@@ -108,7 +109,7 @@ std::vector<SlideCluster> SlidingSamples(const std::vector<double>& x_m,
       // cycles shorter than a stuck phase can be (at 250 Hz the paper rod's
       // 4 to 40 ms sticks) read as a steady speed there, and F - M a swings.
       if (usable && sampling.time_s != nullptr) {
-        const WindowFit fit = QuadraticInTime(x_m, *sampling.time_s, i, k);
+        const WindowFit fit = QuadraticInTime(x_m, *sampling.time_s, i, k, h);
         v = fit.v;
         a = fit.a;
         usable = fit.misfit <= max_misfit;

@@ -259,20 +259,28 @@ class RigBuilder {
 
   // The valve test's command: the staircase 0 -> 1 -> 0 V, or the ramp up and
   // down (a continuous command) when the protocol asks for one.
+  int StaircaseSteps() const { return static_cast<int>(std::lround(1.0 / protocol_.valve_step_V)); }
+
+  // How long the valve test runs: the ramp up and down, or every level of
+  // the staircase up and down held valve_hold_s.
+  double ValveDuration() const {
+    if (protocol_.valve_ramp_s > 0) return 2 * protocol_.valve_ramp_s;
+    return static_cast<double>(2 * StaircaseSteps() + 1) * protocol_.valve_hold_s;
+  }
+
   std::pair<std::vector<double>, std::vector<double>> ValveCommand(const LoggerClock& clock) const {
     const double ramp_s = protocol_.valve_ramp_s;
+    const auto t = clock.Until(ValveDuration());
     if (ramp_s > 0) {
-      const auto t = clock.Until(2 * ramp_s);
       std::vector<double> u(t.size());
       for (std::size_t i = 0; i < t.size(); ++i)
         u[i] = std::clamp(1.0 - std::fabs(t[i] - ramp_s) / ramp_s, 0.0, 1.0);
       return {t, u};
     }
     std::vector<double> levels;
-    const int steps = static_cast<int>(std::lround(1.0 / protocol_.valve_step_V));
+    const int steps = StaircaseSteps();
     for (int i = 0; i <= steps; ++i) levels.push_back(std::min(1.0, i * protocol_.valve_step_V));
     for (int i = steps - 1; i >= 0; --i) levels.push_back(i * protocol_.valve_step_V);
-    const auto t = clock.Until(levels.size() * protocol_.valve_hold_s);
     std::vector<double> u(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) {
       const auto level = std::min<std::size_t>(
@@ -284,11 +292,7 @@ class RigBuilder {
 
   RigLog ValveTest(const Manifest& manifest, std::size_t index) const {
     std::uint64_t rng = StreamSeed(seed_, index);
-    const double duration_s =
-        protocol_.valve_ramp_s > 0
-            ? 2 * protocol_.valve_ramp_s
-            : (2 * std::lround(1.0 / protocol_.valve_step_V) + 1) * protocol_.valve_hold_s;
-    const LoggerClock clock = ClockOf(duration_s, index);
+    const LoggerClock clock = ClockOf(ValveDuration(), index);
     const auto [t, u] = ValveCommand(clock);
     const std::vector<double> opening = Lag(u, clock, EffectValue(truth_, "valve_lag", "tau"));
     const double p_up = truth_.supply.supply_pressure_Pa,
