@@ -12,6 +12,8 @@
 namespace pneumaid {
 namespace {
 
+constexpr const char* kExperimentNames = "experiment ids or kinds";
+
 // Whether names[i] is one of the names before it (a stage lists each free
 // parameter once).
 bool ListedBefore(const std::vector<std::string>& names, std::size_t i) {
@@ -68,9 +70,12 @@ class FitSpecReader : internal::YamlReader {
     ReadChannels(root["channels"], &spec);
     if (const YAML::Node experiments = root["experiments"]) {
       Keys(experiments, "experiments.", {"fit", "hold_out"});
-      if (experiments["fit"]) spec.fit = Names(experiments["fit"], "experiments.fit");
+      if (experiments["fit"]) {
+        spec.fit = Names(experiments["fit"], "experiments.fit", kExperimentNames, &spec.fit_lines);
+      }
       if (experiments["hold_out"]) {
-        spec.hold_out = Names(experiments["hold_out"], "experiments.hold_out");
+        spec.hold_out = Names(experiments["hold_out"], "experiments.hold_out", kExperimentNames,
+                              &spec.hold_out_lines);
       }
       if (spec.fit.empty()) Fail(experiments, "experiments.fit: expected at least one experiment");
     }
@@ -111,6 +116,7 @@ class FitSpecReader : internal::YamlReader {
     for (const auto& entry : node) {
       FreeParameter p;
       p.path = Key(entry.first);
+      p.line = entry.first.Mark().line + 1;
       const ValueRange* range = RangeOf(p.path);
       if (range == nullptr) Fail(entry.first, "unknown parameter '" + p.path + "'");
       const YAML::Node bounds = entry.second;
@@ -195,7 +201,7 @@ class FitSpecReader : internal::YamlReader {
         spec->stages.push_back(stage);
         continue;
       }
-      stage.parameters = Names(parameters, "stages");
+      stage.parameters = Names(parameters, "stages", "parameters");
       for (size_t i = 0; i < stage.parameters.size(); ++i) {
         if (spec->FindParameter(stage.parameters[i]) == nullptr) {
           Fail(parameters[i], "stages: '" + stage.parameters[i] + "' is not under parameters");
@@ -209,10 +215,17 @@ class FitSpecReader : internal::YamlReader {
     }
   }
 
-  std::vector<std::string> Names(const YAML::Node& node, const std::string& path) const {
-    if (!node.IsSequence()) Fail(node, path + ": expected a list of experiment ids or kinds");
+  // A list of names (`items` says of what) and, when `lines` is given, the
+  // line of each.
+  std::vector<std::string> Names(const YAML::Node& node, const std::string& path,
+                                 const std::string& items,
+                                 std::map<std::string, int>* lines = nullptr) const {
+    if (!node.IsSequence()) Fail(node, path + ": expected a list of " + items);
     std::vector<std::string> names;
-    for (const auto& item : node) names.push_back(Text(item));
+    for (const auto& item : node) {
+      names.push_back(Text(item));
+      if (lines != nullptr) lines->emplace(names.back(), item.Mark().line + 1);
+    }
     return names;
   }
 };

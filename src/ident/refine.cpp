@@ -251,7 +251,7 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   r.windowed_report = attempts.windowed_report();
   r.polish_report = attempts.polish_report();
   const Parameters conditioned = WithRigConditions(start, unit);
-  const auto held_out = Select(unit, spec.hold_out, spec, false);
+  const auto held_out = Select(unit, spec, ExperimentList::kHoldOut, false);
   if (earlier != nullptr) {
     FromCallersStart(*earlier, &r);
   } else {
@@ -337,7 +337,8 @@ RefineResult WithCreepFit(RefineResult paper, const Parameters& start, const Uni
                           const FitSpec& spec, const RefineOptions& options) {
   RefineResult r = WithStickCreep(std::move(paper), start, unit, spec, options);
   if (Creeps(r.params) && !Creeps(start)) {
-    r.held_out_after = HeldOut(r.params, unit, Select(unit, spec.hold_out, spec, false), options);
+    r.held_out_after =
+        HeldOut(r.params, unit, Select(unit, spec, ExperimentList::kHoldOut, false), options);
     if (options.start_disagreement_errors && !RefinedBefore(start))
       WidenByStartDisagreement(start, &r);
   }

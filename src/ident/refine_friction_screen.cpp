@@ -27,7 +27,7 @@ void FrictionScreenSearch::ReadSlides() {
   FrictionFitOptions friction;
   friction.force_balance = true;
   friction_internal::StrokeSelection selection;
-  for (const Experiment* e : Select(unit_, spec_.fit, spec_, false))
+  for (const Experiment* e : Select(unit_, spec_, ExperimentList::kFit, false))
     selection.runs.push_back(e->entry.id);
   selection.slides_under_segments = true;  // nothing here replays the segments
   data_ = friction_internal::PrepareStrokes(unit_, friction, selection);

@@ -16,7 +16,7 @@ void CheckPathsIn(const Parameters& start, const FitSpec& spec) {
   for (const FreeParameter& p : spec.parameters) {
     double value = 0;
     if (!GetParameter(start, p.path, &value)) {
-      throw InputError(spec.Name(), 0, 0,
+      throw InputError(spec.Name(), p.line, 0,
                        "parameter " + p.path + " is not in the starting parameter set");
     }
   }
@@ -30,7 +30,7 @@ ParameterMap MakeParameterMap(const Parameters& start, const FitSpec& spec) {
     double value = 0;
     GetParameter(start, p.path, &value);
     if (!(value >= p.lower && value <= p.upper)) {
-      throw InputError(spec.Name(), 0, 0,
+      throw InputError(spec.Name(), p.line, 0,
                        "the start value of " + p.path + " (" + FormatDouble(value) +
                            ") lies outside its bounds");
     }

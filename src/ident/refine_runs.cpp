@@ -30,9 +30,21 @@ const Channel kChannelTable[5] = {
     {"q1", &Trajectory::q1_kg_per_s, &TrajectorySensitivities::q1, 0, 0},
     {"q2", &Trajectory::q2_kg_per_s, &TrajectorySensitivities::q2, 0, 0}};
 
-// Experiments named by id or kind; InputError for a name that matches none.
-std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
-                                      const FitSpec& spec, bool must_match) {
+namespace {
+
+// The spec file's line of an entry (0: a spec built in code).
+int LineOf(const std::map<std::string, int>& lines, const std::string& name) {
+  const auto it = lines.find(name);
+  return it == lines.end() ? 0 : it->second;
+}
+
+}  // namespace
+
+std::vector<const Experiment*> Select(const Unit& unit, const FitSpec& spec, ExperimentList list,
+                                      bool must_match) {
+  const bool fit = list == ExperimentList::kFit;
+  const std::vector<std::string>& names = fit ? spec.fit : spec.hold_out;
+  const std::map<std::string, int>& lines = fit ? spec.fit_lines : spec.hold_out_lines;
   std::vector<const Experiment*> chosen;
   for (const std::string& name : names) {
     bool matched = false;
@@ -42,7 +54,7 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
       matched = true;
       if (!IsSimulable(e.entry.kind)) {
         if (by_kind) continue;
-        throw InputError(spec.Name(), 0, 0,
+        throw InputError(spec.Name(), LineOf(lines, name), 0,
                          "experiment '" + name + "' is a " + ToString(e.entry.kind) +
                              " log; only stroke and validation runs can be refined on");
       }
@@ -57,9 +69,9 @@ std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::s
                 (spec.source.empty() ? "the fit spec" : "the fit spec " + spec.source) + " fits '" +
                 name + "': the refinement has no run to fit");
       }
-      throw InputError(
-          spec.Name(), 0, 0,
-          "fit: no experiment '" + name + "' (an id or a kind) in " + unit.manifest_path());
+      throw InputError(spec.Name(), LineOf(lines, name), 0,
+                       (fit ? "fit: " : "hold_out: ") + std::string("no experiment '") + name +
+                           "' (an id or a kind) in " + unit.manifest_path());
     }
   }
   return chosen;
@@ -195,10 +207,14 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, d
 }
 
 std::vector<const Experiment*> RunsToFit(const FitSpec& spec, const Unit& unit) {
-  const auto fitted = Select(unit, spec.fit, spec, true);
-  for (const Experiment* e : Select(unit, spec.hold_out, spec, false)) {
+  const auto fitted = Select(unit, spec, ExperimentList::kFit, true);
+  for (const Experiment* e : Select(unit, spec, ExperimentList::kHoldOut, false)) {
     if (std::count(fitted.begin(), fitted.end(), e)) {
-      throw InputError(spec.Name(), 0, 0,
+      // The hold-out entry that names it (by id, else by kind).
+      const std::string& kind = ToString(e->entry.kind);
+      const int line =
+          LineOf(spec.hold_out_lines, spec.hold_out_lines.count(e->entry.id) ? e->entry.id : kind);
+      throw InputError(spec.Name(), line, 0,
                        "experiment '" + e->entry.id + "' is both fitted and held out");
     }
   }

@@ -66,9 +66,14 @@ InitialState StartOf(const FitExperiment& e, const double* offsets);
 // The rows of the residual table: x, p1, p2, q1, q2.
 extern const Channel kChannelTable[5];
 
-// Experiments named by id or kind; InputError for a name that matches none.
-std::vector<const Experiment*> Select(const Unit& unit, const std::vector<std::string>& names,
-                                      const FitSpec& spec, bool must_match);
+// The spec's two lists of experiments.
+enum class ExperimentList { kFit, kHoldOut };
+
+// The experiments one of the spec's lists names by id or kind; InputError
+// (the spec's file and the entry's line) for a name that matches none (a
+// kind the unit lacks only when must_match) or a run that cannot be refined on.
+std::vector<const Experiment*> Select(const Unit& unit, const FitSpec& spec, ExperimentList list,
+                                      bool must_match);
 
 // The noise sigma [SI] of each channel of the residual table that the spec
 // fits: the spec's when it gives one, else the unit's (NoiseOf: declared under

@@ -575,6 +575,60 @@ void ExpectRefusedNaming(const Parameters& start, const Unit& unit, const FitSpe
   }
 }
 
+// The line of Refine(start, unit, spec)'s InputError, which must name `file`.
+int RefusedAtLine(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                  const std::string& file) {
+  try {
+    Refine(start, unit, spec, RefineOptions{});
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.file(), file) << error.what();
+    return error.line();
+  }
+  ADD_FAILURE() << "refined; expected a refusal";
+  return -1;
+}
+
+// What the spec file says and the unit does not match is refused at the
+// spec's line that says it (a spec built in code has none).
+TEST_F(RefineSpecTest, RefusesAtTheSpecsLineThatDoesNotFitTheUnit) {
+  const auto spec = [](const std::string& negative_max, const std::string& fit,
+                       const std::string& hold_out, const std::string& source) {
+    return ParseFitSpec(
+        "format: pneumaid-fit/1\n"
+        "parameters:\n"
+        "  friction.positive.Fd: {min: 0.05, max: 5}\n"
+        "  friction.negative.Fd: {min: 0.5, max: " +
+            negative_max +
+            "}\n"
+            "experiments:\n"
+            "  fit: [" +
+            fit +
+            "]\n"
+            "  hold_out:\n"
+            "    - validation\n"
+            "    - " +
+            hold_out + "\n",
+        source);
+  };
+  // Both fitted and held out: the hold-out entry's line.
+  EXPECT_EQ(RefusedAtLine(Parameters{}, *unit_, spec("20", "stroke-100", "stroke-100", "s.yaml"),
+                          "s.yaml"),
+            9);
+  // An experiment the unit lacks: its entry's line.
+  EXPECT_EQ(RefusedAtLine(Parameters{}, *unit_, spec("20", "stroke-999", "validation", "s.yaml"),
+                          "s.yaml"),
+            6);
+  // A start outside the bounds (the paper's negative Fd, 5 N, above 2): the
+  // parameter's line.
+  EXPECT_EQ(RefusedAtLine(Parameters{}, *unit_, spec("2", "stroke-100", "validation", "s.yaml"),
+                          "s.yaml"),
+            4);
+  // A spec built in code has no line to name.
+  FitSpec in_code = spec("2", "stroke-100", "validation", "");
+  in_code.parameters[1].line = 0;
+  EXPECT_EQ(RefusedAtLine(Parameters{}, *unit_, in_code, "fit spec"), 0);
+}
+
 TEST_F(RefineSpecTest, RefusesSpecsThatDoNotFitTheUnit) {
   FitSpec spec = TwoParameters();
   spec.fit = {"stroke-999"};

@@ -22,6 +22,7 @@ struct FreeParameter {
   double lower = 0;  // bounds in the parameter's SI unit
   double upper = 0;
   ParameterScale scale = ParameterScale::kLinear;
+  int line = 0;  // the spec file's line that frees it (0: built in code)
 };
 
 struct ChannelWeight {
@@ -56,6 +57,9 @@ struct FitSpec {
   // Experiments by id or by kind ("stroke", "validation").
   std::vector<std::string> fit = {"stroke"};
   std::vector<std::string> hold_out = {"validation"};
+  // The spec file's line of each entry of `fit` and `hold_out`, for messages
+  // about a unit that lacks one or a run both lists name (empty: built in code).
+  std::map<std::string, int> fit_lines, hold_out_lines;
   // Extra starting points from a Latin hypercube inside the bounds (0: only
   // the given start).
   int multistart = 0;
