@@ -18,13 +18,18 @@ CommandRunner AddExportCommand(CLI::App* app) {
   app->add_option("--format", args->format, "ros2, c-header, matlab or json")->required();
   app->add_option("--out", args->out_path, "output file (default: stdout)")
       ->check(InExistingDirectory);
-  app->add_option("--node", args->node, "ROS 2 node name")->capture_default_str();
-  return [args]() {
+  CLI::Option* node = app->add_option("--node", args->node, "ROS 2 node name (--format ros2)")
+                          ->capture_default_str();
+  return [args, node]() {
     RefuseOverwritingInputs({args->out_path}, {args->params_path});
     ExportOptions options;
     if (!ParseExportFormat(args->format, &options.format)) {
       throw InputError("--format", 0, 0,
                        "expected ros2, c-header, matlab or json, got '" + args->format + "'");
+    }
+    if (node->count() > 0 && options.format != ExportFormat::kRos2) {
+      throw InputError("--node", 0, 0,
+                       "names the ROS 2 node, and --format " + args->format + " has none");
     }
     options.ros2_node = args->node;
     const Parameters params = LoadParams(args->params_path);

@@ -216,6 +216,27 @@ std::string Json(const Parameters& params, const std::vector<Entry>& entries) {
   return out.str();
 }
 
+// A ROS 2 params file's node key: a node name, a namespaced one (/ns/node)
+// or a wildcard (/**, /ns/*): tokens of letters, digits and '_' not
+// starting with a digit, or * or **, separated by '/' with an optional
+// leading one. No empty token: "/", "a//b" and "a/" name no node (and any
+// other character made a YAML key that did not parse).
+bool IsRos2NodeKey(const std::string& node) {
+  std::stringstream tokens(node.size() > 1 && node[0] == '/' ? node.substr(1) : node);
+  std::string token;
+  int count = 0;
+  while (std::getline(tokens, token, '/')) {
+    ++count;
+    if (token == "*" || token == "**") continue;
+    if (token.empty() || std::isdigit(static_cast<unsigned char>(token[0]))) return false;
+    if (!std::all_of(token.begin(), token.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+        }))
+      return false;
+  }
+  return count > 0 && node.back() != '/';
+}
+
 }  // namespace
 
 bool ParseExportFormat(const std::string& name, ExportFormat* format) {
@@ -227,20 +248,12 @@ bool ParseExportFormat(const std::string& name, ExportFormat* format) {
 }
 
 std::string ExportParameters(const Parameters& params, const ExportOptions& options) {
-  // A ROS 2 params file's node key: a node name, a namespaced one (/ns/node)
-  // or a wildcard (/**): letters, digits, '_', '/' and '*' (any other text
-  // made a YAML key that did not parse).
-  const std::string& node = options.ros2_node;
-  const bool node_ok =
-      !node.empty() && !std::isdigit(static_cast<unsigned char>(node[0])) &&
-      std::all_of(node.begin(), node.end(), [](char c) {
-        return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/' || c == '*';
-      });
-  if (options.format == ExportFormat::kRos2 && !node_ok) {
+  if (options.format == ExportFormat::kRos2 && !IsRos2NodeKey(options.ros2_node)) {
     throw InputError("export options", 0, 0,
-                     "ros2_node: expected a ROS 2 node name, namespaced or a wildcard (letters, "
-                     "digits, '_', '/', '*'; not starting with a digit), got '" +
-                         node + "'");
+                     "ros2_node: expected a ROS 2 node name, namespaced or a wildcard (tokens of "
+                     "letters, digits and '_' not starting with a digit, or * or **, separated "
+                     "by '/'), got '" +
+                         options.ros2_node + "'");
   }
   const std::vector<Entry> entries = Entries(params);
   switch (options.format) {

@@ -167,6 +167,13 @@ TEST_F(BatchCliTest, ExportsEveryFormatAndRefusesAnUnknownOne) {
   // A namespaced node and the wildcard are params files' keys too.
   EXPECT_EQ(Run("export --params " + params + " --format ros2 --node '/**'"), 0) << Stderr();
   EXPECT_EQ(Run("export --params " + params + " --format ros2 --node /arm/actuator"), 0);
+  // A node for a format that has none is a mistake, not ignored.
+  EXPECT_EQ(Run("export --params " + params + " --format json --node arm --out " +
+                (dir_ / "x.json").string()),
+            2);
+  EXPECT_NE(Stderr().find("--node: names the ROS 2 node, and --format json has none"),
+            std::string::npos)
+      << Stderr();
   EXPECT_EQ(Listing(dir_), before);
   // The set exported over itself.
   const std::string set = Write("set.yaml", Read(params));

@@ -12,6 +12,7 @@
 #include <regex>
 #include <sstream>
 
+#include "pneumaid/io/input_error.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -55,6 +56,31 @@ TEST(ExportTest, Ros2ParsesAndHoldsEveryParameter) {
 
 // The header compiled by the system's C and C++ compilers; a program prints
 // each constant with 17 digits, which must read back as the set's value.
+// The node key follows ROS 2's rules for node names, namespaces and
+// wildcards; a key with no node in it is refused, naming the option.
+TEST(ExportTest, Ros2NodeKeysFollowRos2sNames) {
+  Parameters params;
+  ExportOptions options;
+  options.format = ExportFormat::kRos2;
+  for (const char* node : {"pneumaid", "actuator_1", "/ns/node", "/**", "/ns/*", "ns/node"}) {
+    options.ros2_node = node;
+    const YAML::Node root = YAML::Load(ExportParameters(params, options));
+    EXPECT_TRUE(root[node]["ros__parameters"].IsMap()) << node;
+  }
+  for (const char* node : {"", "/", "//", "a//b", "ns/", "1node", "/ns/2", "bad node", "a:b"}) {
+    options.ros2_node = node;
+    try {
+      ExportParameters(params, options);
+      ADD_FAILURE() << "exported with node '" << node << "'";
+    } catch (const InputError& error) {
+      EXPECT_EQ(error.message().rfind("ros2_node: ", 0), 0u) << error.what();
+    }
+  }
+  options.format = ExportFormat::kJson;  // no node in it: not read
+  options.ros2_node = "/";
+  EXPECT_NO_THROW(ExportParameters(params, options));
+}
+
 TEST(ExportTest, CHeaderCompilesAsC99AndCxx17WithTheExactValues) {
   const Parameters p = Identified();
   const fs::path dir = fs::path(::testing::TempDir()) / "export_c";
