@@ -60,6 +60,16 @@ int RunValidate(const ValidateArgs& args) {
     options.min_fit_percent[channel] = value;
   for (const auto& [channel, value] : Thresholds(args.max_rmse, "--max-rmse"))
     options.max_rmse[channel] = value;
+  // The options' messages name their fields; here those are flags.
+  if (std::string error; !options.IsValid(&error)) {
+    for (const auto& [field, flag] :
+         {std::pair<std::string, std::string>{"min_fit_percent: ", "--min-fit"},
+          {"max_rmse: ", "--max-rmse"}}) {
+      if (error.compare(0, field.size(), field) == 0)
+        throw InputError(flag, 0, 0, error.substr(field.size()));
+    }
+    throw InputError("validation options", 0, 0, error);
+  }
   const ValidationReport report = ValidateUnit(params, unit, options);
   std::cout << report.BriefReport();
   ReportOptions page;

@@ -10,6 +10,7 @@
 #include "pneumaid/io/channel_noise.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/io/json.h"
+#include "pneumaid/io/params_yaml.h"
 #include "pneumaid/validate/lag_start.h"
 #include "pneumaid/validate/logged_run.h"
 
@@ -186,13 +187,19 @@ bool ValidationOptions::Chooses(const Experiment& e) const {
 bool ValidationOptions::IsValid(std::string* error) const {
   for (const auto& [channel, value] : min_fit_percent) {
     if (!(value <= 100.0) || !std::isfinite(value)) {
-      if (error) *error = "min_fit_percent for " + channel + " must be at most 100";
+      if (error) {
+        *error = "min_fit_percent: " + channel + ": expected a number at most 100, got " +
+                 FormatDouble(value);
+      }
       return false;
     }
   }
   for (const auto& [channel, value] : max_rmse) {
-    if (!(value > 0)) {
-      if (error) *error = "max_rmse for " + channel + " must be > 0";
+    if (!(value > 0) || !std::isfinite(value)) {
+      if (error) {
+        *error =
+            "max_rmse: " + channel + ": expected a finite number > 0, got " + FormatDouble(value);
+      }
       return false;
     }
   }
