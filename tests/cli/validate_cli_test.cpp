@@ -76,18 +76,15 @@ TEST_F(ValidateCliTest, BadInputExitsTwoAndWritesNothing) {
                 testing::Source("datasets/paper-rig") + " --min-fit z=3 --json " + json),
             2);
   // A threshold that is no number the comparison can use, named by its flag.
-  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
-                testing::Source("datasets/paper-rig") + " --min-fit x=nan --json " + json),
-            2);
-  EXPECT_NE(Stderr().find("--min-fit: x: expected a number at most 100, got nan"),
-            std::string::npos)
-      << Stderr();
-  EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
-                testing::Source("datasets/paper-rig") + " --max-rmse p1=inf --json " + json),
-            2);
-  EXPECT_NE(Stderr().find("--max-rmse: p1: expected a finite number > 0, got inf"),
-            std::string::npos)
-      << Stderr();
+  for (const auto& [threshold, message] :
+       {std::pair<std::string, std::string>{"--min-fit x=nan",
+                                            "--min-fit: x: expected a number at most 100, got nan"},
+        {"--max-rmse p1=inf", "--max-rmse: p1: expected a finite number > 0, got inf"}}) {
+    EXPECT_EQ(Run("validate --params " + testing::Source("configs/paper.yaml") + " " +
+                  testing::Source("datasets/paper-rig") + " " + threshold + " --json " + json),
+              2);
+    EXPECT_NE(Stderr().find(message), std::string::npos) << Stderr();
+  }
   EXPECT_EQ(Listing(dir_), before);
   // A CSV directory that is a file, a JSON path that is a directory: refused
   // before the validation runs, nothing written (the JSON was written first
