@@ -338,27 +338,6 @@ Parameters LoadParams(const std::string& path) {
   return ParamsFromYaml(ReadTextFile(path, "parameter file"), path);
 }
 
-namespace {
-
-// Whether a YAML 1.1 or 1.2 reader (PyYAML, the ROS 2 parameter files)
-// would resolve the plain scalar `text` (a unit id: letters, digits, '.',
-// '_', '-') to something other than a string: anything that starts like a
-// number, and the words that mean a bool or null (ASCII, whatever the
-// process's locale).
-bool ReadAsOtherThanText(const std::string& text) {
-  if (text.empty()) return true;
-  const char first = text.front();
-  if ((first >= '0' && first <= '9') || first == '.' || first == '-' || first == '+') return true;
-  std::string lower;
-  for (const char c : text) lower += (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
-  for (const char* word : {"y", "n", "yes", "no", "on", "off", "true", "false", "null", "~"}) {
-    if (lower == word) return true;
-  }
-  return false;
-}
-
-}  // namespace
-
 std::string ParamsToYaml(const Parameters& params) {
   YAML::Node root(YAML::NodeType::Map);
   root["format"] = kParamsFormat;
@@ -417,6 +396,8 @@ std::string ParamsToYaml(const Parameters& params) {
     // what it reads otherwise itself.
     if (key == "unit" && ReadAsOtherThanText(params.unit)) {
       emitter << YAML::DoubleQuoted << params.unit;
+    } else if (key == "provenance") {
+      EmitProvenanceNode(entry.second, false, &emitter);
     } else {
       emitter << entry.second;
     }

@@ -30,11 +30,64 @@ YAML::Node ProvenanceMap(const std::string& provenance) {
   return kept;
 }
 
+namespace {
+
+// Keys whose values are text whatever they look like: yaml-cpp writes a
+// string unquoted, so a unit "12345" or a file "007" would read as numbers
+// (and `held` maps paths to reasons).
+bool IsTextKey(const std::string& key) {
+  static const std::set<std::string> kText = {"unit",   "unit_directory", "tool",   "date",
+                                              "file",   "sha256",         "status", "given",
+                                              "source", "held",           "verdict"};
+  return kText.count(key) > 0;
+}
+
+}  // namespace
+
+bool ReadAsOtherThanText(const std::string& text) {
+  if (text.empty()) return true;
+  const char first = text.front();
+  if ((first >= '0' && first <= '9') || first == '.' || first == '-' || first == '+') return true;
+  std::string lower;
+  for (const char c : text) lower += (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
+  for (const char* word : {"y", "n", "yes", "no", "on", "off", "true", "false", "null", "~"}) {
+    if (lower == word) return true;
+  }
+  return false;
+}
+
+void EmitProvenanceNode(const YAML::Node& node, bool text, YAML::Emitter* out) {
+  // A collection keeps the style it was read or built with (provenance is
+  // flow style inside a block-style parameter file).
+  if ((node.IsMap() || node.IsSequence()) && node.Style() == YAML::EmitterStyle::Flow)
+    *out << YAML::Flow;
+  if (node.IsMap()) {
+    *out << YAML::BeginMap;
+    for (const auto& item : node) {
+      const std::string key = item.first.Scalar();
+      *out << YAML::Key;
+      if (ReadAsOtherThanText(key)) *out << YAML::DoubleQuoted;
+      *out << key << YAML::Value;
+      EmitProvenanceNode(item.second, text || IsTextKey(key), out);
+    }
+    *out << YAML::EndMap;
+  } else if (node.IsSequence()) {
+    *out << YAML::BeginSeq;
+    for (const auto& item : node) EmitProvenanceNode(item, text, out);
+    *out << YAML::EndSeq;
+  } else if (node.IsScalar()) {
+    if (text && ReadAsOtherThanText(node.Scalar())) *out << YAML::DoubleQuoted;
+    *out << node.Scalar();
+  } else {
+    *out << YAML::Null;
+  }
+}
+
 std::string EmitProvenance(const YAML::Node& root, const std::string& what) {
   YAML::Emitter out;
   out.SetMapFormat(YAML::Flow);
   out.SetSeqFormat(YAML::Flow);
-  out << root;
+  EmitProvenanceNode(root, false, &out);
   // yaml-cpp reports an emitter error in its state, not by throwing.
   if (!out.good()) throw std::logic_error(what + ": " + out.GetLastError());
   return out.c_str();
@@ -62,16 +115,6 @@ YAML::Node Field(const std::string& provenance, const std::string& key, const st
   YAML::Node entry = key.empty() ? root : root[key];
   if (!entry.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
   return entry[field];
-}
-
-// Keys whose values are text whatever they look like: yaml-cpp writes a
-// string unquoted, so a unit "12345" or a file "007" would read as numbers
-// (and `held` maps paths to reasons).
-bool IsTextKey(const std::string& key) {
-  static const std::set<std::string> kText = {"unit",   "unit_directory", "tool",   "date",
-                                              "file",   "sha256",         "status", "given",
-                                              "source", "held",           "verdict"};
-  return kText.count(key) > 0;
 }
 
 // A node as JSON: mappings as objects, sequences as arrays; a plain scalar

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <regex>
 
+#include "../../src/io/provenance_map.h"
 #include "pneumaid/io/input_error.h"
 #include "pneumaid/model/parameter_table.h"
 
@@ -67,6 +68,30 @@ TEST(ParamsYamlTest, AUnitIdThatReadsAsANumberIsQuoted) {
     EXPECT_NE(text.find(std::string("\nunit: ") + id + "\n"), std::string::npos) << text;
     EXPECT_EQ(ParamsFromYaml(text, "plain").unit, id);
   }
+}
+
+// So is every text the provenance holds (its unit, a date, a file, a digest
+// that starts with digits, a held coefficient's reason), in the parameter
+// file and in the provenance text alike; its numbers stay numbers.
+TEST(ParamsYamlTest, TheProvenancesTextsThatReadAsNumbersAreQuoted) {
+  Parameters p = LoadParams(kConfigs + "paper.yaml");
+  p.unit = "0001";
+  p.provenance_yaml =
+      "{unit: \"0001\", date: \"2026-11-30T14:55:49Z\", inputs: [{file: \"007\", sha256: "
+      "\"1234\"}], held: {friction.positive.vs: \"1e3\"}, friction: {final_cost: 2.5, segments: "
+      "12}}";
+  for (const std::string& text :
+       {ParamsToYaml(p), WithProvenanceEntry(p.provenance_yaml, "x", YAML::Node("y"))}) {
+    for (const char* quoted : {"unit: \"0001\"", "date: \"2026-11-30T14:55:49Z\"", "file: \"007\"",
+                               "sha256: \"1234\"", "friction.positive.vs: \"1e3\""})
+      EXPECT_NE(text.find(quoted), std::string::npos) << quoted << " in " << text;
+    for (const char* plain : {"final_cost: 2.5", "segments: 12"})
+      EXPECT_NE(text.find(plain), std::string::npos) << plain << " in " << text;
+  }
+  const Parameters back = ParamsFromYaml(ParamsToYaml(p), "quoted");
+  const YAML::Node provenance = YAML::Load(back.provenance_yaml);
+  EXPECT_EQ(provenance["unit"].as<std::string>(), "0001");
+  EXPECT_EQ(provenance["inputs"][0]["file"].as<std::string>(), "007");
 }
 
 // A set built in code may carry provenance that is free text, or not YAML at
