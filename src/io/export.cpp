@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdio>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "pneumaid/io/input_error.h"
@@ -17,9 +18,19 @@ namespace pneumaid {
 namespace {
 
 struct Entry {
+  Entry(std::string path_, std::string unit_, std::string doc_, double value_ = 0,
+        double standard_error_ = 0, std::string choice_ = "")
+      : path(std::move(path_)),
+        unit(std::move(unit_)),
+        doc(std::move(doc_)),
+        value(value_),
+        standard_error(standard_error_),
+        choice(std::move(choice_)) {}
   std::string path, unit, doc;
   double value = 0, standard_error = 0;  // 0: none known
   std::string choice;                    // a model's choice ("vertical"), else empty: a number
+  std::vector<double> values;            // a list's numbers (then `value` is unused)
+  bool is_list = false;
 };
 
 // The choices of the model, which a controller needs as much as its numbers
@@ -65,6 +76,22 @@ std::vector<Entry> Entries(const Parameters& params) {
       entries.push_back({path, unit, doc, value, error(path), ""});
     }
   }
+  // The tube lag measured at each tube length, as two lists of one length
+  // (a controller on another tube reads its delta off them).
+  if (const auto& by_length = params.pipeline.delta_by_length; !by_length.empty()) {
+    Entry lengths{"pipeline.delta_by_length.tube_length", "m",
+                  "the tube lengths identify measured delta at"};
+    Entry deltas{"pipeline.delta_by_length.delta", "1/s",
+                 "the tube's delta measured at each of those lengths"};
+    for (const DeltaAtLength& at : by_length) {
+      lengths.values.push_back(at.tube_length_m);
+      deltas.values.push_back(at.delta_per_s);
+    }
+    lengths.is_list = deltas.is_list = true;
+    const auto after = std::find_if(entries.begin(), entries.end(),
+                                    [](const Entry& e) { return e.path == "pipeline.delta"; });
+    entries.insert(after == entries.end() ? after : after + 1, {lengths, deltas});
+  }
   InsertChoices(params, &entries);
   return entries;
 }
@@ -76,6 +103,16 @@ std::string Number(double value) {
   std::string s = FormatDouble(value);
   if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
   return s;
+}
+
+// An entry's numbers: its value, or its list between `open` and `close`
+// separated by `separator`.
+std::string Numbers(const Entry& e, const char* open, const char* separator, const char* close) {
+  if (!e.is_list) return Number(e.value);
+  std::string out = open;
+  for (std::size_t i = 0; i < e.values.size(); ++i)
+    out += (i > 0 ? separator : "") + Number(e.values[i]);
+  return out + close;
 }
 
 std::string OneLine(const std::string& text) {
@@ -121,8 +158,8 @@ std::string Ros2(const Parameters& params, const ExportOptions& options,
       open.push_back(parts[k]);
     }
     out << std::string(4 + 2 * (parts.size() - 1), ' ') << parts.back() << ": "
-        << (e.choice.empty() ? Number(e.value) : JsonString(e.choice)) << "  # " << Comment(e)
-        << "\n";
+        << (e.choice.empty() ? Numbers(e, "[", ", ", "]") : JsonString(e.choice)) << "  # "
+        << Comment(e) << "\n";
   }
   return out.str();
 }
@@ -161,7 +198,13 @@ std::string CHeader(const Parameters& params, const std::vector<Entry>& entries)
       << "#ifndef " << guard << "\n#define " << guard << "\n\n#define PNEUMAID_UNIT_ID "
       << CString(params.unit) << "\n\n";
   for (const Entry& e : entries) {
-    const std::string value = e.choice.empty() ? "(" + Number(e.value) + ")" : CString(e.choice);
+    // A list: an initializer for an array, and its length.
+    if (e.is_list) {
+      out << "#define " << Identifier(e.path) << "_COUNT " << e.values.size() << "\n";
+    }
+    const std::string value = !e.choice.empty() ? CString(e.choice)
+                              : e.is_list       ? Numbers(e, "{", ", ", "}")
+                                                : "(" + Number(e.value) + ")";
     out << "#define " << Identifier(e.path) << " " << value << " /* " << InCComment(Comment(e))
         << " */\n";
   }
@@ -188,7 +231,7 @@ std::string Matlab(const Parameters& params, const std::vector<Entry>& entries) 
   out << "pneumaid_model = struct();\n";
   for (const Entry& e : entries) {
     out << (e.choice.empty() ? "pneumaid_params." : "pneumaid_model.") << e.path << " = "
-        << (e.choice.empty() ? Number(e.value) : MatlabString(e.choice)) << ";  % "
+        << (e.choice.empty() ? Numbers(e, "[", " ", "]") : MatlabString(e.choice)) << ";  % "
         << OneLine(Comment(e)) << "\n";
   }
   return out.str();
@@ -206,8 +249,8 @@ std::string Json(const Parameters& params, const std::vector<Entry>& entries) {
       model += (model.empty() ? "" : ", ") + JsonString(e.path) + ": " + JsonString(e.choice);
       continue;
     }
-    out << (first ? "\n  " : ",\n  ") << JsonString(e.path) << ": {\"value\": " << Number(e.value)
-        << ", \"unit\": " << JsonString(e.unit)
+    out << (first ? "\n  " : ",\n  ") << JsonString(e.path)
+        << ": {\"value\": " << Numbers(e, "[", ", ", "]") << ", \"unit\": " << JsonString(e.unit)
         << ", \"standard_error\": " << (e.standard_error > 0 ? Number(e.standard_error) : "null")
         << "}";
     first = false;

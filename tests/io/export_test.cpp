@@ -200,6 +200,60 @@ TEST(ExportTest, JsonAndEveryFormatStateTheUnitAndProvenance) {
   EXPECT_FALSE(ParseExportFormat("fortran", &format));
 }
 
+// The tube lag identify measured at each tube length reaches every format as
+// two lists of one length (a controller on another tube reads its delta off
+// them); a set without them has none. The C lists compile as array
+// initializers with their counts.
+TEST(ExportTest, EveryFormatCarriesTheDeltaMeasuredAtEachTubeLength) {
+  Parameters p = Identified();
+  p.pipeline.delta_by_length = {{0.09, 19.25}, {0.38, 8.5}, {1.2, 3.0000000000000004}};
+  const std::vector<double> lengths = {0.09, 0.38, 1.2}, deltas = {19.25, 8.5, 3.0000000000000004};
+  const YAML::Node ros2 =
+      YAML::Load(Export(p, ExportFormat::kRos2))["actuator_controller"]["ros__parameters"];
+  const YAML::Node json = YAML::Load(Export(p, ExportFormat::kJson))["parameters"];
+  EXPECT_EQ(json["pipeline.delta_by_length.delta"]["unit"].as<std::string>(), "1/s");
+  for (const auto& [name, values] :
+       {std::make_pair("tube_length", lengths), std::make_pair("delta", deltas)}) {
+    EXPECT_EQ(ros2["pipeline"]["delta_by_length"][name].as<std::vector<double>>(), values);
+    EXPECT_EQ(
+        json[std::string("pipeline.delta_by_length.") + name]["value"].as<std::vector<double>>(),
+        values);
+  }
+  EXPECT_EQ(ros2["pipeline"]["delta"].as<double>(), p.pipeline.delta_per_s);  // still there
+  EXPECT_NE(Export(p, ExportFormat::kMatlab)
+                .find("pneumaid_params.pipeline.delta_by_length.delta = [19.25 8.5 "
+                      "3.0000000000000004];"),
+            std::string::npos);
+  const fs::path dir = fs::path(::testing::TempDir()) / "export_c_lists";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "params.h") << Export(p, ExportFormat::kCHeader);
+  std::ofstream(dir / "main.c")
+      << "#include <stdio.h>\n#include \"params.h\"\nint main(void) {\n"
+      << "  static const double l[] = PNEUMAID_PIPELINE_DELTA_BY_LENGTH_TUBE_LENGTH;\n"
+      << "  static const double d[PNEUMAID_PIPELINE_DELTA_BY_LENGTH_DELTA_COUNT] =\n"
+      << "      PNEUMAID_PIPELINE_DELTA_BY_LENGTH_DELTA;\n"
+      << "  int i;\n  for (i = 0; i < PNEUMAID_PIPELINE_DELTA_BY_LENGTH_TUBE_LENGTH_COUNT; ++i)\n"
+      << "    printf(\"%.17g %.17g\\n\", l[i], d[i]);\n  return 0;\n}\n";
+  const std::string binary = (dir / "c").string(), out = (dir / "c.txt").string();
+  ASSERT_EQ(std::system(("cc -std=c99 -Wall -Werror -pedantic -o " + binary + " " +
+                         (dir / "main.c").string())
+                            .c_str()),
+            0);
+  ASSERT_EQ(std::system((binary + " > " + out).c_str()), 0);
+  std::ifstream in(out);
+  for (std::size_t i = 0; i < lengths.size(); ++i) {
+    double length = 0, delta = 0;
+    in >> length >> delta;
+    EXPECT_EQ(length, lengths[i]);
+    EXPECT_EQ(delta, deltas[i]);
+  }
+  p.pipeline.delta_by_length.clear();
+  for (ExportFormat format :
+       {ExportFormat::kRos2, ExportFormat::kCHeader, ExportFormat::kMatlab, ExportFormat::kJson})
+    EXPECT_EQ(Export(p, format).find("delta_by_length"), std::string::npos);
+}
+
 // JSON's provenance is an object a program reads field by field: plain YAML
 // numbers as numbers, quoted ones and other text as strings; text that is not
 // a mapping under "given".
