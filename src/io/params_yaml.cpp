@@ -138,6 +138,7 @@ class ParamsReader : internal::YamlReader {
       const YAML::Node& value = entry.second;
       where_[key] = value;
       if (!kTopLevelKeys.count(key)) Fail(entry.first, "unknown key '" + key + "'");
+      NotEmpty(entry.first, value, key);
       if (key == "format") {
         if (ScalarText(value, key) != kParamsFormat) {
           Fail(value, std::string("expected format: ") + kParamsFormat);
@@ -171,6 +172,7 @@ class ParamsReader : internal::YamlReader {
       const std::string path = prefix + "." + Key(entry.first);
       const YAML::Node& value = entry.second;
       where_[path] = value;
+      NotEmpty(entry.first, value, path);
       if (const ScalarParameterInfo* info = FindScalarParameter(path)) {
         info->ref(*params) = Number(value, path);
       } else if (kSubsections.count(path)) {

@@ -102,6 +102,7 @@ class ManifestReader : internal::YamlReader {
       if (!known.count(key))
         Fail(entry.first,
              "unknown key '" + key + "' (expected " + "format, unit, rig, sensors, experiments)");
+      NotEmpty(entry.first, entry.second, key);
     }
     for (const char* key : {"format", "unit", "experiments"}) {
       if (!root[key]) Fail(root, std::string("missing required key '") + key + "'");
@@ -248,6 +249,7 @@ class ManifestReader : internal::YamlReader {
         Fail(entry.first, "unknown key '" + path + "." + key + "' (expected " +
                               Join({allowed.begin(), allowed.end()}) + ")");
       }
+      NotEmpty(entry.first, entry.second, path + "." + key);
     }
   }
 
@@ -292,6 +294,7 @@ class ManifestReader : internal::YamlReader {
     if (!sensors.IsMap()) Fail(sensors, "sensors: expected a mapping column -> {tau, sigma}");
     for (const auto& entry : sensors) {
       const std::string name = Key(entry.first);
+      NotEmpty(entry.first, entry.second, "sensors." + name);
       const ColumnInfo* column = FindColumn(name);
       if (column == nullptr) {
         std::vector<std::string> names;

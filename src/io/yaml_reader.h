@@ -140,6 +140,15 @@ class YamlReader {
     for (const auto& entry : node) {
       const std::string key = Key(entry.first);
       if (!allowed.count(key)) Fail(entry.first, "unknown key '" + prefix + key + "'");
+      NotEmpty(entry.first, entry.second, prefix + key);
+    }
+  }
+
+  // A key with nothing after it (`sensors:`) is refused at the key's line: a
+  // null value's mark is the next token's, often the next key's line.
+  void NotEmpty(const YAML::Node& key, const YAML::Node& value, const std::string& path) const {
+    if (value.IsNull()) {
+      Fail(key, path + ": expected a value after the key, got none (an empty mapping is {})");
     }
   }
 

@@ -96,6 +96,9 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadSpec{"format", "format: pneumaid-fit/2\nparameters: {}\n", 1, "pneumaid-fit/1"},
         BadSpec{"unknown key", "format: pneumaid-fit/1\nparameter: {}\n", 2, "unknown key"},
+        // A key with nothing after it: its own line, not the next key's.
+        BadSpec{"empty value", "format: pneumaid-fit/1\nparameters:\nchannels: {x: {}}\n", 2,
+                "parameters: expected a value after the key"},
         BadSpec{"unknown path",
                 "format: pneumaid-fit/1\nparameters:\n  friction.positive.Fz: {min: 0, max: 1}\n",
                 3, "friction.positive.Fz"},

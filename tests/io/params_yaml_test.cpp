@@ -212,6 +212,11 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"uncertainty_unknown_path", "uncertainty: {}", "uncertainty: {friction.up.Fs: 1}",
                 32, "names no parameter"},
         BadCase{"non_scalar_key", "effects: {}", "effects: {[a]: 1}", 31, "expected a plain key"},
+        // A key with nothing after it: its own line, not the next key's.
+        BadCase{"empty_mapping", "effects: {}", "effects:", 31,
+                "effects: expected a value after the key, got none"},
+        BadCase{"empty_value", "delta: 8.0", "delta:", 24,
+                "pipeline.delta: expected a value after the key, got none"},
         BadCase{"yaml_syntax", "gas: {k: 1.4, R: 287.0, T: 293.0}",
                 "gas: {k: 1.4, R: [287.0, T: 293.0}", 6, "YAML syntax"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });

@@ -200,6 +200,11 @@ INSTANTIATE_TEST_SUITE_P(
                 "{bore:", "{bor:", "unit.yaml:5:", "unknown key 'rig.cylinder.bor'"},
         BadUnit{"duplicate_key", "unit.yaml", "stroke: \"50 mm\"}",
                 "stroke: \"50 mm\", stroke: \"45 mm\"}", "unit.yaml:5:", "duplicate key 'stroke'"},
+        // A key with nothing after it: its own line, not the next key's.
+        BadUnit{"empty_sensors", "unit.yaml", "sensors:\n  q: {tau: 0.03, sigma: 2.0e-7}\n",
+                "sensors:\n", "unit.yaml:8:", "sensors: expected a value after the key"},
+        BadUnit{"empty_rig_key", "unit.yaml", "  orientation: horizontal\n", "  orientation:\n",
+                "unit.yaml:6:", "rig.orientation: expected a value after"},
         BadUnit{"wrong_format", "unit.yaml", "pneumaid-rig/1", "pneumaid-rig/2",
                 "unit.yaml:1:", "expected format: pneumaid-rig/1"},
         BadUnit{"missing_file", "unit.yaml", "file: pipe.csv", "file: pipe2.csv", "unit.yaml:12",
