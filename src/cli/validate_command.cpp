@@ -26,16 +26,31 @@ struct ValidateArgs {
   std::string html_path;
 };
 
-// "x=95" items: a channel of the comparison and a number.
-std::map<std::string, double> Thresholds(const std::vector<std::string>& items,
-                                         const std::string& option) {
-  return ParseAssignments(items, option, "CHANNEL=NUMBER with CHANNEL one of x, p1, p2, q1, q2",
-                          [](const std::string& channel) {
-                            for (const auto& c : kComparedChannels) {
-                              if (channel == c.name) return true;
-                            }
-                            return false;
-                          });
+// "x=95" items into `thresholds`: a channel of the comparison and a number,
+// which replaces that channel's default only (before, one --max-rmse dropped
+// p2's check), or "off", which drops the channel's check.
+void SetThresholds(const std::vector<std::string>& items, const std::string& option,
+                   std::map<std::string, double>* thresholds) {
+  const auto known = [](const std::string& channel) {
+    for (const auto& c : kComparedChannels) {
+      if (channel == c.name) return true;
+    }
+    return false;
+  };
+  for (const std::string& item : items) {
+    const std::size_t eq = item.find('=');
+    const bool off = eq != std::string::npos && item.compare(eq + 1, std::string::npos, "off") == 0;
+    // One item at a time, "off" checked for its channel as a number is.
+    const auto parsed = ParseAssignments(
+        {off ? item.substr(0, eq + 1) + "0" : item}, option,
+        "CHANNEL=NUMBER or CHANNEL=off with CHANNEL one of x, p1, p2, q1, q2", known);
+    const auto& [channel, value] = *parsed.begin();
+    if (off) {
+      thresholds->erase(channel);
+    } else {
+      (*thresholds)[channel] = value;
+    }
+  }
 }
 
 int RunValidate(const ValidateArgs& args) {
@@ -54,12 +69,8 @@ int RunValidate(const ValidateArgs& args) {
     if (!args.csv_dir.empty() && options.Chooses(e)) outputs.push_back(csv_path(e.entry.id));
   }
   RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
-  // A threshold given replaces that channel's default only; the other
-  // channels keep theirs (before, one --max-rmse dropped p2's check).
-  for (const auto& [channel, value] : Thresholds(args.min_fit, "--min-fit"))
-    options.min_fit_percent[channel] = value;
-  for (const auto& [channel, value] : Thresholds(args.max_rmse, "--max-rmse"))
-    options.max_rmse[channel] = value;
+  SetThresholds(args.min_fit, "--min-fit", &options.min_fit_percent);
+  SetThresholds(args.max_rmse, "--max-rmse", &options.max_rmse);
   // The options' messages name their fields; here those are flags.
   if (std::string error; !options.IsValid(&error)) {
     for (const auto& [field, flag] :
@@ -103,10 +114,10 @@ CommandRunner AddValidateCommand(CLI::App* app) {
       ->check(DirectoryToWrite);
   app->add_option("--min-fit", args->min_fit,
                   "CHANNEL=PERCENT: lowest NRMSE fit accepted (default x=95; repeatable; "
-                  "replaces that channel's default only)");
+                  "replaces that channel's default only; CHANNEL=off drops its check)");
   app->add_option("--max-rmse", args->max_rmse,
                   "CHANNEL=VALUE: highest RMSE accepted, SI (default p1=1e4 p2=1e4 Pa; "
-                  "repeatable; replaces that channel's default only)");
+                  "repeatable; replaces that channel's default only; CHANNEL=off drops its check)");
   app->add_option("--experiment", args->experiments,
                   "validate these experiment ids (default: every validation run; repeatable)");
   AddHtmlOption(app, &args->html_path);

@@ -122,6 +122,18 @@ TEST_F(ValidateCliTest, AThresholdGivenKeepsTheOtherChannelsDefaults) {
   EXPECT_NE(Stdout().find("MISSED: p2 RMSE"), std::string::npos) << Stdout();
   EXPECT_NE(Stdout().find("MISSED: x fit"), std::string::npos) << Stdout();
   EXPECT_EQ(Stdout().find("MISSED: p1 RMSE"), std::string::npos) << Stdout();
+  // CHANNEL=off drops a default's check: with the three missed ones off,
+  // nothing is missed.
+  EXPECT_EQ(Run("validate " + unit + " --params " + testing::Source("configs/paper.yaml") +
+                " --max-rmse p1=off --max-rmse p2=off --min-fit x=off"),
+            0)
+      << Stdout();
+  EXPECT_EQ(Stdout().find("MISSED"), std::string::npos) << Stdout();
+  EXPECT_EQ(Run("validate " + unit + " --params " + testing::Source("configs/paper.yaml") +
+                " --max-rmse z=off"),
+            2);
+  EXPECT_NE(Stderr().find("'z=0': expected CHANNEL=NUMBER or CHANNEL=off"), std::string::npos)
+      << Stderr();
 }
 
 // A set that names another unit than the logs' is validated, with a note:
