@@ -1,8 +1,8 @@
 #include <algorithm>
-#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 
+#include "../io/parse_number.h"
 #include "commands.h"
 #include "pneumaid/io/input_error.h"
 
@@ -14,10 +14,14 @@ std::map<std::string, double> ParseAssignments(
   std::map<std::string, double> out;
   for (const auto& item : items) {
     const auto eq = item.find('=');
-    char* end = nullptr;
-    const double value = eq == std::string::npos ? 0 : std::strtod(item.c_str() + eq + 1, &end);
+    double value = 0;
+    const char* const stop = item.c_str() + item.size();
+    // Locale-independent, as every reader of pneumaid.
+    const char* end = eq == std::string::npos
+                          ? nullptr
+                          : internal::ParseNumber(item.c_str() + eq + 1, stop, &value);
     const std::string key = item.substr(0, eq);
-    if (eq == std::string::npos || eq == 0 || end == item.c_str() + eq + 1 || *end != '\0' ||
+    if (eq == 0 || end == nullptr || end != stop || end == item.c_str() + eq + 1 ||
         (key_allowed && !key_allowed(key))) {
       throw InputError(option, 0, 0, "'" + item + "': expected " + expected);
     }

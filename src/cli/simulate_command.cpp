@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "../io/parse_number.h"
 #include "commands.h"
 #include "pneumaid/eval/stroke_summary.h"
 #include "pneumaid/io/csv_table.h"
@@ -38,12 +39,13 @@ std::pair<double, double> ParseStep(const std::string& text) {
   const auto at = text.find('@');
   try {
     if (at == std::string::npos) throw std::invalid_argument("no @");
-    std::size_t used_u = 0, used_t = 0;
-    const std::string u_text = text.substr(0, at), t_text = text.substr(at + 1);
-    const double u = std::stod(u_text, &used_u);
-    const double t = std::stod(t_text, &used_t);
-    if (used_u != u_text.size() || used_t != t_text.size() || !std::isfinite(u) ||
-        !std::isfinite(t) || std::fabs(u) > 1) {
+    double u = 0, t = 0;
+    const char* const stop = text.c_str() + text.size();
+    // Locale-independent, as every reader of pneumaid.
+    const char* u_end = internal::ParseNumber(text.c_str(), text.c_str() + at, &u);
+    const char* t_end = internal::ParseNumber(text.c_str() + at + 1, stop, &t);
+    if (u_end != text.c_str() + at || at == 0 || t_end != stop || at + 1 == text.size() ||
+        !std::isfinite(u) || !std::isfinite(t) || std::fabs(u) > 1) {
       throw std::invalid_argument("bad number");
     }
     return {t, u};
