@@ -52,11 +52,23 @@ class ProtocolReader : internal::YamlReader {
     ReadUnits(root["units"], &p);
     ReadSensors(root["sensors"], &p);
     if (const YAML::Node valve = root["valve"]) {
-      Keys(valve, "valve.", {"step", "hold", "ramp"});
+      Keys(valve, "valve.", {"step", "hold", "ramp", "levels"});
       p.valve = true;
       if (valve["step"]) p.valve_step_V = Positive(valve["step"], "valve.step");
       if (valve["hold"]) p.valve_hold_s = Positive(valve["hold"], "valve.hold");
       if (valve["ramp"]) p.valve_ramp_s = Positive(valve["ramp"], "valve.ramp");
+      if (const YAML::Node levels = valve["levels"]) {
+        if (valve["ramp"] || valve["step"]) {
+          Fail(levels, "valve.levels: a list of levels is the test; step and ramp make another");
+        }
+        if (!levels.IsSequence() || levels.size() == 0)
+          Fail(levels, "valve.levels: expected a non-empty list of commands in [0, 1] V");
+        for (const auto& level : levels) {
+          p.valve_levels_V.push_back(NonNegative(level, "valve.levels"));
+          if (p.valve_levels_V.back() > 1)
+            Fail(level, "valve.levels: expected commands in [0, 1] V");
+        }
+      }
     }
     if (const YAML::Node pipe = root["pipeline"]) {
       Keys(pipe, "pipeline.", {"tube_lengths", "command", "step_time", "duration", "schedule"});

@@ -261,11 +261,22 @@ class RigBuilder {
   // down (a continuous command) when the protocol asks for one.
   int StaircaseSteps() const { return static_cast<int>(std::lround(1.0 / protocol_.valve_step_V)); }
 
-  // How long the valve test runs: the ramp up and down, or every level of
-  // the staircase up and down held valve_hold_s.
+  // The valve test's held levels: the protocol's list, or the staircase up
+  // and down.
+  std::vector<double> ValveLevels() const {
+    if (!protocol_.valve_levels_V.empty()) return protocol_.valve_levels_V;
+    std::vector<double> levels;
+    const int steps = StaircaseSteps();
+    for (int i = 0; i <= steps; ++i) levels.push_back(std::min(1.0, i * protocol_.valve_step_V));
+    for (int i = steps - 1; i >= 0; --i) levels.push_back(i * protocol_.valve_step_V);
+    return levels;
+  }
+
+  // How long the valve test runs: the ramp up and down, or every level held
+  // valve_hold_s.
   double ValveDuration() const {
     if (protocol_.valve_ramp_s > 0) return 2 * protocol_.valve_ramp_s;
-    return static_cast<double>(2 * StaircaseSteps() + 1) * protocol_.valve_hold_s;
+    return static_cast<double>(ValveLevels().size()) * protocol_.valve_hold_s;
   }
 
   std::pair<std::vector<double>, std::vector<double>> ValveCommand(const LoggerClock& clock) const {
@@ -277,10 +288,7 @@ class RigBuilder {
         u[i] = std::clamp(1.0 - std::fabs(t[i] - ramp_s) / ramp_s, 0.0, 1.0);
       return {t, u};
     }
-    std::vector<double> levels;
-    const int steps = StaircaseSteps();
-    for (int i = 0; i <= steps; ++i) levels.push_back(std::min(1.0, i * protocol_.valve_step_V));
-    for (int i = steps - 1; i >= 0; --i) levels.push_back(i * protocol_.valve_step_V);
+    const std::vector<double> levels = ValveLevels();
     std::vector<double> u(t.size());
     for (std::size_t i = 0; i < t.size(); ++i) {
       const auto level = std::min<std::size_t>(
@@ -303,7 +311,9 @@ class RigBuilder {
       latch.Update(u[i]);
       q[i] = ValveFlow(opening[i], latch.decreasing(), p_up, p_down);
     }
-    RigLog log = NewLog(protocol_.valve_ramp_s > 0 ? "valve-ramp" : "valve-staircase",
+    RigLog log = NewLog(protocol_.valve_ramp_s > 0          ? "valve-ramp"
+                        : !protocol_.valve_levels_V.empty() ? "valve-levels"
+                                                            : "valve-staircase",
                         ExperimentKind::kValve);
     AddColumn(&log, "t", "s", t, manifest);
     AddColumn(&log, "u", "V", u, manifest);

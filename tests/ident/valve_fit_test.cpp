@@ -19,15 +19,14 @@
 namespace pneumaid {
 namespace {
 
-// A valve-only synthetic unit written and read back, as a user's would be:
-// a staircase of `step_V` held `hold_s` at `rate_Hz`, a 30 ms flow meter with
-// an ADC step of `q_quantization` (standard m3/s).
-// With ramp_s > 0 the command is a ramp 0 -> 1 V over ramp_s and back instead.
-// `meter_tau_s` and `lag_declared`: the flow meter's lag and whether the
-// manifest declares it.
-Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed, double step_V = 0.05,
-                        double hold_s = 0.3, double rate_Hz = 1000, double q_quantization = 0,
-                        double ramp_s = 0, double meter_tau_s = 0.03, bool lag_declared = true) {
+// A valve-only test's protocol: a staircase of `step_V` held `hold_s` at
+// `rate_Hz`, a 30 ms flow meter with an ADC step of `q_quantization`
+// (standard m3/s). With ramp_s > 0 the command is a ramp 0 -> 1 V over ramp_s
+// and back instead. `meter_tau_s` and `lag_declared`: the flow meter's lag
+// and whether the manifest declares it.
+Protocol ValveProtocol(double step_V = 0.05, double hold_s = 0.3, double rate_Hz = 1000,
+                       double q_quantization = 0, double ramp_s = 0, double meter_tau_s = 0.03,
+                       bool lag_declared = true) {
   Protocol protocol;
   protocol.valve = true;
   protocol.valve_step_V = step_V;
@@ -37,8 +36,22 @@ Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed, double step
   protocol.sensors["q"] = {2e-7, meter_tau_s, q_quantization, lag_declared};
   protocol.sensors["p_up"] = {300.0, 0.0, 0.0, true};
   protocol.sensors["p_down"] = {300.0, 0.0, 0.0, true};
+  return protocol;
+}
+
+// The unit `protocol` writes, read back as a user's would be.
+Unit WrittenValveUnit(const Parameters& truth, const Protocol& protocol, std::uint64_t seed) {
   return testing::WriteAndReadUnit(Synthesize(truth, protocol, seed, "V"),
                                    "valve_fit_" + std::to_string(seed));
+}
+
+Unit SyntheticValveUnit(const Parameters& truth, std::uint64_t seed, double step_V = 0.05,
+                        double hold_s = 0.3, double rate_Hz = 1000, double q_quantization = 0,
+                        double ramp_s = 0, double meter_tau_s = 0.03, bool lag_declared = true) {
+  return WrittenValveUnit(
+      truth,
+      ValveProtocol(step_V, hold_s, rate_Hz, q_quantization, ramp_s, meter_tau_s, lag_declared),
+      seed);
 }
 
 // A prior 20 % off the truth in every coefficient.
@@ -417,6 +430,47 @@ TEST(ValveFitTest, AStaircaseStoppedShortOfSaturationGetsKvpWhereItWent) {
       }
     }
     EXPECT_NE(fit.BriefReport().find("note: no plateau at or above u_sat"), std::string::npos);
+  }
+}
+
+// Protocols the staircase was not: levels each reached from 0 V (a pulse
+// staircase) and levels in any order. A branch's plateaus are the levels
+// reached by a step its way: the pulse staircase reaches none but 0 V by a
+// step down, so the decreasing branch is held at the prior by name; in any
+// order, the decreasing branch's highest plateaus are 0.5 and 0.75 V, so its
+// u_sat lies somewhere in that gap, with that gap's error, and K_vp is
+// within 1 % of q_max outside it (the increasing branch outside its gap
+// (0.70, 0.75], as on the staircase).
+TEST(ValveFitTest, LevelsInAnyOrderOrEachFromZeroFitTheBranchesTheyReach) {
+  const Parameters truth;
+  Protocol pulse = ValveProtocol();
+  for (int i = 1; i <= 20; ++i)
+    pulse.valve_levels_V.insert(pulse.valve_levels_V.end(), {0.05 * i, 0.0});
+  const ValveFitResult from_zero =
+      FitValve(WrittenValveUnit(truth, pulse, 7), Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << from_zero.BriefReport();
+  ASSERT_EQ(from_zero.increasing.status, FitStatus::kConverged) << from_zero.increasing.reason;
+  EXPECT_LT(WorstKvpError(from_zero.increasing.params, truth.valve.increasing, 0.70, 0.75), 0.01);
+  EXPECT_EQ(from_zero.decreasing.status, FitStatus::kNotFitted);
+  for (const FittedCoefficient& c : from_zero.decreasing.coefficients)
+    EXPECT_NE(c.held.find("fewer than 4 distinct openings"), std::string::npos) << c.path;
+  Protocol any_order = ValveProtocol();
+  any_order.valve_levels_V = {0.1,  0.7,  0.3,  0.4,  0.8,  0.25, 0.6, 0.15, 0.95, 1.0,  0.0,
+                              0.65, 0.05, 0.45, 0.5,  0.75, 0.55, 0.2, 0.85, 0.9,  0.35, 0.65,
+                              0.7,  0.05, 0.3,  0.15, 0.25, 0.4,  1.0, 0.5,  0.55, 0.95, 0.9,
+                              0.45, 0.85, 0.75, 0.1,  0.0,  0.6,  0.8, 0.2,  0.35};
+  const ValveFitResult shuffled =
+      FitValve(WrittenValveUnit(truth, any_order, 8), Perturbed(truth.valve), ValveFitOptions{});
+  std::cout << shuffled.BriefReport();
+  for (const auto& [fitted, real, low] :
+       {std::make_tuple(&shuffled.increasing, &truth.valve.increasing, 0.70),
+        std::make_tuple(&shuffled.decreasing, &truth.valve.decreasing, 0.5)}) {
+    ASSERT_EQ(fitted->status, FitStatus::kConverged) << fitted->reason;
+    EXPECT_LT(WorstKvpError(fitted->params, *real, low, 0.75), 0.01) << low;
+    const FittedCoefficient& u_sat = fitted->coefficients.back();
+    EXPECT_GT(u_sat.value, low);
+    EXPECT_LE(u_sat.value, 0.75);
+    EXPECT_NEAR(u_sat.value, real->u_sat_V, 3 * u_sat.standard_error) << low;
   }
 }
 

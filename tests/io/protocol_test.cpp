@@ -66,6 +66,11 @@ TEST(ProtocolTest, AValveRampALossyLoggerAndAnIrregularClockAreRead) {
   EXPECT_EQ(p.clock_jitter, 0.3);
   EXPECT_EQ(ParseProtocol("format: pneumaid-protocol/1\nvalve: {step: 0.1}\n", "p").valve_ramp_s,
             0.0);  // a staircase by default
+  // Levels in any order, each held `hold`.
+  const Protocol levels = ParseProtocol(
+      "format: pneumaid-protocol/1\nvalve: {levels: [0.3, 0, 1, 0.05], hold: 0.2}\n", "p");
+  EXPECT_EQ(levels.valve_levels_V, (std::vector<double>{0.3, 0, 1, 0.05}));
+  EXPECT_EQ(levels.valve_hold_s, 0.2);
 }
 
 TEST(ProtocolTest, ABadScheduleOrMismatchNamesItsLine) {
@@ -74,6 +79,8 @@ TEST(ProtocolTest, ABadScheduleOrMismatchNamesItsLine) {
         "pipeline: {tube_lengths: [0.38],\n  schedule: [[0.5]]}\n",
         "mismatch:\n  friction: smooth\n", "mismatch: {relative_tolerance: 0,\n  x: 1}\n",
         "\ndropped_samples: 0.5\n", "\nclock_jitter: 0.5\n", "valve:\n  ramp: -1\n",
+        "valve: {hold: 0.2,\n  levels: [0.5, 1.2]}\n", "valve: {ramp: 6,\n  levels: [0.5]}\n",
+        "valve:\n  levels: []\n",
         // Protocols the rig cannot run: a command above 1 V, a knot after the test.
         "stroke:\n  levels: [0.5, 1.2]\n", "pipeline: {tube_lengths: [0.38],\n  command: 1.5}\n",
         "pipeline: {tube_lengths: [0.38], duration: 2,\n  schedule: [[0.1, 1], [3.0, 0]]}\n",

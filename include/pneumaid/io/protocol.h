@@ -41,11 +41,14 @@ struct Protocol {
 
   // Valve test: staircase 0 -> 1 -> 0 in steps of valve_step_V held
   // valve_hold_s; or, when valve_ramp_s > 0, a ramp 0 -> 1 V over valve_ramp_s
-  // and back down over as long (a continuous command, no plateaus).
+  // and back down over as long (a continuous command, no plateaus); or, when
+  // valve_levels_V is given, those commands in order, each held valve_hold_s
+  // (a staircase that returns to 0 between levels, levels in any order).
   bool valve = false;
   double valve_step_V = 0.05;
   double valve_hold_s = 0.3;
   double valve_ramp_s = 0.0;
+  std::vector<double> valve_levels_V;
 
   // Pipeline tests: a step to pipeline_command_V at pipeline_step_time_s, per
   // tube length; or, when pipeline_schedule is given, the command held at
