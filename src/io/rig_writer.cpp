@@ -11,6 +11,7 @@
 #include "pneumaid/io/json.h"
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/units.h"
+#include "provenance_map.h"
 
 namespace pneumaid {
 namespace {
@@ -21,6 +22,15 @@ namespace fs = std::filesystem;
 std::string WithUnit(double value_in_si, const char* unit) {
   const UnitInfo* info = FindUnit(unit);
   return "\"" + FormatDouble((value_in_si - info->offset) / info->scale) + " " + unit + "\"";
+}
+
+// A text scalar as the manifest writes it: plain, or double-quoted where
+// another YAML reader would take it for other than text (a unit "0001") or
+// it holds a character a flow mapping reads otherwise.
+std::string Text(const std::string& text) {
+  const bool plain = !ReadAsOtherThanText(text) &&
+                     text.find_first_of(":,{}[]#&*!|>'\"%@`\\ ") == std::string::npos;
+  return plain ? text : JsonString(text);
 }
 
 }  // namespace
@@ -39,7 +49,7 @@ std::string ManifestToYaml(const Manifest& manifest) {
   const RigConstants& r = manifest.rig;
   std::ostringstream out;
   out << "format: " << kRigFormat << "\n";
-  out << "unit: " << manifest.unit << "\n";
+  out << "unit: " << Text(manifest.unit) << "\n";
   out << "rig:\n";
   out << "  gas: {k: " << FormatDouble(r.gas.heat_capacity_ratio)
       << ", R: " << FormatDouble(r.gas.gas_constant_J_per_kgK)
@@ -72,8 +82,8 @@ std::string ManifestToYaml(const Manifest& manifest) {
   }
   out << "experiments:\n";
   for (const ExperimentEntry& entry : manifest.experiments) {
-    out << "  - {id: " << entry.id << ", kind: " << ToString(entry.kind)
-        << ", file: " << entry.file;
+    out << "  - {id: " << Text(entry.id) << ", kind: " << ToString(entry.kind)
+        << ", file: " << Text(entry.file);
     if (entry.tube_length_m) out << ", tube_length: " << WithUnit(*entry.tube_length_m, "cm");
     out << "}\n";
   }

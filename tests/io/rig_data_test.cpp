@@ -3,6 +3,7 @@
 #include "pneumaid/io/rig_data.h"
 
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 
 #include "pneumaid/io/files.h"
 #include "pneumaid/io/input_error.h"
+#include "pneumaid/io/rig_writer.h"
 #include "pneumaid/io/sha256.h"
 
 namespace pneumaid {
@@ -268,6 +270,28 @@ TEST(RigDataManifestTest, ParsesUnitStringsAndGaugeSupply) {
   EXPECT_DOUBLE_EQ(m.rig.gas.temperature_K, 293.15);
   EXPECT_DOUBLE_EQ(m.rig.load_mass_kg, 0.15);
   EXPECT_NEAR(m.rig.dead_volume_1_m3, 1.01e-7, 1e-20);
+}
+
+// A manifest the synthetic rig writes quotes a unit id, an experiment id or
+// a file name that another YAML reader would take for a number, a bool or
+// null (unit 0001 read as the integer 1), or that holds a character a flow
+// mapping reads otherwise; the rest stays plain. Each reads back as written.
+TEST(RigWriterTest, TextsAnotherReaderWouldMisreadAreQuoted) {
+  Manifest manifest;
+  manifest.unit = "0001";
+  manifest.experiments = {{"1e3", ExperimentKind::kValve, "valve.csv", std::nullopt, 0},
+                          {"step-1", ExperimentKind::kValidation, "step, 1.csv", std::nullopt, 0},
+                          {"true", ExperimentKind::kStroke, "007.csv", std::nullopt, 0}};
+  const YAML::Node root = YAML::Load(ManifestToYaml(manifest));
+  const YAML::Node experiments = root["experiments"];
+  // yaml-cpp tags a quoted scalar "!", a plain one "?".
+  for (const YAML::Node& quoted : {root["unit"], experiments[0]["id"], experiments[1]["file"],
+                                   experiments[2]["id"], experiments[2]["file"]})
+    EXPECT_EQ(quoted.Tag(), "!") << quoted.as<std::string>();
+  for (const YAML::Node& plain : {experiments[0]["file"], experiments[1]["id"]})
+    EXPECT_EQ(plain.Tag(), "?") << plain.as<std::string>();
+  EXPECT_EQ(root["unit"].as<std::string>(), "0001");
+  EXPECT_EQ(experiments[1]["file"].as<std::string>(), "step, 1.csv");
 }
 
 }  // namespace
