@@ -20,6 +20,52 @@ namespace {
 
 using internal::DeltaScan;
 
+// The variance of the parameter in column `column` of the blocks `free`
+// (columns in their order) when their joint covariance is singular: one over
+// its Schur complement in J'J, the other columns scaled to unit norm and
+// their block inverted by a pseudo-inverse (eigenvalues below 1e-12 of the
+// largest dropped), so a nuisance that no residual determines does not take
+// the parameter with it. Infinite when the parameter itself is not determined.
+double MarginalVariance(ceres::Problem* problem, const std::vector<double*>& free, int column) {
+  ceres::Problem::EvaluateOptions options;
+  options.parameter_blocks = free;
+  ceres::CRSMatrix crs;
+  if (!problem->Evaluate(options, nullptr, nullptr, nullptr, &crs)) return HUGE_VAL;
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  for (int row = 0; row < crs.num_rows; ++row) {
+    for (int k = crs.rows[row]; k < crs.rows[row + 1]; ++k)
+      jacobian(row, crs.cols[k]) = crs.values[k];
+  }
+  const Eigen::MatrixXd normal = jacobian.transpose() * jacobian;
+  const double own = normal(column, column);
+  if (!(own > 0)) return HUGE_VAL;
+  std::vector<int> others;
+  for (int j = 0; j < normal.cols(); ++j) {
+    if (j != column && normal(j, j) > 0) others.push_back(j);
+  }
+  const int m = static_cast<int>(others.size());
+  Eigen::MatrixXd block(m, m);
+  Eigen::VectorXd coupling(m);
+  for (int a = 0; a < m; ++a) {
+    const double scale_a = std::sqrt(normal(others[a], others[a]));
+    coupling(a) = normal(others[a], column) / (scale_a * std::sqrt(own));
+    for (int b = 0; b < m; ++b)
+      block(a, b) =
+          normal(others[a], others[b]) / (scale_a * std::sqrt(normal(others[b], others[b])));
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(block);
+  const double largest = m > 0 ? eigen.eigenvalues().maxCoeff() : 0;
+  double explained = 0;  // coupling' pinv(block) coupling
+  for (int k = 0; k < m; ++k) {
+    const double value = eigen.eigenvalues()(k);
+    if (value <= 1e-12 * largest) continue;
+    const double along = eigen.eigenvectors().col(k).dot(coupling);
+    explained += along * along / value;
+  }
+  const double schur = 1.0 - explained;  // of the unit-scaled column
+  return schur > 1e-10 ? 1.0 / (schur * own) : HUGE_VAL;
+}
+
 // What one tube log's fit needs: samples, the level each sample belongs to,
 // meter lags and the channels' noise.
 struct TubeLog {
@@ -245,15 +291,26 @@ TubeFit FitTube(const Experiment& e, const Manifest& manifest, const PipelineFit
   const std::vector<std::pair<const double*, const double*>> blocks = {
       {theta.data(), theta.data()}};
   char note[200];
-  if (!covariance.Compute(blocks, &problem) ||
-      !covariance.GetCovarianceBlock(theta.data(), theta.data(), c.data())) {
-    std::snprintf(note, sizeof(note),
-                  "delta is not determined by this log (singular covariance at delta %.3g 1/s)",
-                  delta);
-    return not_fitted(note);
+  double delta_variance = 0;
+  if (covariance.Compute(blocks, &problem) &&
+      covariance.GetCovarianceBlock(theta.data(), theta.data(), c.data())) {
+    delta_variance = c.back();
+  } else {
+    // Singular: a level's flow that no sample determines (a command changed
+    // at the log's last sample) must not cost the tube its delta.
+    std::vector<double*> free = {theta.data()};
+    if (valve_tau_s > 0) free.push_back(&valve_tau_s);
+    delta_variance = MarginalVariance(&problem, free, log.levels);
+    if (!std::isfinite(delta_variance)) {
+      std::snprintf(note, sizeof(note),
+                    "delta is not determined by this log (singular covariance at delta %.3g 1/s)",
+                    delta);
+      return not_fitted(note);
+    }
   }
   // Model error counts: a fit worse than the noise widens its error.
-  const double error = std::sqrt(c.back() * ModelErrorFactor(residuals, n, fit.reduced_chi_square));
+  const double error =
+      std::sqrt(delta_variance * ModelErrorFactor(residuals, n, fit.reduced_chi_square));
   if (!internal::IsDetermined(delta, error, 0.0, options.determined_relative_error)) {
     std::snprintf(note, sizeof(note),
                   "delta is not determined by this log (%.3g +- %.2g 1/s; the sample rate or the "

@@ -215,6 +215,31 @@ TEST(PipelineFitTest, ACommandThatNeverHoldsIsFittedFromTheMetersAlone) {
   EXPECT_LE(spread, 2.0);
 }
 
+// A logger that stops as the valve is switched off: the command's last level
+// is the log's last sample, and no sample tells that level's flow. Its
+// column made the joint covariance singular and the tube's delta (8.001 for
+// 8) was dropped for the prior; delta's own variance (its Schur complement)
+// keeps it, with the error the log without that sample gives.
+TEST(PipelineFitTest, ACommandChangedAtTheLogsLastSampleKeepsTheTubesDelta) {
+  const Unit unit = ReadUnit(std::string(PNEUMAID_SOURCE_DIR) + "/datasets/paper-rig");
+  Unit cut = unit;
+  for (Experiment& e : cut.experiments) {
+    if (e.entry.kind == ExperimentKind::kPipeline) e.columns.at("u").back() = 0.0;
+  }
+  const PipelineFitResult whole = FitPipeline(unit, PipelineFitOptions{});
+  const PipelineFitResult fit = FitPipeline(cut, PipelineFitOptions{});
+  std::cout << fit.BriefReport();
+  ASSERT_EQ(fit.tubes.size(), whole.tubes.size());
+  for (std::size_t k = 0; k < fit.tubes.size(); ++k) {
+    const TubeFit& tube = fit.tubes[k];
+    ASSERT_TRUE(tube.has_values()) << tube.experiment << ": " << tube.reason;
+    EXPECT_NEAR(tube.delta_per_s(), 8.0, 0.05 * 8.0) << tube.experiment;
+    EXPECT_NEAR(tube.delta_standard_error(), whole.tubes[k].delta_standard_error(),
+                0.1 * whole.tubes[k].delta_standard_error())
+        << tube.experiment;
+  }
+}
+
 TEST(PipelineFitTest, ACommandThatNeverChangesSaysWhy) {
   Protocol protocol;
   protocol.tube_lengths_m = {0.38};
