@@ -37,19 +37,18 @@ void SetThresholds(const std::vector<std::string>& items, const std::string& opt
     }
     return false;
   };
+  const std::string expected =
+      "CHANNEL=NUMBER or CHANNEL=off with CHANNEL one of x, p1, p2, q1, q2";
   for (const std::string& item : items) {
     const std::size_t eq = item.find('=');
-    const bool off = eq != std::string::npos && item.compare(eq + 1, std::string::npos, "off") == 0;
-    // One item at a time, "off" checked for its channel as a number is.
-    const auto parsed = ParseAssignments(
-        {off ? item.substr(0, eq + 1) + "0" : item}, option,
-        "CHANNEL=NUMBER or CHANNEL=off with CHANNEL one of x, p1, p2, q1, q2", known);
-    const auto& [channel, value] = *parsed.begin();
-    if (off) {
+    if (eq != std::string::npos && item.compare(eq + 1, std::string::npos, "off") == 0) {
+      const std::string channel = item.substr(0, eq);
+      if (!known(channel)) throw InputError(option, 0, 0, "'" + item + "': expected " + expected);
       thresholds->erase(channel);
-    } else {
-      (*thresholds)[channel] = value;
+      continue;
     }
+    for (const auto& [channel, value] : ParseAssignments({item}, option, expected, known))
+      (*thresholds)[channel] = value;
   }
 }
 

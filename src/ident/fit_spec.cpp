@@ -146,7 +146,9 @@ class FitSpecReader : internal::YamlReader {
       for (const char* c : {"x", "p1", "p2"}) spec->channels[c] = ChannelWeight{};
       return;
     }
-    Keys(node, "channels.", {kChannels[0], kChannels[1], kChannels[2], kChannels[3], kChannels[4]});
+    // A bare channel (`channels: {x, p1}`) takes the manifest's sigma and weight 1.
+    Keys(node, "channels.", {kChannels[0], kChannels[1], kChannels[2], kChannels[3], kChannels[4]},
+         true);
     for (const auto& entry : node) {
       const std::string name = Key(entry.first);
       ChannelWeight w;

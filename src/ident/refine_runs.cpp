@@ -70,8 +70,9 @@ std::vector<const Experiment*> Select(const Unit& unit, const FitSpec& spec, Exp
                 name + "': the refinement has no run to fit");
       }
       throw InputError(spec.Name(), LineOf(lines, name), 0,
-                       (fit ? "fit: " : "hold_out: ") + std::string("no experiment '") + name +
-                           "' (an id or a kind) in " + unit.manifest_path());
+                       (fit ? "experiments.fit: " : "experiments.hold_out: ") +
+                           std::string("no experiment '") + name + "' (an id or a kind) in " +
+                           unit.manifest_path());
     }
   }
   return chosen;

@@ -261,16 +261,22 @@ std::string Json(const Parameters& params, const std::vector<Entry>& entries) {
 
 // A ROS 2 params file's node key: a node name, a namespaced one (/ns/node)
 // or a wildcard (/**, /ns/*): tokens of letters, digits and '_' not
-// starting with a digit, or * or **, separated by '/' with an optional
-// leading one. No empty token: "/", "a//b" and "a/" name no node (and any
+// starting with a digit, or * or ** after a leading '/', separated by '/'
+// with an optional leading one. No empty token: "/", "a//b" and "a/" name no node (and any
 // other character made a YAML key that did not parse).
 bool IsRos2NodeKey(const std::string& node) {
-  std::stringstream tokens(node.size() > 1 && node[0] == '/' ? node.substr(1) : node);
+  // A wildcard only after a leading '/': a key that starts with '*' is a
+  // YAML alias, not text.
+  const bool absolute = node.size() > 1 && node[0] == '/';
+  std::stringstream tokens(absolute ? node.substr(1) : node);
   std::string token;
   int count = 0;
   while (std::getline(tokens, token, '/')) {
     ++count;
-    if (token == "*" || token == "**") continue;
+    if (token == "*" || token == "**") {
+      if (!absolute) return false;
+      continue;
+    }
     if (token.empty() || std::isdigit(static_cast<unsigned char>(token[0]))) return false;
     if (!std::all_of(token.begin(), token.end(), [](char c) {
           return std::isalnum(static_cast<unsigned char>(c)) || c == '_';

@@ -154,9 +154,9 @@ class ParamsReader : internal::YamlReader {
         ReadUncertainty(value, params);
       } else if (key == "provenance") {
         if (!value.IsMap()) Fail(value, "provenance: expected a mapping");
-        YAML::Emitter emitter;
-        emitter << value;
-        params->provenance_yaml = emitter.c_str();
+        // Its texts stay quoted where another reader would misread them (a
+        // unit 0001 in an export's comment or a report).
+        params->provenance_yaml = EmitProvenance(value);
       } else {
         ReadSection(value, key, params);
       }

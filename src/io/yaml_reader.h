@@ -134,13 +134,16 @@ class YamlReader {
   }
 
   // Fails on the first key of `node` not in `allowed`, naming it with `prefix`.
-  void Keys(const YAML::Node& node, const std::string& prefix,
-            const std::set<std::string>& allowed) const {
+  // A key with nothing after it fails too (NotEmpty), unless `empty_allowed`
+  // (a set of names, `channels: {x, p1}`, where a bare key means "with the
+  // defaults").
+  void Keys(const YAML::Node& node, const std::string& prefix, const std::set<std::string>& allowed,
+            bool empty_allowed = false) const {
     if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
     for (const auto& entry : node) {
       const std::string key = Key(entry.first);
       if (!allowed.count(key)) Fail(entry.first, "unknown key '" + prefix + key + "'");
-      NotEmpty(entry.first, entry.second, prefix + key);
+      if (!empty_allowed) NotEmpty(entry.first, entry.second, prefix + key);
     }
   }
 

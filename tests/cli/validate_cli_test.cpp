@@ -132,7 +132,7 @@ TEST_F(ValidateCliTest, AThresholdGivenKeepsTheOtherChannelsDefaults) {
   EXPECT_EQ(Run("validate " + unit + " --params " + testing::Source("configs/paper.yaml") +
                 " --max-rmse z=off"),
             2);
-  EXPECT_NE(Stderr().find("'z=0': expected CHANNEL=NUMBER or CHANNEL=off"), std::string::npos)
+  EXPECT_NE(Stderr().find("'z=off': expected CHANNEL=NUMBER or CHANNEL=off"), std::string::npos)
       << Stderr();
 }
 

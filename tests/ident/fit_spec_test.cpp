@@ -47,6 +47,15 @@ seed: 9
   EXPECT_EQ(spec.multistart, 4);
   EXPECT_EQ(spec.seed, 9u);
   EXPECT_TRUE(spec.fit_initial_pressures);  // the default
+  // A bare channel, in a set or with nothing after it, takes the defaults.
+  for (const char* channels : {"channels: {x, p1}\n", "channels:\n  x:\n  p1:\n"}) {
+    const FitSpec bare = ParseFitSpec(
+        std::string("format: pneumaid-fit/1\nparameters: {pipeline.delta: {min: 1, max: 9}}\n") +
+            channels,
+        "s.yaml");
+    ASSERT_EQ(bare.channels.size(), 2u) << channels;
+    EXPECT_EQ(bare.channels.at("p1").weight, 1.0);
+  }
 }
 
 // A seed past an int's range is read whole (it once passed the reader's

@@ -624,8 +624,14 @@ TEST_F(RefineSpecTest, RefusesAtTheSpecsLineThatDoesNotFitTheUnit) {
                           "s.yaml"),
             4);
   // A spec built in code has no line to name.
-  FitSpec in_code = spec("2", "stroke-100", "validation", "");
-  in_code.parameters[1].line = 0;
+  FitSpec in_code;
+  in_code.parameters = {{"friction.negative.Fd", 0.5, 2.0}};
+  in_code.channels["x"] = ChannelWeight{};
+  in_code.fit = {"stroke-100"};
+  in_code.hold_out = {};
+  EXPECT_EQ(RefusedAtLine(Parameters{}, *unit_, in_code, "fit spec"), 0);
+  in_code.parameters[0].upper = 20.0;
+  in_code.hold_out = {"stroke-100"};
   EXPECT_EQ(RefusedAtLine(Parameters{}, *unit_, in_code, "fit spec"), 0);
 }
 

@@ -452,6 +452,7 @@ TEST(ValveFitTest, LevelsInAnyOrderOrEachFromZeroFitTheBranchesTheyReach) {
   ASSERT_EQ(from_zero.increasing.status, FitStatus::kConverged) << from_zero.increasing.reason;
   EXPECT_LT(WorstKvpError(from_zero.increasing.params, truth.valve.increasing, 0.70, 0.75), 0.01);
   EXPECT_EQ(from_zero.decreasing.status, FitStatus::kNotFitted);
+  ASSERT_FALSE(from_zero.decreasing.coefficients.empty());
   for (const FittedCoefficient& c : from_zero.decreasing.coefficients)
     EXPECT_NE(c.held.find("fewer than 4 distinct openings"), std::string::npos) << c.path;
   Protocol any_order = ValveProtocol();

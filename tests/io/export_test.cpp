@@ -54,10 +54,9 @@ TEST(ExportTest, Ros2ParsesAndHoldsEveryParameter) {
   EXPECT_EQ(node["effects"]["valve_lag"]["tau"].as<double>(), 0.0315);
 }
 
-// The header compiled by the system's C and C++ compilers; a program prints
-// each constant with 17 digits, which must read back as the set's value.
 // The node key follows ROS 2's rules for node names, namespaces and
-// wildcards; a key with no node in it is refused, naming the option.
+// wildcards; a key with no node in it, or one YAML reads as an alias (`*`),
+// is refused, naming the option.
 TEST(ExportTest, Ros2NodeKeysFollowRos2sNames) {
   Parameters params;
   ExportOptions options;
@@ -67,7 +66,8 @@ TEST(ExportTest, Ros2NodeKeysFollowRos2sNames) {
     const YAML::Node root = YAML::Load(ExportParameters(params, options));
     EXPECT_TRUE(root[node]["ros__parameters"].IsMap()) << node;
   }
-  for (const char* node : {"", "/", "//", "a//b", "ns/", "1node", "/ns/2", "bad node", "a:b"}) {
+  for (const char* node : {"", "/", "//", "a//b", "ns/", "1node", "/ns/2", "bad node", "a:b", "*",
+                           "**", "*/x", "a/*"}) {
     options.ros2_node = node;
     try {
       ExportParameters(params, options);
@@ -81,6 +81,8 @@ TEST(ExportTest, Ros2NodeKeysFollowRos2sNames) {
   EXPECT_NO_THROW(ExportParameters(params, options));
 }
 
+// The header compiled by the system's C and C++ compilers; a program prints
+// each constant with 17 digits, which must read back as the set's value.
 TEST(ExportTest, CHeaderCompilesAsC99AndCxx17WithTheExactValues) {
   const Parameters p = Identified();
   const fs::path dir = fs::path(::testing::TempDir()) / "export_c";

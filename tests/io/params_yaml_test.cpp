@@ -89,6 +89,10 @@ TEST(ParamsYamlTest, TheProvenancesTextsThatReadAsNumbersAreQuoted) {
       EXPECT_NE(text.find(plain), std::string::npos) << plain << " in " << text;
   }
   const Parameters back = ParamsFromYaml(ParamsToYaml(p), "quoted");
+  // Read back, the provenance text keeps them quoted (exports and reports
+  // carry it as it is).
+  for (const char* quoted : {"unit: \"0001\"", "date: \"2026-11-30T14:55:49Z\""})
+    EXPECT_NE(back.provenance_yaml.find(quoted), std::string::npos) << back.provenance_yaml;
   const YAML::Node provenance = YAML::Load(back.provenance_yaml);
   EXPECT_EQ(provenance["unit"].as<std::string>(), "0001");
   EXPECT_EQ(provenance["inputs"][0]["file"].as<std::string>(), "007");

@@ -43,7 +43,7 @@ struct Protocol {
   // valve_hold_s; or, when valve_ramp_s > 0, a ramp 0 -> 1 V over valve_ramp_s
   // and back down over as long (a continuous command, no plateaus); or, when
   // valve_levels_V is given, those commands in order, each held valve_hold_s
-  // (a staircase that returns to 0 between levels, levels in any order).
+  // (as listed: 0 V between levels makes a staircase that returns to 0 V).
   bool valve = false;
   double valve_step_V = 0.05;
   double valve_hold_s = 0.3;
