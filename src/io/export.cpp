@@ -30,7 +30,7 @@ struct Entry {
   double value = 0, standard_error = 0;  // 0: none known
   std::string choice;                    // a model's choice ("vertical"), else empty: a number
   std::vector<double> values;            // a list's numbers (then `value` is unused)
-  bool is_list = false;
+  bool IsList() const { return !values.empty(); }
 };
 
 // The choices of the model, which a controller needs as much as its numbers
@@ -87,7 +87,6 @@ std::vector<Entry> Entries(const Parameters& params) {
       lengths.values.push_back(at.tube_length_m);
       deltas.values.push_back(at.delta_per_s);
     }
-    lengths.is_list = deltas.is_list = true;
     const auto after = std::find_if(entries.begin(), entries.end(),
                                     [](const Entry& e) { return e.path == "pipeline.delta"; });
     entries.insert(after == entries.end() ? after : after + 1, {lengths, deltas});
@@ -108,7 +107,7 @@ std::string Number(double value) {
 // An entry's numbers: its value, or its list between `open` and `close`
 // separated by `separator`.
 std::string Numbers(const Entry& e, const char* open, const char* separator, const char* close) {
-  if (!e.is_list) return Number(e.value);
+  if (!e.IsList()) return Number(e.value);
   std::string out = open;
   for (std::size_t i = 0; i < e.values.size(); ++i)
     out += (i > 0 ? separator : "") + Number(e.values[i]);
@@ -199,11 +198,11 @@ std::string CHeader(const Parameters& params, const std::vector<Entry>& entries)
       << CString(params.unit) << "\n\n";
   for (const Entry& e : entries) {
     // A list: an initializer for an array, and its length.
-    if (e.is_list) {
+    if (e.IsList()) {
       out << "#define " << Identifier(e.path) << "_COUNT " << e.values.size() << "\n";
     }
     const std::string value = !e.choice.empty() ? CString(e.choice)
-                              : e.is_list       ? Numbers(e, "{", ", ", "}")
+                              : e.IsList()      ? Numbers(e, "{", ", ", "}")
                                                 : "(" + Number(e.value) + ")";
     out << "#define " << Identifier(e.path) << " " << value << " /* " << InCComment(Comment(e))
         << " */\n";
