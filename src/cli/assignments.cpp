@@ -30,6 +30,14 @@ std::map<std::string, double> ParseAssignments(
   return out;
 }
 
+void ThrowNamingTheFlag(const std::string& message,
+                        const std::vector<std::pair<std::string, std::string>>& flags) {
+  for (const auto& [field, flag] : flags) {
+    if (message.compare(0, field.size(), field) == 0)
+      throw InputError(flag, 0, 0, message.substr(field.size()));
+  }
+}
+
 std::vector<std::string> SplitList(const std::string& text) {
   std::vector<std::string> items;
   std::size_t begin = 0;

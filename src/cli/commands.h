@@ -6,6 +6,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pneumaid/ident/refine.h"
@@ -29,6 +30,13 @@ using CommandRunner = std::function<int()>;
 std::map<std::string, double> ParseAssignments(
     const std::vector<std::string>& items, const std::string& option, const std::string& expected,
     const std::function<bool(const std::string&)>& key_allowed = {});
+
+// The library's options name their fields in messages ("ros2_node: expected
+// ..."); the CLI names the flag that sets each. Throws InputError(flag, rest
+// of the message) when `message` starts with one of `flags`' fields
+// ("ros2_node: " -> "--node"); returns when it starts with none.
+void ThrowNamingTheFlag(const std::string& message,
+                        const std::vector<std::pair<std::string, std::string>>& flags);
 
 // "a,b,..." -> {"a", "b", ...}; empty items dropped (--effects).
 std::vector<std::string> SplitList(const std::string& text);

@@ -37,10 +37,8 @@ CommandRunner AddExportCommand(CLI::App* app) {
     try {
       text = ExportParameters(params, options);
     } catch (const InputError& error) {
-      // The library names its options' objects; here they are flags.
-      const std::string object = "ros2_node: ";
-      if (error.message().compare(0, object.size(), object) != 0) throw;
-      throw InputError("--node", 0, 0, error.message().substr(object.size()));
+      ThrowNamingTheFlag(error.message(), {{"ros2_node: ", "--node"}});
+      throw;
     }
     if (args->out_path.empty()) {
       std::cout << text;

@@ -70,14 +70,8 @@ int RunValidate(const ValidateArgs& args) {
   RefuseOverwritingInputs(outputs, {args.unit_dir, args.params_path});
   SetThresholds(args.min_fit, "--min-fit", &options.min_fit_percent);
   SetThresholds(args.max_rmse, "--max-rmse", &options.max_rmse);
-  // The options' messages name their fields; here those are flags.
   if (std::string error; !options.IsValid(&error)) {
-    for (const auto& [field, flag] :
-         {std::pair<std::string, std::string>{"min_fit_percent: ", "--min-fit"},
-          {"max_rmse: ", "--max-rmse"}}) {
-      if (error.compare(0, field.size(), field) == 0)
-        throw InputError(flag, 0, 0, error.substr(field.size()));
-    }
+    ThrowNamingTheFlag(error, {{"min_fit_percent: ", "--min-fit"}, {"max_rmse: ", "--max-rmse"}});
     throw InputError("validation options", 0, 0, error);
   }
   const ValidationReport report = ValidateUnit(params, unit, options);
