@@ -77,12 +77,6 @@ KindColumns ColumnsOf(ExperimentKind kind) {
   return {};
 }
 
-std::string Join(const std::vector<std::string>& items) {
-  std::string out;
-  for (const auto& item : items) out += (out.empty() ? "" : ", ") + item;
-  return out;
-}
-
 // Reads the manifest, remembering nothing but what it returns.
 class ManifestReader : internal::YamlReader {
  public:
@@ -165,14 +159,15 @@ class ManifestReader : internal::YamlReader {
     const auto child = [&](const YAML::Node& parent, const char* key) {
       return parent && parent.IsMap() ? parent[key] : empty;
     };
-    CheckKeys(rig, "rig",
-              {"gas", "supply_pressure", "atmospheric_pressure", "air_density", "cylinder",
-               "load_mass", "orientation", "tube_length", "position_origin"});
+    if (rig)
+      Keys(rig, "rig.",
+           {"gas", "supply_pressure", "atmospheric_pressure", "air_density", "cylinder",
+            "load_mass", "orientation", "tube_length", "position_origin"});
     const YAML::Node gas = child(rig, "gas");
     const YAML::Node cylinder = child(rig, "cylinder");
-    CheckKeys(gas, "rig.gas", {"k", "R", "T"});
-    CheckKeys(cylinder, "rig.cylinder",
-              {"bore", "rod", "stroke", "dead_volume_1", "dead_volume_2"});
+    if (gas) Keys(gas, "rig.gas.", {"k", "R", "T"});
+    if (cylinder)
+      Keys(cylinder, "rig.cylinder.", {"bore", "rod", "stroke", "dead_volume_1", "dead_volume_2"});
 
     // Atmospheric pressure first: gauge values elsewhere need it.
     ReadScalar(child(rig, "atmospheric_pressure"), "rig.atmospheric_pressure",
@@ -239,20 +234,6 @@ class ManifestReader : internal::YamlReader {
     CheckPositive(where(child(rig, "tube_length")), "rig.tube_length", r.tube_length_m);
   }
 
-  void CheckKeys(const YAML::Node& node, const std::string& path,
-                 const std::set<std::string>& allowed) const {
-    if (!node) return;
-    if (!node.IsMap()) Fail(node, path + ": expected a mapping");
-    for (const auto& entry : node) {
-      const std::string key = Key(entry.first);
-      if (!allowed.count(key)) {
-        Fail(entry.first, "unknown key '" + path + "." + key + "' (expected " +
-                              Join({allowed.begin(), allowed.end()}) + ")");
-      }
-      NotEmpty(entry.first, entry.second, path + "." + key);
-    }
-  }
-
   void ReadScalar(const YAML::Node& node, const std::string& path,
                   const std::vector<Quantity>& quantities, double* value, Manifest* manifest,
                   bool absolute_only = false, double atmospheric_Pa = 0) const {
@@ -287,7 +268,7 @@ class ManifestReader : internal::YamlReader {
       }
       names.push_back(name);
     }
-    Fail(node, path + ": expected one of " + Join(names) + ", got '" + text + "'");
+    Fail(node, path + ": expected one of " + internal::JoinNames(names) + ", got '" + text + "'");
   }
 
   void ReadSensors(const YAML::Node& sensors, const RigConstants& rig, Manifest* manifest) const {
@@ -299,11 +280,11 @@ class ManifestReader : internal::YamlReader {
       if (column == nullptr) {
         std::vector<std::string> names;
         for (const auto& known : KnownColumns()) names.push_back(known.name);
-        Fail(entry.first,
-             "sensors: unknown column '" + name + "' (expected one of " + Join(names) + ")");
+        Fail(entry.first, "sensors: unknown column '" + name + "' (expected one of " +
+                              internal::JoinNames(names) + ")");
       }
       const std::string path = "sensors." + name;
-      CheckKeys(entry.second, path, {"tau", "sigma"});
+      Keys(entry.second, path + ".", {"tau", "sigma"});
       SensorInfo info;
       if (const YAML::Node tau = entry.second["tau"]) {
         info.tau_s = ScalarInSI(tau, path + ".tau", {Quantity::kTime}, 0.0);
@@ -335,7 +316,7 @@ class ManifestReader : internal::YamlReader {
     std::set<std::string> ids;
     for (const auto& item : list) {
       if (!item.IsMap()) Fail(item, "experiments: expected {id, kind, file}");
-      CheckKeys(item, "experiments[]", {"id", "kind", "file", "tube_length"});
+      Keys(item, "experiments[].", {"id", "kind", "file", "tube_length"});
       for (const char* key : {"id", "kind", "file"}) {
         if (!item[key]) Fail(item, std::string("experiment: missing required key '") + key + "'");
       }
@@ -535,7 +516,7 @@ Experiment ParseExperiment(const std::string& text, const std::string& path,
     if (table.Find(name) == nullptr) {
       throw InputError(path, table.header_line, 0,
                        "missing column '" + name + "': a " + ToString(entry.kind) + " log needs " +
-                           Join(kind_columns.required));
+                           internal::JoinNames(kind_columns.required));
     }
   }
   Experiment out;

@@ -19,6 +19,13 @@
 
 namespace pneumaid::internal {
 
+// "a, b, c": names as a message lists them.
+inline std::string JoinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
 class YamlReader {
  protected:
   explicit YamlReader(std::string source) : source_(std::move(source)) {}
@@ -133,16 +140,23 @@ class YamlReader {
     return out;
   }
 
-  // Fails on the first key of `node` not in `allowed`, naming it with `prefix`.
-  // A key with nothing after it fails too (NotEmpty), unless `empty_allowed`
-  // (a set of names, `channels: {x, p1}`, where a bare key means "with the
-  // defaults").
+  // Fails on the first key of `node` not in `allowed`, naming it with `prefix`
+  // and listing the keys expected there. A key with nothing after it fails too
+  // (NotEmpty), unless `empty_allowed` (a set of names, `channels: {x, p1}`,
+  // where a bare key means "with the defaults").
   void Keys(const YAML::Node& node, const std::string& prefix, const std::set<std::string>& allowed,
             bool empty_allowed = false) const {
-    if (!node.IsMap()) Fail(node, prefix + ": expected a mapping");
+    if (!node.IsMap()) {
+      const bool top = prefix.empty();
+      Fail(node,
+           (top ? "the document" : prefix.substr(0, prefix.size() - 1)) + ": expected a mapping");
+    }
     for (const auto& entry : node) {
       const std::string key = Key(entry.first);
-      if (!allowed.count(key)) Fail(entry.first, "unknown key '" + prefix + key + "'");
+      if (!allowed.count(key)) {
+        Fail(entry.first, "unknown key '" + prefix + key + "' (expected " +
+                              JoinNames({allowed.begin(), allowed.end()}) + ")");
+      }
       if (!empty_allowed) NotEmpty(entry.first, entry.second, prefix + key);
     }
   }

@@ -198,8 +198,9 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadUnit{"missing_key", "unit.yaml", "unit: TEST-1\n", "", "unit.yaml:1",
                 "missing required key 'unit'"},
-        BadUnit{"unknown_key", "unit.yaml",
-                "{bore:", "{bor:", "unit.yaml:5:", "unknown key 'rig.cylinder.bor'"},
+        BadUnit{"unknown_key", "unit.yaml", "{bore:", "{bor:", "unit.yaml:5:",
+                "unknown key 'rig.cylinder.bor' (expected bore, dead_volume_1, dead_volume_2, rod, "
+                "stroke)"},
         BadUnit{"duplicate_key", "unit.yaml", "stroke: \"50 mm\"}",
                 "stroke: \"50 mm\", stroke: \"45 mm\"}", "unit.yaml:5:", "duplicate key 'stroke'"},
         // A key with nothing after it: its own line, not the next key's.
