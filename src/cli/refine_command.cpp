@@ -53,7 +53,10 @@ int ReportAndSave(const RefineResult& result, const Unit& unit, const std::strin
   WriteHtml(html_path, html);
   if (result.status == FitStatus::kNotExplained) {
     std::cerr << "error: " << result.reason
-              << "\n  the best set found is written, with that verdict in its provenance\n";
+              << (result.start_written
+                      ? "\n  the start's coefficients are written, with that verdict and the "
+                        "refined values (which absorb what the model lacks) in its provenance\n"
+                      : "\n  the best set found is written, with that verdict in its provenance\n");
     return kNumericalFailure;
   }
   if (result.status != FitStatus::kConverged) {

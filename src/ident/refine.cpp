@@ -121,6 +121,13 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   for (const std::string& path : freed) free.push_back(path);
   entry["free"] = free;
   if (!r.creep_report.empty()) entry["creep_fit"] = r.creep_report;
+  // The start written instead of the refined set: what the refinement found.
+  if (r.start_written) {
+    entry["written"] = "start (the model does not explain these logs)";
+    YAML::Node refined(YAML::NodeType::Map);
+    for (const FittedCoefficient& c : r.coefficients) refined[c.path] = YamlNumber(c.value);
+    entry["refined"] = refined;
+  }
   return WithProvenanceEntry(provenance, "refine", entry);
 }
 
@@ -346,6 +353,19 @@ RefineResult WithCreepFit(RefineResult paper, const Parameters& start, const Uni
   return r;
 }
 
+// RefineOptions::write_start_unless_explained: a refinement the verdict does
+// not accept writes the start (under the unit's conditions, as validated
+// before), its own entry in the provenance saying so with the refined values.
+void WriteStartUnlessExplained(const Parameters& start, const Unit& unit, const FitSpec& spec,
+                               RefineResult* r) {
+  if (!r->has_values() || r->status != FitStatus::kNotExplained) return;
+  const std::string provenance = r->params.provenance_yaml;
+  r->params = WithRigConditions(start, unit);
+  r->start_written = true;
+  r->params.provenance_yaml = WithRefineEntry(provenance, *r, spec);
+  r->held_out_after = r->held_out_before;
+}
+
 }  // namespace
 
 RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& spec,
@@ -355,6 +375,7 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const RefineOptions options = WithLagStarts(start, unit, spec, given);
   RefineResult r = LaterRounds(RefineModel(start, unit, spec, options), start, unit, spec, options);
   if (options.fit_stick_creep) r = WithCreepFit(std::move(r), start, unit, spec, options);
+  if (options.write_start_unless_explained) WriteStartUnlessExplained(start, unit, spec, &r);
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;
 }
@@ -442,6 +463,10 @@ std::string RefineResult::BriefReport() const {
     out << line;
   }
   out << CoefficientReport("  ", correlation_flag);
+  if (start_written) {
+    out << "  written: the start's coefficients; the refined ones above absorb what the model "
+           "lacks (provenance refine.refined)\n";
+  }
   for (const ExperimentCost& e : fitted) {
     std::snprintf(line, sizeof(line), "  fitted   %-16s cost %.6g -> %.6g (%ld residuals)\n",
                   e.id.c_str(), e.before, e.after, e.residuals);

@@ -39,22 +39,6 @@ std::string NotApplicable(const RefineResult& paper, const Parameters& start, co
   return "the spec's last stage frees no friction coefficient";
 }
 
-// The inner fits start in the paper fit's basin: its last stage alone, none
-// of the searches for another basin, no creep fit of their own.
-RefineOptions InnerOptions(const RefineOptions& options) {
-  RefineOptions inner = options;
-  inner.fit_stick_creep = false;
-  inner.screen_friction_starts = false;
-  inner.screen_friction_windows = false;
-  inner.coordinate_rounds = 0;
-  inner.robust_refit = false;
-  inner.windowed_refit = false;
-  inner.rescue_starts = 0;
-  inner.windowed_polish = false;
-  inner.rounds = 1;
-  return inner;
-}
-
 // The spec's last stage alone, without held-out runs (Refine validates the
 // creep fit it keeps, once).
 FitSpec LastStageOnly(const FitSpec& spec) {
@@ -123,6 +107,21 @@ Profile FitProfile(const RefineResult& paper, const Unit& unit, const FitSpec& h
 }
 
 }  // namespace
+
+RefineOptions InnerOptions(const RefineOptions& options) {
+  RefineOptions inner = options;
+  inner.fit_stick_creep = false;
+  inner.screen_friction_starts = false;
+  inner.screen_friction_windows = false;
+  inner.coordinate_rounds = 0;
+  inner.robust_refit = false;
+  inner.windowed_refit = false;
+  inner.rescue_starts = 0;
+  inner.windowed_polish = false;
+  inner.rounds = 1;
+  inner.write_start_unless_explained = false;  // its fits are compared as refined
+  return inner;
+}
 
 RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
                             const FitSpec& spec, const RefineOptions& options) {

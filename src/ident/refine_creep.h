@@ -26,6 +26,12 @@ namespace pneumaid::refine_internal {
 RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
                             const FitSpec& spec, const RefineOptions& options);
 
+// The options of the creep fit's inner fits, from the refinement's: its
+// last stage alone in the paper fit's basin (none of the searches for another
+// basin, no creep fit of their own), their refined sets returned whatever
+// their verdict (they are compared, not written).
+RefineOptions InnerOptions(const RefineOptions& options);
+
 // A creep fit kept with v held at a profile point (the fit with it freed
 // ended higher): v listed among its coefficients as held, by name, with
 // `why`; no standard error, the others' errors conditional on it.

@@ -410,7 +410,15 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     for (const FittedCoefficient& rp : refined.coefficients) {
       double truth = 0, value = 0;
       if (!GetParameter(t, rp.path, &truth)) continue;
-      out.refined_errors.Add(rp.path, rp.value, truth, rp.standard_error);
+      // As written: the start's value and error where the model does not
+      // explain the runs (RefineResult::start_written).
+      double written = rp.value, written_error = rp.standard_error;
+      if (refined.start_written) {
+        GetParameter(fit, rp.path, &written);
+        const auto found = fit.uncertainty.find(rp.path);
+        written_error = found == fit.uncertainty.end() ? 0 : found->second;
+      }
+      out.refined_errors.Add(rp.path, written, truth, written_error);
       const auto error = identified.uncertainty.find(rp.path);
       if (error != identified.uncertainty.end() && GetParameter(identified, rp.path, &value))
         out.identify_errors.Add(rp.path, value, truth, error->second);

@@ -171,5 +171,18 @@ TEST(RefineCreepTest, OptionsNameTheBadField) {
   EXPECT_FALSE(RefineOptions{}.fit_stick_creep);  // diagnose's base refits keep their model
 }
 
+// The creep fit compares its inner fits as refined: with identify's options
+// an inner fit that is not explained had returned its start, and on a gate
+// unit (0.09 kg, 500 Hz) the freed fit then started from the profile's start
+// and ended at 166 per residual instead of 113.
+TEST(RefineCreepTest, TheInnerFitsReturnTheirRefinedSets) {
+  const RefineOptions outer = RefineOptions::ForIdentify();
+  ASSERT_TRUE(outer.write_start_unless_explained);
+  const RefineOptions inner = refine_internal::InnerOptions(outer);
+  EXPECT_FALSE(inner.write_start_unless_explained);
+  EXPECT_FALSE(inner.fit_stick_creep);
+  EXPECT_EQ(inner.rounds, 1);
+}
+
 }  // namespace
 }  // namespace pneumaid

@@ -310,6 +310,89 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
             FitStatus::kNotExplained);
   EXPECT_GT(missing.reduced_chi_square, missing.acceptable_reduced_chi_square);
   EXPECT_EQ(missing.rescue_starts_tried, 2);  // the trust box's two
+  // The default options write the refined set, whatever the verdict.
+  EXPECT_FALSE(missing.start_written);
+  for (const FittedCoefficient& c : missing.coefficients)
+    EXPECT_EQ(testing::ParameterValue(missing.params, c.path), c.value) << c.path;
+}
+
+// A rig whose chambers exchange heat with their walls (heat_transfer, h
+// 0.2 W/K; the model is adiabatic) and whose rod creeps at its stick, from the
+// component fits: the refinement cannot explain the strokes, and its
+// coefficients absorb the heat exchange (friction at or near its bounds).
+// identify's options write the start, the component fits, with the verdict
+// and the refined values in the provenance; the refined set is the further
+// from the truth. Without the option (diagnose's fits) the same fit writes
+// the refined set.
+TEST(RefineTest, WhereTheModelDoesNotExplainTheLogsTheComponentFitsAreWritten) {
+  Parameters truth;
+  truth.effects["heat_transfer"] = {{"h", 0.2}};
+  Protocol protocol = testing::RefinementProtocol({0.5, 0.8}, true);
+  protocol.mismatch.regularized_friction = true;
+  protocol.mismatch.stick_velocity_m_per_s = 1e-4;
+  protocol.mismatch.relative_tolerance = 1e-8;
+  const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 53, "H"), "refine_heat");
+  IdentifyReport report;
+  const Parameters identified = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
+  RefineOptions options = RefineOptions::ForIdentify();
+  // The written set under test, not the attempts to explain the runs.
+  options.rounds = 1;
+  options.windowed_polish = false;
+  options.screen_friction_windows = false;
+  options.screened_alternatives = 0;
+  options.coordinate_rounds = 0;
+  options.rescue_starts = 0;
+  ASSERT_TRUE(options.write_start_unless_explained);
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineResult written = Refine(identified, unit, spec, options);
+  std::cout << report.BriefReport() << written.BriefReport();
+  ASSERT_EQ(written.status, FitStatus::kNotExplained) << written.reason;
+  EXPECT_TRUE(written.start_written);
+  // How far a set's friction is from the truth: the sum of the relative
+  // errors of its eight coefficients.
+  const auto friction_error = [&truth](const Parameters& p) {
+    double sum = 0;
+    for (const char* path : {"friction.positive.Fs", "friction.positive.Fd", "friction.positive.b",
+                             "friction.positive.vs", "friction.negative.Fs", "friction.negative.Fd",
+                             "friction.negative.b", "friction.negative.vs"}) {
+      const double t = testing::ParameterValue(truth, path);
+      sum += std::fabs(testing::ParameterValue(p, path) / t - 1);
+    }
+    return sum;
+  };
+  Parameters refined = written.params;
+  written.ApplyTo(&refined);
+  for (const FittedCoefficient& c : written.coefficients) {
+    EXPECT_EQ(testing::ParameterValue(written.params, c.path),
+              testing::ParameterValue(identified, c.path))
+        << c.path;
+  }
+  EXPECT_LT(friction_error(written.params), 0.5 * friction_error(refined));
+  // The provenance says which set was written and keeps the refined values.
+  const YAML::Node entry = YAML::Load(written.params.provenance_yaml)["refine"];
+  EXPECT_EQ(entry["written"].as<std::string>(), "start (the model does not explain these logs)");
+  for (const FittedCoefficient& c : written.coefficients)
+    EXPECT_DOUBLE_EQ(entry["refined"][c.path].as<double>(), c.value) << c.path;
+  EXPECT_EQ(entry["status"].as<std::string>(), ToString(FitStatus::kNotExplained));
+  EXPECT_NE(written.BriefReport().find("written: the start's coefficients"), std::string::npos);
+  // The held-out runs are validated with what is written.
+  ASSERT_EQ(written.held_out_after.experiments.size(), written.held_out_before.experiments.size());
+  for (std::size_t i = 0; i < written.held_out_after.experiments.size(); ++i) {
+    EXPECT_EQ(written.held_out_after.experiments[i].channels.at("x").rmse,
+              written.held_out_before.experiments[i].channels.at("x").rmse);
+  }
+  // The option changes what is written, not the fit: the creep fit's inner
+  // fits are compared as refined (they had written their starts).
+  options.write_start_unless_explained = false;
+  const RefineResult refined_written = Refine(identified, unit, spec, options);
+  EXPECT_FALSE(refined_written.start_written);
+  EXPECT_EQ(refined_written.creep_report, written.creep_report);
+  ASSERT_EQ(refined_written.coefficients.size(), written.coefficients.size());
+  for (std::size_t i = 0; i < written.coefficients.size(); ++i) {
+    const FittedCoefficient& c = refined_written.coefficients[i];
+    EXPECT_EQ(c.value, written.coefficients[i].value) << c.path;
+    EXPECT_EQ(testing::ParameterValue(refined_written.params, c.path), c.value) << c.path;
+  }
 }
 
 class RefineSpecTest : public ::testing::Test {

@@ -10,6 +10,7 @@
 
 #include <iostream>
 
+#include "../../src/ident/refine_creep.h"
 #include "../../src/ident/refine_friction_screen.h"
 #include "../synth/synth_test_util.h"
 #include "pneumaid/ident/refine.h"
@@ -87,15 +88,9 @@ TEST(RefineWindowedRefitTest, TheScreenRankedByWindowsFindsTheSameBasin) {
       c.start, c.unit, spec, options, true, 0, refine_internal::ScreenMeasure::kWindows);
   std::cout << screen.report << "\n";
   ASSERT_TRUE(screen.moved) << screen.report;
-  RefineOptions plain;
-  plain.screen_friction_starts = false;
-  plain.coordinate_rounds = 0;
-  plain.robust_refit = false;
-  plain.windowed_refit = false;
-  plain.rescue_starts = 0;
-  plain.windowed_polish = false;
-  plain.rounds = 1;
-  plain.fit_stick_creep = false;
+  // One fit from that start, none of the attempts (the creep fit's inner
+  // fits are such).
+  const RefineOptions plain = refine_internal::InnerOptions(RefineOptions{});
   const RefineResult result = Refine(screen.start, c.unit, spec, plain);
   std::cout << result.BriefReport();
   EXPECT_EQ(result.status, FitStatus::kConverged) << result.reason;
