@@ -141,8 +141,10 @@ UnitOutcome ProcessUnit(const std::string& name, const fs::path& unit_dir,
     if (stop != nullptr && stop->load()) throw FitError("unit " + name, "time limit reached");
     params = r.params;
     verdict = std::string("refine: ") + ToString(r.status);
+    if (r.start_written) verdict += " (the component fits written)";
     json << ", \"refine\": {\"status\": " << JsonString(ToString(r.status))
-         << ", \"reduced_chi_square\": " << JsonNumber(r.reduced_chi_square) << "}";
+         << ", \"reduced_chi_square\": " << JsonNumber(r.reduced_chi_square)
+         << ", \"start_written\": " << (r.start_written ? "true" : "false") << "}";
   }
   if (options.validate) {
     ValidationOptions v;

@@ -56,7 +56,9 @@ int ReportAndSave(const RefineResult& result, const Unit& unit, const std::strin
               << (result.start_written
                       ? "\n  the start's coefficients are written, with that verdict and the "
                         "refined values (which absorb what the model lacks) in its provenance\n"
-                      : "\n  the best set found is written, with that verdict in its provenance\n");
+                      : "\n  the best set found is written, with that verdict in its provenance\n")
+              << "  next: pneumaid diagnose " << unit.directory << " --params " << out_path
+              << " --out DIR looks for the effect the model lacks (docs/diagnose.md)\n";
     return kNumericalFailure;
   }
   if (result.status != FitStatus::kConverged) {
@@ -72,7 +74,9 @@ CommandRunner AddRefineCommand(CLI::App* app) {
   app->add_option("unit", args->unit_dir, "unit directory")->required();
   app->add_option("--params", args->params_path, "starting parameter set (params-v1)")->required();
   app->add_option("--spec", args->spec_path, "fit spec (pneumaid-fit/1)")->capture_default_str();
-  app->add_option("--out", args->out_path, "refined parameter set (params-v1)")
+  app->add_option("--out", args->out_path,
+                  "parameter set written (params-v1): the refined one, or the start where the "
+                  "model does not explain the logs")
       ->required()
       ->check(InExistingDirectory);
   app->add_option("--threads", args->threads,

@@ -65,8 +65,11 @@ std::string YamlNumber(double value) {
   return FormatDouble(value);
 }
 
-// The start's provenance with this refinement's entry `refine` (replacing
-// any earlier one: a mapping has one key of a name), in flow style.
+// The start's provenance with this refinement's entry (replacing any
+// earlier one of its name: a mapping has one key of a name), in flow style:
+// `refine` for a refined set; `refine_not_written` where the start is written
+// instead (RefineResult::start_written), which leaves the start's own entries,
+// and with them what the written values are, as they were.
 std::string WithRefineEntry(const std::string& provenance, const RefineResult& r,
                             const FitSpec& spec) {
   YAML::Node entry(YAML::NodeType::Map);
@@ -81,8 +84,9 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   entry["experiments"] = std::to_string(r.fitted.size());
   entry["initial_pressures"] = spec.fit_initial_pressures ? "fit" : "logged";
   // The estimates the verdict holds from, per run: [p1, p2] in Pa absolute
-  // (the logged ones leave a worse fit; docs/refinement.md).
-  if (!r.estimated_starts.empty()) {
+  // (the logged ones leave a worse fit; docs/refinement.md). Of the refined
+  // set only.
+  if (!r.estimated_starts.empty() && !r.start_written) {
     YAML::Node starts(YAML::NodeType::Map);
     for (const EstimatedStart& e : r.estimated_starts) {
       YAML::Node pair(YAML::NodeType::Sequence);
@@ -96,6 +100,16 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   entry["reduced_chi_square"] = YamlNumber(r.reduced_chi_square);
   entry["acceptable_reduced_chi_square"] = YamlNumber(r.acceptable_reduced_chi_square);
   entry["converged"] = r.explained();
+  if (!r.creep_report.empty()) entry["creep_fit"] = r.creep_report;
+  if (r.start_written) {
+    // What the refinement found, not written: the written set's values are
+    // the start's, and so are its words on them (identify's `held`, an
+    // earlier refinement's `refine`).
+    YAML::Node refined(YAML::NodeType::Map);
+    for (const FittedCoefficient& c : r.coefficients) refined[c.path] = YamlNumber(c.value);
+    entry["refined"] = refined;
+    return WithProvenanceEntry(provenance, "refine_not_written", entry);
+  }
   // Fitted, but on a bound of its range: no standard error, so no entry in
   // `uncertainty` (a reader would otherwise take it for the prior's).
   YAML::Node at_bound(YAML::NodeType::Sequence);
@@ -120,14 +134,6 @@ std::string WithRefineEntry(const std::string& provenance, const RefineResult& r
   YAML::Node free(YAML::NodeType::Sequence);
   for (const std::string& path : freed) free.push_back(path);
   entry["free"] = free;
-  if (!r.creep_report.empty()) entry["creep_fit"] = r.creep_report;
-  // The start written instead of the refined set: what the refinement found.
-  if (r.start_written) {
-    entry["written"] = "start (the model does not explain these logs)";
-    YAML::Node refined(YAML::NodeType::Map);
-    for (const FittedCoefficient& c : r.coefficients) refined[c.path] = YamlNumber(c.value);
-    entry["refined"] = refined;
-  }
   return WithProvenanceEntry(provenance, "refine", entry);
 }
 
@@ -355,14 +361,14 @@ RefineResult WithCreepFit(RefineResult paper, const Parameters& start, const Uni
 
 // RefineOptions::write_start_unless_explained: a refinement the verdict does
 // not accept writes the start (under the unit's conditions, as validated
-// before), its own entry in the provenance saying so with the refined values.
+// before: held_out_before) with its own entries, and this refinement's as
+// `refine_not_written`, with the refined values.
 void WriteStartUnlessExplained(const Parameters& start, const Unit& unit, const FitSpec& spec,
                                RefineResult* r) {
   if (!r->has_values() || r->status != FitStatus::kNotExplained) return;
-  const std::string provenance = r->params.provenance_yaml;
   r->params = WithRigConditions(start, unit);
   r->start_written = true;
-  r->params.provenance_yaml = WithRefineEntry(provenance, *r, spec);
+  r->params.provenance_yaml = WithRefineEntry(r->params.provenance_yaml, *r, spec);
   r->held_out_after = r->held_out_before;
 }
 
@@ -465,7 +471,7 @@ std::string RefineResult::BriefReport() const {
   out << CoefficientReport("  ", correlation_flag);
   if (start_written) {
     out << "  written: the start's coefficients; the refined ones above absorb what the model "
-           "lacks (provenance refine.refined)\n";
+           "lacks (provenance refine_not_written.refined)\n";
   }
   for (const ExperimentCost& e : fitted) {
     std::snprintf(line, sizeof(line), "  fitted   %-16s cost %.6g -> %.6g (%ld residuals)\n",

@@ -147,9 +147,9 @@ class YamlReader {
   void Keys(const YAML::Node& node, const std::string& prefix, const std::set<std::string>& allowed,
             bool empty_allowed = false) const {
     if (!node.IsMap()) {
-      const bool top = prefix.empty();
-      Fail(node,
-           (top ? "the document" : prefix.substr(0, prefix.size() - 1)) + ": expected a mapping");
+      std::string where = prefix.empty() ? "the document" : prefix;
+      if (where.back() == '.') where.pop_back();
+      Fail(node, where + ": expected a mapping");
     }
     for (const auto& entry : node) {
       const std::string key = Key(entry.first);

@@ -387,7 +387,11 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
       refine_spec.parameters.push_back(
           {"effects.stick_creep.v", v.plausible_min, v.plausible_max, ParameterScale::kLog});
     }
-    const RefineResult refined = Refine(from, unit, refine_spec, refine_options);
+    // From the truth (or the rig's model) the start is no measurement: the
+    // refined set is judged whatever its verdict.
+    RefineOptions options = refine_options;
+    options.write_start_unless_explained &= start == Start::kIdentify;
+    const RefineResult refined = Refine(from, unit, refine_spec, options);
     out.refine_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
     // The truth the fit is judged by; with --start rig, the rig's own model.
     const Parameters& t = start == Start::kRig ? from : d.truth;

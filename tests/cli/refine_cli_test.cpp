@@ -77,6 +77,37 @@ TEST_F(RefineCliTest, IdentifyRefineRunsTheComponentFitsThenTheRefinement) {
   EXPECT_NE(written.find("refine:"), std::string::npos) << written;
 }
 
+// A refinement the model cannot win (the tube's delta held to a tenth of
+// the rig's by its bounds): exit 3, "the model does not explain these logs",
+// and the start's set written with the refined value in its provenance, and
+// the next step named (diagnose, from the set written).
+TEST_F(RefineCliTest, WhereTheModelDoesNotExplainTheLogsTheStartIsWrittenAndDiagnoseNamed) {
+  std::string paper = Read(testing::Source("configs/paper.yaml"));
+  paper.replace(paper.find("delta: 8.0"), 10, "delta: 0.8");
+  const std::string start = Write("slow-tube.yaml", paper);
+  const std::string spec = Write("tube.yaml", R"(format: pneumaid-fit/1
+parameters:
+  pipeline.delta: {min: 0.5, max: 1}
+experiments: {fit: [step-1], hold_out: [profile-1]}
+max_iterations: 10
+)");
+  const std::string out = (dir_ / "refined.yaml").string();
+  const std::string unit = testing::Source("datasets/paper-rig");
+  ASSERT_EQ(Run("refine " + unit + " --params " + start + " --spec " + spec + " --out " + out +
+                " --no-stick-creep"),
+            3)
+      << Stdout() << Stderr();
+  EXPECT_NE(Stderr().find("the model does not explain these logs"), std::string::npos);
+  EXPECT_NE(Stderr().find("the start's coefficients are written"), std::string::npos) << Stderr();
+  EXPECT_NE(Stderr().find("next: pneumaid diagnose " + unit + " --params " + out),
+            std::string::npos)
+      << Stderr();
+  const std::string written = Read(out);
+  EXPECT_NE(written.find("delta: 0.8\n"), std::string::npos) << written;
+  EXPECT_NE(written.find("refine_not_written: {"), std::string::npos) << written;
+  EXPECT_NE(written.find("refined: {pipeline.delta: "), std::string::npos) << written;
+}
+
 TEST_F(RefineCliTest, BadInputExitsTwoAndWritesNothing) {
   const std::string out = (dir_ / "refined.yaml").string();
   const std::string unit = testing::Source("datasets/paper-rig");

@@ -20,6 +20,7 @@
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/provenance.h"
 #include "pneumaid/model/parameter_table.h"
+#include "pneumaid/validate/logged_run.h"
 #include "pneumaid/validate/validate.h"
 #include "refine_mismatch_util.h"
 
@@ -369,23 +370,35 @@ TEST(RefineTest, WhereTheModelDoesNotExplainTheLogsTheComponentFitsAreWritten) {
   }
   EXPECT_LT(friction_error(written.params), 0.5 * friction_error(refined));
   // The provenance says which set was written and keeps the refined values.
-  const YAML::Node entry = YAML::Load(written.params.provenance_yaml)["refine"];
-  EXPECT_EQ(entry["written"].as<std::string>(), "start (the model does not explain these logs)");
+  const YAML::Node provenance = YAML::Load(written.params.provenance_yaml);
+  const YAML::Node entry = provenance["refine_not_written"];
+  ASSERT_TRUE(entry.IsMap()) << written.params.provenance_yaml;
   for (const FittedCoefficient& c : written.coefficients)
     EXPECT_DOUBLE_EQ(entry["refined"][c.path].as<double>(), c.value) << c.path;
   EXPECT_EQ(entry["status"].as<std::string>(), ToString(FitStatus::kNotExplained));
+  // The start's own words on its values stay (identify's entries), and no
+  // `refine` entry claims the written values were refined.
+  EXPECT_FALSE(provenance["refine"]) << written.params.provenance_yaml;
+  EXPECT_TRUE(provenance["friction"]) << written.params.provenance_yaml;
+  // The whole set is identify's under the unit's conditions: errors and
+  // effects too (no creep speed the creep fit may have found).
+  const Parameters conditioned = WithRigConditions(identified, unit);
+  EXPECT_EQ(written.params.uncertainty, conditioned.uncertainty);
+  EXPECT_EQ(written.params.effects, conditioned.effects);
   EXPECT_NE(written.BriefReport().find("written: the start's coefficients"), std::string::npos);
-  // The held-out runs are validated with what is written.
-  ASSERT_EQ(written.held_out_after.experiments.size(), written.held_out_before.experiments.size());
-  for (std::size_t i = 0; i < written.held_out_after.experiments.size(); ++i) {
-    EXPECT_EQ(written.held_out_after.experiments[i].channels.at("x").rmse,
-              written.held_out_before.experiments[i].channels.at("x").rmse);
+  // The held-out runs are reported as validated with what is written.
+  const ValidationReport held_out = ValidateUnit(written.params, unit, ValidationOptions{});
+  ASSERT_EQ(written.held_out_after.experiments.size(), held_out.experiments.size());
+  for (std::size_t i = 0; i < held_out.experiments.size(); ++i) {
+    EXPECT_NEAR(written.held_out_after.experiments[i].channels.at("x").rmse,
+                held_out.experiments[i].channels.at("x").rmse, 1e-9);
   }
   // The option changes what is written, not the fit: the creep fit's inner
   // fits are compared as refined (they had written their starts).
   options.write_start_unless_explained = false;
   const RefineResult refined_written = Refine(identified, unit, spec, options);
   EXPECT_FALSE(refined_written.start_written);
+  ASSERT_NE(written.creep_report.find("v held at"), std::string::npos) << written.creep_report;
   EXPECT_EQ(refined_written.creep_report, written.creep_report);
   ASSERT_EQ(refined_written.coefficients.size(), written.coefficients.size());
   for (std::size_t i = 0; i < written.coefficients.size(); ++i) {

@@ -267,7 +267,7 @@ struct RefineOptions {
   // the component fits, read off tests that isolate their component, were
   // within tolerance, and `diagnose` from the refined set named the effect
   // at 14 times its size (docs/refinement.md, session 53). The refined values
-  // stay in the report and the provenance (refine.refined). On by
+  // stay in the report and the provenance (refine_not_written.refined). On by
   // ForIdentify(); diagnose's fits compare refined values and keep it off.
   bool write_start_unless_explained = false;
 
