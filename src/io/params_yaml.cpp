@@ -81,6 +81,23 @@ const std::vector<ChoiceKey>& ChoiceKeys() {
   return keys;
 }
 
+// The keys a set may have directly under `section` ("friction.positive"),
+// for the message that refuses another: read off the tables that the reader
+// itself walks.
+std::vector<std::string> KeysUnder(const std::string& section) {
+  std::set<std::string> keys;
+  const std::string prefix = section + ".";
+  const auto add = [&](const std::string& path) {
+    if (path.compare(0, prefix.size(), prefix) != 0) return;
+    keys.insert(path.substr(prefix.size(), path.find('.', prefix.size()) - prefix.size()));
+  };
+  for (const ScalarParameterInfo& info : ScalarParameterTable()) add(info.path);
+  for (const ChoiceKey& key : ChoiceKeys()) add(key.path);
+  for (const std::string& path : kSubsections) add(path);
+  add("pipeline.delta_by_length");
+  return {keys.begin(), keys.end()};
+}
+
 const ChoiceKey* FindChoiceKey(const std::string& path) {
   for (const ChoiceKey& key : ChoiceKeys()) {
     if (path == key.path) return &key;
@@ -137,7 +154,11 @@ class ParamsReader : internal::YamlReader {
       const std::string key = Key(entry.first);
       const YAML::Node& value = entry.second;
       where_[key] = value;
-      if (!kTopLevelKeys.count(key)) Fail(entry.first, "unknown key '" + key + "'");
+      if (!kTopLevelKeys.count(key)) {
+        Fail(entry.first, "unknown key '" + key + "' (expected " +
+                              internal::JoinNames({kTopLevelKeys.begin(), kTopLevelKeys.end()}) +
+                              ")");
+      }
       NotEmpty(entry.first, value, key);
       if (key == "format") {
         if (ScalarText(value, key) != kParamsFormat) {
@@ -178,7 +199,8 @@ class ParamsReader : internal::YamlReader {
       } else if (kSubsections.count(path)) {
         ReadSection(value, path, params);
       } else if (!ReadSpecial(value, path, params)) {
-        Fail(entry.first, "unknown key '" + path + "'");
+        Fail(entry.first, "unknown key '" + path + "' (expected " +
+                              internal::JoinNames(KeysUnder(prefix)) + ")");
       }
     }
   }

@@ -170,9 +170,11 @@ INSTANTIATE_TEST_SUITE_P(
     Cases, ParamsYamlBadInputTest,
     ::testing::Values(
         BadCase{"unknown_top_key", "effects: {}", "effects: {}\ncolour: blue", 32,
-                "unknown key 'colour'"},
+                "unknown key 'colour' (expected cylinder, effects, format, friction, gas, "
+                "pipeline, provenance, supply, uncertainty, unit, valve)"},
         BadCase{"unknown_nested_key", "  stroke: 0.05", "  stroke: 0.05\n  strok: 0.05", 12,
-                "cylinder.strok"},
+                "unknown key 'cylinder.strok' (expected area_1, area_2, dead_volume_1, "
+                "dead_volume_2, load_mass, orientation, stroke)"},
         BadCase{"missing_key", "  load_mass: 0.15\n", "", 9,
                 "missing required key 'cylinder.load_mass'"},
         // The model's choices are required too (a missing orientation was
