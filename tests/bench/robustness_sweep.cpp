@@ -45,6 +45,9 @@
 // --rig-creep V: every unit's rig sticks by the smooth law with creep speed
 // V [m/s] (the draw's other values unchanged): a rig regularised wider than
 // the sweep draws.
+// --hidden effects.NAME.PARAM=VALUE (repeatable): every unit's rig has that
+// effect of the catalog (docs/effects.md), which the fitted model lacks: a
+// rig's physics the paper leaves out (a heat exchange, a valve's lag, a leak).
 #include <glog/logging.h>
 #include <unistd.h>
 
@@ -345,7 +348,8 @@ enum class Start { kIdentify, kTruth, kRig };
 
 UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& scratch, bool keep,
                    const RefineOptions& refine_options, Start start, int probe_sets,
-                   double rig_creep_m_per_s, double clock_jitter) {
+                   double rig_creep_m_per_s, double clock_jitter,
+                   const std::map<std::string, double>& hidden) {
   UnitResult out;
   char id[32];
   std::snprintf(id, sizeof(id), "sweep-%02d", index);
@@ -363,6 +367,12 @@ UnitResult RunUnit(std::uint64_t seed, int index, const std::filesystem::path& s
     char clock[48];
     std::snprintf(clock, sizeof(clock), " (clock +-%.0f %%)", 100 * clock_jitter);
     d.summary += clock;
+  }
+  for (const auto& [path, value] : hidden) {
+    std::string name, parameter;
+    SplitEffectPath(path, &name, &parameter);
+    d.truth.effects[name][parameter] = value;
+    d.summary += " (hidden " + path + " " + FormatDouble(value) + ")";
   }
   out.summary = d.summary;
   try {
@@ -460,7 +470,7 @@ int main(int argc, char** argv) {
                  "[--start-prior on|off] "
                  "[--start identify|truth|rig] [--held-out-probe K] [--error-blocks S] "
                  "[--cost-resolution-directions K] [--units I,J,...] [--stick-creep on|off] "
-                 "[--rig-creep V] [--clock-jitter J]\n";
+                 "[--rig-creep V] [--clock-jitter J] [--hidden effects.NAME.PARAM=VALUE]\n";
     return 2;
   }
   const int n = std::atoi(argv[1]);
@@ -468,8 +478,9 @@ int main(int argc, char** argv) {
   int jobs = 1, min_units = -1, min_units_valve_tube = -1, min_friction_total = -1, probe_sets = 0;
   std::string keep;  // --keep DIR: the units are written there and kept
   RefineOptions refine_options = RefineOptions::ForIdentify();
-  double rig_creep = 0;     // --rig-creep
-  double clock_jitter = 0;  // --clock-jitter
+  double rig_creep = 0;                  // --rig-creep
+  double clock_jitter = 0;               // --clock-jitter
+  std::map<std::string, double> hidden;  // --hidden
   Start start = Start::kIdentify;
   std::vector<int> indices;  // --units: the units to run (default: all N)
   if (argc % 2 != 0) {
@@ -492,7 +503,19 @@ int main(int argc, char** argv) {
       probe_sets = std::atoi(argv[i + 1]);
     else if (flag == "--keep")
       keep = argv[i + 1];
-    else if (flag == "--units") {
+    else if (flag == "--hidden") {
+      const std::size_t equals = value.find('=');
+      const std::string path = value.substr(0, equals);
+      char* end = nullptr;
+      const double number =
+          equals == std::string::npos ? NAN : std::strtod(value.c_str() + equals + 1, &end);
+      if (FindEffectParameter(path) == nullptr || !std::isfinite(number) || *end != '\0') {
+        std::cerr << "--hidden: expected effects.NAME.PARAM=VALUE of the catalog, got " << value
+                  << "\n";
+        return 2;
+      }
+      hidden[path] = number;
+    } else if (flag == "--units") {
       if (value.empty()) {
         std::cerr << "--units: an empty list\n";
         return 2;
@@ -582,7 +605,7 @@ int main(int argc, char** argv) {
     workers.emplace_back([&] {
       for (int k = next++; k < count; k = next++) {
         results[k] = RunUnit(seed, indices[k], scratch, !keep.empty(), refine_options, start,
-                             probe_sets, rig_creep, clock_jitter);
+                             probe_sets, rig_creep, clock_jitter, hidden);
         const UnitResult& r = results[k];
         std::lock_guard<std::mutex> lock(print);
         std::printf("%s: %s\n", r.id.c_str(), r.summary.c_str());
