@@ -58,7 +58,9 @@ auto NamingFlag(const std::string& options, const std::string& field, const std:
 
 // Prints a refinement's report and writes its parameter set (and, with
 // `html_path`, the unit's report of it, `text_before` heading its text); the
-// exit status says whether it converged (refine, identify --refine).
+// exit status says whether it converged (refine, identify --refine). The
+// result is one of RefineOptions::ForIdentify(): where the model does not
+// explain the runs, the set written is the start.
 int ReportAndSave(const RefineResult& result, const Unit& unit, const std::string& out_path,
                   const std::string& html_path, const std::string& text_before = "");
 

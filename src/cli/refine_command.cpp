@@ -53,10 +53,8 @@ int ReportAndSave(const RefineResult& result, const Unit& unit, const std::strin
   WriteHtml(html_path, html);
   if (result.status == FitStatus::kNotExplained) {
     std::cerr << "error: " << result.reason
-              << (result.start_written
-                      ? "\n  the start's coefficients are written, with that verdict and the "
-                        "refined values (which absorb what the model lacks) in its provenance\n"
-                      : "\n  the best set found is written, with that verdict in its provenance\n")
+              << "\n  the start's coefficients are written, with that verdict and the refined "
+                 "values (which absorb what the model lacks) in its provenance\n"
               << "  next: pneumaid diagnose " << unit.directory << " --params " << out_path
               << " --out DIR looks for the effect the model lacks (docs/diagnose.md)\n";
     return kNumericalFailure;
