@@ -120,6 +120,8 @@ bool RefineOptions::IsValid(std::string* error) const {
     if (!(v >= creep.plausible_min && v <= creep.plausible_max))
       return fail("stick_creep_profile: each creep speed must lie in the catalog's range");
   }
+  if (!(out_of_reach_ratio == 0 || out_of_reach_ratio >= 1))
+    return fail("out_of_reach_ratio must be 0 (never) or >= 1");
   if (!(correlation_flag > 0 && correlation_flag < 1)) {
     return fail("correlation_flag must be in (0, 1)");
   }
@@ -269,6 +271,34 @@ RefineResult WithCreepFit(RefineResult paper, const Parameters& start, const Uni
   return r;
 }
 
+// RefineOptions::out_of_reach_ratio: the first round `first` ended "not
+// explained" too far above the verdict's threshold for a later round or the
+// creep fit, where a refined set not explained is not written.
+bool OutOfReach(const RefineResult& first, const RefineOptions& options) {
+  const bool later = options.rounds > 1 || options.fit_stick_creep;
+  return later && options.out_of_reach_ratio > 0 && options.write_start_unless_explained &&
+         first.status == FitStatus::kNotExplained && !StopRequested(options) &&
+         first.reduced_chi_square >
+             options.out_of_reach_ratio * options.acceptable_reduced_chi_square;
+}
+
+// The first round `first` as the result, the later rounds and the creep fit
+// each reported as not run, with why.
+void EndOutOfReach(const Parameters& start, const FitSpec& spec, const RefineOptions& options,
+                   RefineResult* first) {
+  char because[200];
+  std::snprintf(because, sizeof(because),
+                "the first round ends at a median reduced chi-square of %.3g, more than %g times "
+                "the acceptable %.3g (out_of_reach_ratio)",
+                first->reduced_chi_square, options.out_of_reach_ratio,
+                options.acceptable_reduced_chi_square);
+  if (options.rounds > 1) first->rounds_report = std::string("round 2: not run, ") + because;
+  if (options.fit_stick_creep) {
+    first->creep_report = CreepNotRunReport(*first, start, spec, options, because);
+    first->params.provenance_yaml = WithRefineEntry(first->params.provenance_yaml, *first, spec);
+  }
+}
+
 // RefineOptions::write_start_unless_explained: a refinement the verdict does
 // not accept writes the start (under the unit's conditions, as validated
 // before: held_out_before) with its own entries, and this refinement's as
@@ -289,8 +319,13 @@ RefineResult Refine(const Parameters& start, const Unit& unit, const FitSpec& sp
   const auto clock = std::chrono::steady_clock::now();
   CheckInputs(spec, given);
   const RefineOptions options = WithLagStarts(start, unit, spec, given);
-  RefineResult r = LaterRounds(RefineModel(start, unit, spec, options), start, unit, spec, options);
-  if (options.fit_stick_creep) r = WithCreepFit(std::move(r), start, unit, spec, options);
+  RefineResult r = RefineModel(start, unit, spec, options);
+  if (OutOfReach(r, options)) {
+    EndOutOfReach(start, spec, options, &r);
+  } else {
+    r = LaterRounds(std::move(r), start, unit, spec, options);
+    if (options.fit_stick_creep) r = WithCreepFit(std::move(r), start, unit, spec, options);
+  }
   if (options.write_start_unless_explained) WriteStartUnlessExplained(start, unit, spec, &r);
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock).count();
   return r;

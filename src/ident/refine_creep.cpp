@@ -123,11 +123,18 @@ RefineOptions InnerOptions(const RefineOptions& options) {
   return inner;
 }
 
+std::string CreepNotRunReport(const RefineResult& paper, const Parameters& start,
+                              const FitSpec& spec, const RefineOptions& options,
+                              const std::string& because) {
+  const std::string why = NotApplicable(paper, start, spec, options);
+  return "creep fit (" + std::string(kPath) + "): not run, " + (why.empty() ? because : why);
+}
+
 RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
                             const FitSpec& spec, const RefineOptions& options) {
   const std::string name = "creep fit (" + std::string(kPath) + ")";
-  if (const std::string why = NotApplicable(paper, start, spec, options); !why.empty()) {
-    paper.creep_report = name + ": not run, " + why;
+  if (!NotApplicable(paper, start, spec, options).empty()) {
+    paper.creep_report = CreepNotRunReport(paper, start, spec, options, "");
     return paper;
   }
   const auto clock = std::chrono::steady_clock::now();

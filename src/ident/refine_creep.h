@@ -26,6 +26,12 @@ namespace pneumaid::refine_internal {
 RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
                             const FitSpec& spec, const RefineOptions& options);
 
+// The creep fit's line where it is not run: why it does not apply to this
+// refinement, or, where it would, `because`.
+std::string CreepNotRunReport(const RefineResult& paper, const Parameters& start,
+                              const FitSpec& spec, const RefineOptions& options,
+                              const std::string& because);
+
 // The options of the creep fit's inner fits, from the refinement's: its
 // last stage alone in the paper fit's basin (none of the searches for another
 // basin, no creep fit of their own), their refined sets returned whatever

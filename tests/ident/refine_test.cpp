@@ -317,36 +317,67 @@ TEST(RefineTest, TheVerdictTellsAnExplainedUnitFromOneWithAMissingEffect) {
     EXPECT_EQ(testing::ParameterValue(missing.params, c.path), c.value) << c.path;
 }
 
-// A rig whose chambers exchange heat with their walls (heat_transfer, h
-// 0.2 W/K; the model is adiabatic) and whose rod creeps at its stick, from the
-// component fits: the refinement cannot explain the strokes, and its
-// coefficients absorb the heat exchange (friction at or near its bounds).
-// identify's options write the start, the component fits, with the verdict
-// and the refined values in the provenance; the refined set is the further
-// from the truth. Without the option (diagnose's fits) the same fit writes
-// the refined set.
-TEST(RefineTest, WhereTheModelDoesNotExplainTheLogsTheComponentFitsAreWritten) {
-  Parameters truth;
-  truth.effects["heat_transfer"] = {{"h", 0.2}};
-  Protocol protocol = testing::RefinementProtocol({0.5, 0.8}, true);
-  protocol.mismatch.regularized_friction = true;
-  protocol.mismatch.stick_velocity_m_per_s = 1e-4;
-  protocol.mismatch.relative_tolerance = 1e-8;
-  const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, protocol, 53, "H"), "refine_heat");
-  IdentifyReport report;
-  const Parameters identified = Identify(unit, Parameters{}, IdentifyOptions{}, &report);
-  RefineOptions options = RefineOptions::ForIdentify();
-  // The written set under test, not the attempts to explain the runs.
+// A unit whose rig's chambers exchange heat with their walls (heat_transfer,
+// h 0.2 W/K; the model is adiabatic) and whose rod creeps at its stick, and
+// its component fits: the refinement cannot explain the strokes.
+class RefineHeatTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    Parameters* truth = new Parameters;
+    truth->effects["heat_transfer"] = {{"h", 0.2}};
+    truth_ = truth;
+    Protocol protocol = testing::RefinementProtocol({0.5, 0.8}, true);
+    protocol.mismatch.regularized_friction = true;
+    protocol.mismatch.stick_velocity_m_per_s = 1e-4;
+    protocol.mismatch.relative_tolerance = 1e-8;
+    unit_ =
+        new Unit(testing::WriteAndReadUnit(Synthesize(*truth_, protocol, 53, "H"), "refine_heat"));
+    IdentifyReport report;
+    identified_ = new Parameters(Identify(*unit_, Parameters{}, IdentifyOptions{}, &report));
+    std::cout << report.BriefReport();
+  }
+  static void TearDownTestSuite() {
+    delete truth_;
+    delete unit_;
+    delete identified_;
+  }
+  // ForIdentify's options with the attempts to explain the runs cut to the
+  // fit from the start: what they do with its result is under test.
+  static RefineOptions FewAttempts() {
+    RefineOptions options = RefineOptions::ForIdentify();
+    options.windowed_polish = false;
+    options.screen_friction_windows = false;
+    options.screened_alternatives = 0;
+    options.coordinate_rounds = 0;
+    options.rescue_starts = 0;
+    return options;
+  }
+  static const Parameters* truth_;
+  static const Unit* unit_;
+  static const Parameters* identified_;
+};
+const Parameters* RefineHeatTest::truth_ = nullptr;
+const Unit* RefineHeatTest::unit_ = nullptr;
+const Parameters* RefineHeatTest::identified_ = nullptr;
+
+// From the component fits the refined coefficients absorb the heat exchange
+// (friction at or near its bounds). identify's options write the start, the
+// component fits, with the verdict and the refined values in the provenance;
+// the refined set is the further from the truth. Without the option
+// (diagnose's fits) the same fit writes the refined set.
+TEST_F(RefineHeatTest, WhereTheModelDoesNotExplainTheLogsTheComponentFitsAreWritten) {
+  const Parameters& truth = *truth_;
+  const Unit& unit = *unit_;
+  const Parameters& identified = *identified_;
+  RefineOptions options = FewAttempts();
+  // The written set under test: one round, the creep fit run however far
+  // the fit ends above the threshold.
   options.rounds = 1;
-  options.windowed_polish = false;
-  options.screen_friction_windows = false;
-  options.screened_alternatives = 0;
-  options.coordinate_rounds = 0;
-  options.rescue_starts = 0;
+  options.out_of_reach_ratio = 0;
   ASSERT_TRUE(options.write_start_unless_explained);
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   const RefineResult written = Refine(identified, unit, spec, options);
-  std::cout << report.BriefReport() << written.BriefReport();
+  std::cout << written.BriefReport();
   ASSERT_EQ(written.status, FitStatus::kNotExplained) << written.reason;
   EXPECT_TRUE(written.start_written);
   // How far a set's friction is from the truth: the sum of the relative
@@ -405,6 +436,53 @@ TEST(RefineTest, WhereTheModelDoesNotExplainTheLogsTheComponentFitsAreWritten) {
     const FittedCoefficient& c = refined_written.coefficients[i];
     EXPECT_EQ(c.value, written.coefficients[i].value) << c.path;
     EXPECT_EQ(testing::ParameterValue(refined_written.params, c.path), c.value) << c.path;
+  }
+}
+
+// A first round far above the threshold (out_of_reach_ratio, 100 by
+// ForIdentify) ends the refinement: no second round, no creep fit, each
+// report saying why; the start is written as after any fit not explained.
+TEST_F(RefineHeatTest, AFitFarAboveTheThresholdRunsNoLaterRoundNorTheCreepFit) {
+  RefineOptions options = FewAttempts();
+  ASSERT_EQ(options.rounds, 2);
+  ASSERT_TRUE(options.fit_stick_creep);
+  ASSERT_EQ(options.out_of_reach_ratio, 100);
+  const FitSpec spec = LoadFitSpec(kDefaultSpec);
+  const RefineResult far = Refine(*identified_, *unit_, spec, options);
+  std::cout << far.BriefReport();
+  ASSERT_EQ(far.status, FitStatus::kNotExplained) << far.reason;
+  ASSERT_GT(far.reduced_chi_square, 100 * options.acceptable_reduced_chi_square);
+  EXPECT_EQ(far.rounds_report.rfind("round 2: not run, the first round ends", 0), 0u)
+      << far.rounds_report;
+  EXPECT_NE(far.creep_report.find(": not run, the first round ends"), std::string::npos)
+      << far.creep_report;
+  EXPECT_TRUE(far.start_written);
+  // The provenance says why the creep fit did not run.
+  const YAML::Node provenance = YAML::Load(far.params.provenance_yaml);
+  EXPECT_EQ(provenance["refine_not_written"]["creep_fit"].as<std::string>(""), far.creep_report)
+      << far.params.provenance_yaml;
+  // The verdict is the first round's: one round without the creep fit ends
+  // the same.
+  RefineOptions one = options;
+  one.rounds = 1;
+  one.fit_stick_creep = false;
+  const RefineResult first = Refine(*identified_, *unit_, spec, one);
+  EXPECT_EQ(first.reduced_chi_square, far.reduced_chi_square);
+  EXPECT_TRUE(first.rounds_report.empty()) << first.rounds_report;
+  EXPECT_TRUE(first.creep_report.empty()) << first.creep_report;
+  // The second round runs with the ratio just above where the first round
+  // ends, and where the refined set is written whatever the verdict (the
+  // rule's premise: such a set would not be written).
+  RefineOptions near = options;
+  near.fit_stick_creep = false;
+  near.out_of_reach_ratio = 1.01 * far.reduced_chi_square / options.acceptable_reduced_chi_square;
+  RefineOptions refined_written = options;
+  refined_written.fit_stick_creep = false;
+  refined_written.write_start_unless_explained = false;
+  for (const RefineOptions& runs : {near, refined_written}) {
+    const RefineResult again = Refine(*identified_, *unit_, spec, runs);
+    EXPECT_EQ(again.rounds_report.rfind("round 2 (", 0), 0u) << again.rounds_report;
+    EXPECT_LE(again.reduced_chi_square, far.reduced_chi_square);
   }
 }
 
@@ -854,6 +932,7 @@ TEST(RefineOptionsTest, IsValidNamesTheBadField) {
       {"cost_resolution_directions", [](RefineOptions* o) { o->cost_resolution_directions = -1; }},
       {"screen_windows_max", [](RefineOptions* o) { o->screen_windows_max = -1; }},
       {"rounds", [](RefineOptions* o) { o->rounds = 0; }},
+      {"out_of_reach_ratio", [](RefineOptions* o) { o->out_of_reach_ratio = 0.5; }},
       {"simulation.relative_tolerance",
        [](RefineOptions* o) { o->simulation.relative_tolerance = 0; }},
       {"validation.relative_tolerance",
