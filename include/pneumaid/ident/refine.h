@@ -277,7 +277,7 @@ struct RefineOptions {
   // 0: they always are. They cost as much as the first round again (a hidden
   // 0.05 W/K heat exchange: a unit's refinement 563 s with them, 257 s
   // without) and did not bring a first round that far up to "explained" on
-  // the N = 40 seed-12 sweep (the largest they did: 50.7, sweep-08;
+  // the sweeps measured (the largest they did: 81.3, seed 77's sweep-22;
   // docs/refinement.md, "Out of reach"). The verdict is the first round's,
   // and the set written the start. 100 by ForIdentify(); diagnose compares
   // refined costs and keeps 0.
