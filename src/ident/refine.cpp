@@ -293,10 +293,10 @@ void EndOutOfReach(const Parameters& start, const FitSpec& spec, const RefineOpt
                 first->reduced_chi_square, options.out_of_reach_ratio,
                 options.acceptable_reduced_chi_square);
   if (options.rounds > 1) first->rounds_report = std::string("round 2: not run, ") + because;
-  if (options.fit_stick_creep) {
+  // The provenance entry with this line is written with the start
+  // (WriteStartUnlessExplained: OutOfReach asks for it).
+  if (options.fit_stick_creep)
     first->creep_report = CreepNotRunReport(*first, start, spec, options, because);
-    first->params.provenance_yaml = WithRefineEntry(first->params.provenance_yaml, *first, spec);
-  }
 }
 
 // RefineOptions::write_start_unless_explained: a refinement the verdict does

@@ -39,6 +39,11 @@ std::string NotApplicable(const RefineResult& paper, const Parameters& start, co
   return "the spec's last stage frees no friction coefficient";
 }
 
+// The creep fit's line where it is not run, for `why`.
+std::string NotRunLine(const std::string& why) {
+  return "creep fit (" + std::string(kPath) + "): not run, " + why;
+}
+
 // The spec's last stage alone, without held-out runs (Refine validates the
 // creep fit it keeps, once).
 FitSpec LastStageOnly(const FitSpec& spec) {
@@ -127,14 +132,14 @@ std::string CreepNotRunReport(const RefineResult& paper, const Parameters& start
                               const FitSpec& spec, const RefineOptions& options,
                               const std::string& because) {
   const std::string why = NotApplicable(paper, start, spec, options);
-  return "creep fit (" + std::string(kPath) + "): not run, " + (why.empty() ? because : why);
+  return NotRunLine(why.empty() ? because : why);
 }
 
 RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const Unit& unit,
                             const FitSpec& spec, const RefineOptions& options) {
   const std::string name = "creep fit (" + std::string(kPath) + ")";
-  if (!NotApplicable(paper, start, spec, options).empty()) {
-    paper.creep_report = CreepNotRunReport(paper, start, spec, options, "");
+  if (const std::string why = NotApplicable(paper, start, spec, options); !why.empty()) {
+    paper.creep_report = NotRunLine(why);
     return paper;
   }
   const auto clock = std::chrono::steady_clock::now();

@@ -99,8 +99,7 @@ max_iterations: 10
       << Stdout() << Stderr();
   EXPECT_NE(Stderr().find("the model does not explain these logs"), std::string::npos);
   // So far above the threshold that no second round is run (out_of_reach_ratio).
-  EXPECT_NE((Stdout() + Stderr()).find("round 2: not run, the first round ends"),
-            std::string::npos)
+  EXPECT_NE((Stdout() + Stderr()).find("round 2: not run, the first round ends"), std::string::npos)
       << Stdout() << Stderr();
   EXPECT_NE(Stderr().find("the start's coefficients are written"), std::string::npos) << Stderr();
   EXPECT_NE(Stderr().find("next: pneumaid diagnose " + unit + " --params " + out),
