@@ -63,6 +63,7 @@ Outcome FitAndEvaluate(const Parameters& start, const Unit& unit, const FitSpec&
   options.windowed_refit = false;     // the same: a fit with an effect missing rarely explains
   options.screen_friction_windows = false;  // the same (~2 800 simulations of windows)
   options.coordinate_rounds = 0;            // the same (and its starts are refined sets already)
+  options.stribeck_velocity_divisor = 0;    // the same
   options.windowed_polish = false;          // the same
   options.rounds = 1;                       // the same
   options.start_prior = false;

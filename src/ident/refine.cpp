@@ -120,6 +120,8 @@ bool RefineOptions::IsValid(std::string* error) const {
     if (!(v >= creep.plausible_min && v <= creep.plausible_max))
       return fail("stick_creep_profile: each creep speed must lie in the catalog's range");
   }
+  if (!(stribeck_velocity_divisor == 0 || stribeck_velocity_divisor > 1))
+    return fail("stribeck_velocity_divisor must be 0 (off) or > 1");
   if (!(out_of_reach_ratio == 0 || out_of_reach_ratio >= 1))
     return fail("out_of_reach_ratio must be 0 (never) or >= 1");
   if (!(correlation_flag > 0 && correlation_flag < 1)) {
@@ -162,8 +164,9 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
       spec.stages.empty() ? std::vector<FitStage>{FitStage{}} : spec.stages;
   Attempts attempts(from, unit, spec, stages, options);
   for (void (Attempts::*attempt)() :
-       {&Attempts::ScreenFriction, &Attempts::CoordinateStart, &Attempts::RobustRefit,
-        &Attempts::WindowedRefit, &Attempts::Rescue, &Attempts::WindowedPolish}) {
+       {&Attempts::ScreenFriction, &Attempts::CoordinateStart, &Attempts::VelocityStarts,
+        &Attempts::RobustRefit, &Attempts::WindowedRefit, &Attempts::Rescue,
+        &Attempts::WindowedPolish}) {
     if (StopRequested(options)) break;  // none after a stop
     (attempts.*attempt)();
   }
@@ -172,6 +175,7 @@ RefineResult RefineModel(const Parameters& start, const Unit& unit, const FitSpe
   r.screen_report = attempts.screen_report();
   r.screened_candidates = attempts.screened_candidates();
   r.coordinate_report = attempts.coordinate_report();
+  r.velocity_report = attempts.velocity_report();
   r.robust_report = attempts.robust_report();
   r.windowed_report = attempts.windowed_report();
   r.polish_report = attempts.polish_report();
@@ -384,6 +388,7 @@ std::string RefineResult::BriefReport() const {
   if (!position_note.empty()) out << "  " << position_note << "\n";
   if (!screen_report.empty()) out << "  " << screen_report << "\n";
   if (!coordinate_report.empty()) out << "  " << coordinate_report << "\n";
+  if (!velocity_report.empty()) out << "  " << velocity_report << "\n";
   if (!robust_report.empty()) out << "  " << robust_report << "\n";
   if (!windowed_report.empty()) out << "  " << windowed_report << "\n";
   if (!polish_report.empty()) out << "  " << polish_report << "\n";

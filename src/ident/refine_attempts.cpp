@@ -325,17 +325,13 @@ void Attempts::CoordinateStart() {
     coordinate_report_ = moved.report + Took(clock);
     return;
   }
-  const bool explained_before = Explained();
   const double before = best_.result.reduced_chi_square;
   StagedFit candidate = FitStages(moved.start, unit_, spec_, stages_, options_);
   candidate.from_moved_start = true;
   const double after = candidate.result.reduced_chi_square;
-  // An explained fit gives way to a clear gain only.
-  const bool has_values = candidate.result.has_values();
-  const bool clear_gain =
-      !explained_before || (has_values && after <= options_.coordinate_start_keep_ratio * before);
+  const bool clear_gain = ClearGain(candidate.result);
   if (!clear_gain) best_.result.iterations += candidate.result.iterations;
-  const bool small_gain = !clear_gain && has_values && after < before;
+  const bool small_gain = !clear_gain && candidate.result.has_values() && after < before;
   const bool kept = clear_gain && Offer(std::move(candidate), &coordinate_report_);
   if (kept) {
     moved_start_ = std::move(moved.start);
@@ -348,6 +344,46 @@ void Attempts::CoordinateStart() {
                 : small_gain ? "not kept (explained before, no clear gain)"
                              : "not kept");
   coordinate_report_ = moved.report + line + Took(clock);
+}
+
+bool Attempts::ClearGain(const RefineResult& candidate) const {
+  return !Explained() || (candidate.has_values() &&
+                          candidate.reduced_chi_square <= options_.coordinate_start_keep_ratio *
+                                                              best_.result.reduced_chi_square);
+}
+
+void Attempts::VelocityStarts() {
+  const double before = best_.result.reduced_chi_square;
+  const bool well_above_noise = before > options_.coordinate_start_above;
+  if ((Explained() && !well_above_noise) || stages_.front().friction_replay) return;
+  const auto clock = std::chrono::steady_clock::now();
+  const std::vector<VelocityStart> starts =
+      StribeckVelocityStarts(start_, spec_, options_.stribeck_velocity_divisor);
+  if (starts.empty()) return;
+  char line[200];
+  std::snprintf(line, sizeof(line),
+                "Stribeck velocity starts (the given start's vs divided by %g), median reduced "
+                "chi-square against %.3g:",
+                options_.stribeck_velocity_divisor, before);
+  std::string report = line, which;
+  for (const VelocityStart& v : starts) {
+    if (StopRequested(options_)) break;
+    StagedFit candidate = FitStages(v.start, unit_, spec_, stages_, options_);
+    candidate.from_moved_start = true;
+    std::snprintf(line, sizeof(line), " %s %.3g", v.direction.c_str(),
+                  candidate.result.reduced_chi_square);
+    report += line;
+    if (!ClearGain(candidate.result)) {
+      best_.result.iterations += candidate.result.iterations;
+      continue;
+    }
+    if (!Offer(std::move(candidate), &velocity_report_)) continue;
+    which = which.empty() ? "the " + v.direction + " kept" : which + ", then the " + v.direction;
+    moved_start_ = v.start;
+    moved_start_shot_ = false;
+    moved_ = true;
+  }
+  velocity_report_ = report + "; " + (which.empty() ? "none kept" : which) + Took(clock);
 }
 
 void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,

@@ -11,11 +11,13 @@
 //      (refine_coordinate_start.h; also on an explained fit whose measure is
 //      above RefineOptions::coordinate_start_above, which then gives way to
 //      a clear gain only);
-//   3. a robust refit (each run through a Cauchy loss);
-//   4. a windowed refit (the last stage by multiple shooting first);
-//   5. rescue starts in a trust box around the given start (the last stage
+//   3. per direction, the given start with its Stribeck velocity divided
+//      (refine_coordinate_start.h; on the same trigger);
+//   4. a robust refit (each run through a Cauchy loss);
+//   5. a windowed refit (the last stage by multiple shooting first);
+//   6. rescue starts in a trust box around the given start (the last stage
 //      only);
-//   6. a windowed polish: the kept fit's last stage again from its own
+//   7. a windowed polish: the kept fit's last stage again from its own
 //      result, by multiple shooting first.
 // What the kept fit started from and each attempt's one-line report are the
 // caller's to put into the result (refine.cpp).
@@ -83,11 +85,13 @@ class Attempts {
            const std::vector<FitStage>& stages, const RefineOptions& options);
 
   // The later attempts, in order; each does nothing once the kept fit is
-  // explained (but the coordinate start above coordinate_start_above), or
+  // explained (but the coordinate and velocity starts above
+  // coordinate_start_above), or
   // when its option is off. The caller runs none after a stop
   // (StopRequested); within one, the screens stop between candidates.
   void ScreenFriction();
   void CoordinateStart();
+  void VelocityStarts();
   void RobustRefit();
   void WindowedRefit();
   void Rescue();
@@ -100,6 +104,7 @@ class Attempts {
   // The whole runs' screen's line, then the windows' screen's (if it ran).
   std::string screen_report() const;
   const std::string& coordinate_report() const { return coordinate_report_; }
+  const std::string& velocity_report() const { return velocity_report_; }
   const std::string& robust_report() const { return robust_report_; }
   const std::string& windowed_report() const { return windowed_report_; }
   const std::string& polish_report() const { return polish_report_; }
@@ -107,6 +112,10 @@ class Attempts {
 
  private:
   bool Explained() const { return best_.result.explained(); }
+  // Whether a fit from a moved start (the coordinate or a velocity start)
+  // may replace the kept one: always while that is not explained, else only
+  // at most coordinate_start_keep_ratio of its measure (a clear gain).
+  bool ClearGain(const RefineResult& candidate) const;
   // One friction screen ranked by `measure`, the fits from its start and
   // next-best candidates offered; its one-line report into `report`.
   void ScreenWith(ScreenMeasure measure, bool even_if_explained, std::string* report);
@@ -133,8 +142,8 @@ class Attempts {
   // moved_start_ was fitted by windows first already (a candidate of the
   // windows' screen): the windowed refit from it would repeat that fit.
   bool moved_start_shot_ = false;
-  std::string screen_report_, windows_screen_report_, coordinate_report_, robust_report_,
-      windowed_report_, polish_report_;
+  std::string screen_report_, windows_screen_report_, coordinate_report_, velocity_report_,
+      robust_report_, windowed_report_, polish_report_;
   int screened_candidates_ = 0;
   std::string* kept_report_ = nullptr;  // the report of the later attempt kept, if any
 };

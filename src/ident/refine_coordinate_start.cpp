@@ -125,4 +125,23 @@ CoordinateSearch SearchFrictionCoordinates(const Parameters& start, const Unit& 
   return out;
 }
 
+std::vector<VelocityStart> StribeckVelocityStarts(const Parameters& from, const FitSpec& spec,
+                                                  double divisor) {
+  std::vector<VelocityStart> out;
+  if (!(divisor > 1)) return out;
+  for (const char* direction : {"positive", "negative"}) {
+    const std::string path = std::string("friction.") + direction + ".vs";
+    const FreeParameter* free = spec.FindParameter(path);
+    double vs = 0;
+    if (free == nullptr || !GetParameter(from, path, &vs)) continue;
+    const double moved = std::clamp(vs / divisor, free->lower, free->upper);
+    if (moved == vs) continue;
+    Parameters start = from;
+    SetParameter(&start, path, moved);
+    ForgetMoved(from, spec, &start);
+    out.push_back({direction, std::move(start)});
+  }
+  return out;
+}
+
 }  // namespace pneumaid::refine_internal

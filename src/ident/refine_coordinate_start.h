@@ -12,6 +12,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "pneumaid/ident/refine.h"
 
@@ -36,5 +37,16 @@ struct CoordinateSearch {
 // standard error in `start.uncertainty` (as the screen's).
 CoordinateSearch SearchFrictionCoordinates(const Parameters& start, const Unit& unit,
                                            const FitSpec& spec, const RefineOptions& options);
+
+// RefineOptions::stribeck_velocity_divisor: one start per direction whose
+// Stribeck velocity is free in `spec`, `from` with that vs divided by the
+// divisor (clamped to its bounds; a start equal to `from` is left out), the
+// other values as they are, and the moved vs without a standard error.
+struct VelocityStart {
+  std::string direction;  // "positive" or "negative"
+  Parameters start;
+};
+std::vector<VelocityStart> StribeckVelocityStarts(const Parameters& from, const FitSpec& spec,
+                                                  double divisor);
 
 }  // namespace pneumaid::refine_internal

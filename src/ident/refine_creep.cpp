@@ -79,6 +79,7 @@ void InPaperFrame(const RefineResult& paper, RefineResult* creep) {
   creep->screen_report = paper.screen_report;
   creep->screened_candidates = paper.screened_candidates;
   creep->coordinate_report = paper.coordinate_report;
+  creep->velocity_report = paper.velocity_report;
   creep->robust_report = paper.robust_report;
   creep->windowed_report = paper.windowed_report;
   creep->polish_report = paper.polish_report;
@@ -119,6 +120,7 @@ RefineOptions InnerOptions(const RefineOptions& options) {
   inner.screen_friction_starts = false;
   inner.screen_friction_windows = false;
   inner.coordinate_rounds = 0;
+  inner.stribeck_velocity_divisor = 0;
   inner.robust_refit = false;
   inner.windowed_refit = false;
   inner.rescue_starts = 0;

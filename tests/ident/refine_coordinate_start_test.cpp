@@ -10,10 +10,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <iostream>
 
 #include "../../src/ident/refine_verdict.h"
+#include "../bench/sweep_draw.h"
 #include "friction_test_util.h"
+#include "pneumaid/ident/identify.h"
 #include "pneumaid/ident/refine.h"
 #include "refine_mismatch_util.h"
 
@@ -48,6 +52,7 @@ RefineOptions OnlyTheCoordinateStart(int rounds) {
   options.windowed_polish = false;
   options.rounds = 1;
   options.coordinate_rounds = rounds;
+  options.stribeck_velocity_divisor = 0;
   return options;
 }
 
@@ -114,6 +119,106 @@ TEST(RefineCoordinateStartTest, AnExplainedFitWellAboveTheNoiseGivesWayToAClearG
   EXPECT_GT(kept.iterations, given.iterations);  // the candidate was fitted, and counted
 }
 
+// RefineOptions::stribeck_velocity_divisor's starts: one per direction whose
+// vs the spec frees, that vs alone divided, its standard error dropped.
+TEST(StribeckVelocityStartsTest, EachDividesOneDirectionsVelocityAlone) {
+  const FitSpec spec = LoadFitSpec(testing::kDefaultFitSpec);
+  Parameters from = testing::HeavyHorizontalTruth();
+  from.friction.positive = {10.0, 0.5, 5.0, 0.012};
+  from.friction.negative = {8.0, 2.0, 4.0, 0.03};
+  from.uncertainty = {{"friction.positive.vs", 1e-3},
+                      {"friction.negative.vs", 2e-3},
+                      {"friction.negative.Fs", 0.2}};
+  const std::vector<refine_internal::VelocityStart> starts =
+      refine_internal::StribeckVelocityStarts(from, spec, 3.0);
+  ASSERT_EQ(starts.size(), 2u);
+  EXPECT_EQ(starts[0].direction, "positive");
+  EXPECT_EQ(starts[1].direction, "negative");
+  EXPECT_DOUBLE_EQ(starts[0].start.friction.positive.stribeck_velocity_m_per_s, 0.004);
+  EXPECT_EQ(starts[0].start.friction.negative.stribeck_velocity_m_per_s, 0.03);
+  EXPECT_DOUBLE_EQ(starts[1].start.friction.negative.stribeck_velocity_m_per_s, 0.01);
+  EXPECT_EQ(starts[1].start.friction.positive.stribeck_velocity_m_per_s, 0.012);
+  EXPECT_EQ(starts[1].start.friction.negative.static_force_N, 8.0);
+  EXPECT_EQ(starts[0].start.uncertainty.count("friction.positive.vs"), 0u);
+  EXPECT_EQ(starts[0].start.uncertainty.count("friction.negative.vs"), 1u);
+  EXPECT_EQ(starts[1].start.uncertainty.count("friction.negative.vs"), 0u);
+  EXPECT_EQ(starts[1].start.uncertainty.at("friction.negative.Fs"), 0.2);
+  // A vs at its lower bound (1e-4 m/s) stays there: no start for it.
+  from.friction.positive.stribeck_velocity_m_per_s = 1e-4;
+  const auto bounded = refine_internal::StribeckVelocityStarts(from, spec, 3.0);
+  ASSERT_EQ(bounded.size(), 1u);
+  EXPECT_EQ(bounded[0].direction, "negative");
+  // Off, or a spec that does not free vs: none.
+  EXPECT_TRUE(refine_internal::StribeckVelocityStarts(from, spec, 0.0).empty());
+  FitSpec fixed = spec;
+  fixed.parameters.erase(std::remove_if(fixed.parameters.begin(), fixed.parameters.end(),
+                                        [](const FreeParameter& p) {
+                                          return p.path.size() > 3 &&
+                                                 p.path.compare(p.path.size() - 3, 3, ".vs") == 0;
+                                        }),
+                         fixed.parameters.end());
+  EXPECT_TRUE(refine_internal::StribeckVelocityStarts(from, fixed, 3.0).empty());
+}
+
+// The robustness gate's sweep-01 (seed 2026, unit 1, drawn as the sweep
+// draws it: tests/bench/sweep_draw.h): a 0.84 kg vertical rod at 2 kHz,
+// smooth stick, four strokes at 0.36 to 0.55 V that stop 1 mm short of the
+// ends, the negative Stribeck velocity 2.1 mm/s. `identify` reads it as
+// 15.7 mm/s; the fit from there stalls, explained but well above the noise,
+// with that vs at 9.4 mm/s and the negative Fs 3.5 N for 5.3 (held-out x
+// 0.28 mm, the limit 0.08). A third of the start's vs reaches the basin the
+// fit from the truth reaches (4.2 against 8.96).
+const testing::RefineCase& GateUnitOne() {
+  static const testing::RefineCase c = [] {
+    const sweep::Draw d = sweep::MakeDraw(2026, 1);
+    testing::RefineCase s;
+    s.truth = d.truth;
+    s.unit = testing::WriteAndReadUnit(Synthesize(d.truth, d.protocol, 2026 + 1, "sweep-01"),
+                                       "refine_velocity_start");
+    const Parameters prior = LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper.yaml");
+    IdentifyReport report;
+    s.start = Identify(s.unit, prior, IdentifyOptions{}, &report);
+    return s;
+  }();
+  return c;
+}
+
+TEST(StribeckVelocityStartsTest, AFitStalledAtAHighStribeckVelocityReachesTheTruthsBasin) {
+  const testing::RefineCase& c = GateUnitOne();
+  const FitSpec spec = LoadFitSpec(testing::kDefaultFitSpec);
+  RefineOptions options = RefineOptions::ForIdentify();
+  options.fit_stick_creep = false;  // the paper model's basins
+  const double truth_vs = c.truth.friction.negative.stribeck_velocity_m_per_s;
+  ASSERT_GT(c.start.friction.negative.stribeck_velocity_m_per_s, 3 * truth_vs);
+  options.stribeck_velocity_divisor = 0;
+  const RefineResult stalled = Refine(c.start, c.unit, spec, options);
+  std::cout << stalled.BriefReport();
+  ASSERT_TRUE(stalled.explained()) << stalled.reason;
+  EXPECT_GT(stalled.reduced_chi_square, options.coordinate_start_above);
+  EXPECT_TRUE(stalled.velocity_report.empty()) << stalled.velocity_report;
+  options.stribeck_velocity_divisor = 3;
+  const RefineResult moved = Refine(c.start, c.unit, spec, options);
+  std::cout << moved.BriefReport();
+  ASSERT_TRUE(moved.explained()) << moved.reason;
+  EXPECT_NE(moved.velocity_report.find("the negative kept"), std::string::npos)
+      << moved.velocity_report;
+  EXPECT_LE(moved.reduced_chi_square,
+            options.coordinate_start_keep_ratio * stalled.reduced_chi_square);
+  // The basin of the fit from the truth: its cost and negative friction.
+  const RefineResult from_truth = Refine(c.truth, c.unit, spec, options);
+  std::cout << from_truth.BriefReport();
+  ASSERT_TRUE(from_truth.explained()) << from_truth.reason;
+  EXPECT_NEAR(moved.reduced_chi_square, from_truth.reduced_chi_square,
+              0.1 * from_truth.reduced_chi_square);
+  const StribeckParams& m = moved.params.friction.negative;
+  const StribeckParams& t = from_truth.params.friction.negative;
+  const StribeckParams& s = stalled.params.friction.negative;
+  EXPECT_NEAR(m.static_force_N, t.static_force_N, 0.1);
+  EXPECT_NEAR(m.stribeck_velocity_m_per_s, t.stribeck_velocity_m_per_s, 1e-3);
+  EXPECT_GT(std::fabs(s.static_force_N - t.static_force_N), 1.0);
+  EXPECT_GT(s.stribeck_velocity_m_per_s - t.stribeck_velocity_m_per_s, 3e-3);
+}
+
 TEST(RefineCoordinateStartTest, OptionsNameTheBadField) {
   RefineOptions options;
   std::string error;
@@ -135,6 +240,13 @@ TEST(RefineCoordinateStartTest, OptionsNameTheBadField) {
     EXPECT_NE(error.find("coordinate_start_keep_ratio"), std::string::npos) << error;
   }
   options.coordinate_start_keep_ratio = 0.85;
+  EXPECT_TRUE(options.IsValid(&error)) << error;
+  for (const double divisor : {-1.0, 0.5, 1.0}) {
+    options.stribeck_velocity_divisor = divisor;
+    EXPECT_FALSE(options.IsValid(&error)) << divisor;
+    EXPECT_NE(error.find("stribeck_velocity_divisor"), std::string::npos) << error;
+  }
+  options.stribeck_velocity_divisor = 0;  // off
   EXPECT_TRUE(options.IsValid(&error)) << error;
 }
 

@@ -182,6 +182,8 @@ TEST(RefineCreepTest, TheInnerFitsReturnTheirRefinedSets) {
   EXPECT_FALSE(inner.write_start_unless_explained);
   EXPECT_FALSE(inner.fit_stick_creep);
   EXPECT_EQ(inner.rounds, 1);
+  EXPECT_EQ(inner.coordinate_rounds, 0);
+  EXPECT_EQ(inner.stribeck_velocity_divisor, 0);
 }
 
 }  // namespace

@@ -115,6 +115,7 @@ TEST(RefineFrictionScreenTest, WithoutTheScreenTheSameStartEndsInAnotherBasin) {
   RefineOptions options;
   options.screen_friction_starts = false;
   options.coordinate_rounds = 0;
+  options.stribeck_velocity_divisor = 0;
   options.windowed_refit = false;
   const RefineResult result = Refine(c.start, c.unit, spec, options);
   std::cout << result.BriefReport();

@@ -60,7 +60,9 @@ TEST(RefineRobustRefitTest, OneRunTheModelCannotFollowDoesNotDragTheOthers) {
   const FaultCase& c = OneFaultyRun();
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   RefineOptions options;
-  options.coordinate_rounds = 0;  // the attempt before it: the robust refit on its own
+  // The attempts before it off: the robust refit on its own.
+  options.coordinate_rounds = 0;
+  options.stribeck_velocity_divisor = 0;
   const RefineResult result = Refine(c.truth, c.unit, spec, options);
   std::cout << result.BriefReport();
   ASSERT_EQ(result.status, FitStatus::kConverged) << result.reason;

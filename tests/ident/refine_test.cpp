@@ -349,6 +349,7 @@ class RefineHeatTest : public ::testing::Test {
     options.screen_friction_windows = false;
     options.screened_alternatives = 0;
     options.coordinate_rounds = 0;
+    options.stribeck_velocity_divisor = 0;
     options.rescue_starts = 0;
     return options;
   }

@@ -56,6 +56,7 @@ TEST(RefineWindowedRefitTest, ALightRodLoggedAt500HzIsFoundByMultipleShooting) {
     // refit.
     options.screen_friction_starts = false;
     options.coordinate_rounds = 0;
+    options.stribeck_velocity_divisor = 0;
     // The windowed polish and the second round reach it from the stall
     // (tested below): off, to test the windowed refit.
     options.windowed_polish = false;
@@ -112,6 +113,7 @@ TEST(RefineWindowedRefitTest, ThePolishFindsItFromTheStallAndASecondRoundRuns) {
     RefineOptions options;
     options.screen_friction_starts = false;
     options.coordinate_rounds = 0;
+    options.stribeck_velocity_divisor = 0;
     options.windowed_refit = false;
     options.windowed_polish = polish;
     options.rounds = rounds;

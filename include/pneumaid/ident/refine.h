@@ -195,6 +195,19 @@ struct RefineOptions {
   // few per cent are within what the creep fit after it turns on its start.
   double coordinate_start_above = 3.0;
   double coordinate_start_keep_ratio = 0.85;
+  // Then, on the same trigger: for each direction whose Stribeck velocity is
+  // free, the fit through every stage again from the kept fit's result with
+  // that direction's vs divided by stribeck_velocity_divisor (inside its
+  // bounds; the rest as fitted), kept as the coordinate start's fit is. The
+  // friction replay's vs comes out two to five times high where the truth is
+  // small (docs/identification.md, session 52), and the fit from there can
+  // stall with vs between the two, in a basin the coordinate start's grid
+  // does not reach: a 0.84 kg vertical rod ended explained at 8.96 with the
+  // negative vs 9.4 mm/s for 2.1 and Fs 3.46 for 5.34, and from a third of
+  // that vs at 3.91 with every coefficient within tolerance
+  // (docs/refinement.md, "Stribeck velocity starts"). Not with a first stage
+  // that replays the friction fit. 0: off; else > 1.
+  double stribeck_velocity_divisor = 3.0;
   // Standard errors robust over runs: each parameter's error is widened to
   // the run-clustered sandwich's (how much the fitted runs, windows summed
   // per run, disagree about it) where that is larger than the misfit-scaled
@@ -387,6 +400,9 @@ struct RefineResult : FitResult {
   // the fit from it ended at and whether it was kept (empty when it did not
   // run).
   std::string coordinate_report;
+  // What the Stribeck velocity starts (RefineOptions::stribeck_velocity_divisor)
+  // ended at, per direction, and which was kept (empty when they did not run).
+  std::string velocity_report;
   // What the robust refit (RefineOptions::robust_refit) ended at and whether
   // it was kept (empty when it did not run).
   std::string robust_report;
