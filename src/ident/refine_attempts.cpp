@@ -367,18 +367,25 @@ void Attempts::VelocityStarts() {
                 options_.stribeck_velocity_divisor, before);
   std::string report = line, which;
   for (const VelocityStart& v : starts) {
-    if (StopRequested(options_)) break;
+    // The first kept and explained below coordinate_start_above: done.
+    if (StopRequested(options_) ||
+        (Explained() && best_.result.reduced_chi_square <= options_.coordinate_start_above))
+      break;
     StagedFit candidate = FitStages(v.start, unit_, spec_, stages_, options_);
     candidate.from_moved_start = true;
-    std::snprintf(line, sizeof(line), " %s %.3g", v.direction.c_str(),
-                  candidate.result.reduced_chi_square);
+    if (candidate.result.has_values()) {
+      std::snprintf(line, sizeof(line), " %s %.3g", v.direction.c_str(),
+                    candidate.result.reduced_chi_square);
+    } else {
+      std::snprintf(line, sizeof(line), " %s no values", v.direction.c_str());
+    }
     report += line;
     if (!ClearGain(candidate.result)) {
       best_.result.iterations += candidate.result.iterations;
       continue;
     }
     if (!Offer(std::move(candidate), &velocity_report_)) continue;
-    which = which.empty() ? "the " + v.direction + " kept" : which + ", then the " + v.direction;
+    which += (which.empty() ? "the " : ", then the ") + v.direction + " kept";
     moved_start_ = v.start;
     moved_start_shot_ = false;
     moved_ = true;

@@ -42,8 +42,8 @@ struct StagedFit {
   std::vector<ExperimentCost> before;  // the first fitted stage's costs at its start
   double cost_before = 0;
   bool first_fit_windowed = false;  // `before` and `cost_before` are windows'
-  // From a start a later attempt moved (the screen's, the coordinate
-  // start's), else from the caller's.
+  // From a start a later attempt moved (the screen's, the coordinate or a
+  // Stribeck velocity start's), else from the caller's.
   bool from_moved_start = false;
   // Its start was fitted with the last stage by multiple shooting first too
   // (ShootingFirst), the Better of the two kept; `by_windows_first`: that fit.

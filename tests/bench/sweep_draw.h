@@ -5,6 +5,7 @@
 // index alone).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -16,6 +17,11 @@
 #include "pneumaid/io/params_yaml.h"
 #include "pneumaid/io/protocol.h"
 #include "pneumaid/model/parameters.h"
+
+#ifndef PNEUMAID_SOURCE_DIR
+#error \
+    "sweep_draw.h reads configs/ under PNEUMAID_SOURCE_DIR: define it (the tests' and benchmarks' CMake do)"
+#endif
 
 namespace pneumaid::sweep {
 

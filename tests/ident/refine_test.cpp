@@ -591,6 +591,7 @@ TEST_F(RefineSpecTest, AStopRaisedDuringTheFitEndsItNotConverged) {
     EXPECT_GE(result.iterations, 1);
     EXPECT_LE(result.iterations, 3);  // the step logged, and the one whose trial the stop failed
     EXPECT_EQ(result.coordinate_report, "");
+    EXPECT_EQ(result.velocity_report, "");
     EXPECT_EQ(result.robust_report, "");
   }
 }

@@ -70,8 +70,8 @@ struct RefineOptions {
   double acceptable_reduced_chi_square = 10.0;
   // When neither the fit from the given start nor the ones from the screened
   // and coordinate starts explain the runs: one more fit, from the moved start
-  // kept last (the coordinate start's when its fit was kept, else the
-  // screen's best candidate or a next-best one whose fit was kept; the given
+  // kept last (a Stribeck velocity start's or the coordinate start's when its
+  // fit was kept, else the screen's best candidate or a next-best one whose fit was kept; the given
   // start when nothing moved), with each run through a Cauchy
   // loss on its whole squared residual, quadratic up to
   // acceptable_reduced_chi_square times its residuals: a run the model
@@ -196,17 +196,17 @@ struct RefineOptions {
   double coordinate_start_above = 3.0;
   double coordinate_start_keep_ratio = 0.85;
   // Then, on the same trigger: for each direction whose Stribeck velocity is
-  // free, the fit through every stage again from the kept fit's result with
-  // that direction's vs divided by stribeck_velocity_divisor (inside its
-  // bounds; the rest as fitted), kept as the coordinate start's fit is. The
-  // friction replay's vs comes out two to five times high where the truth is
-  // small (docs/identification.md, session 52), and the fit from there can
-  // stall with vs between the two, in a basin the coordinate start's grid
-  // does not reach: a 0.84 kg vertical rod ended explained at 8.96 with the
-  // negative vs 9.4 mm/s for 2.1 and Fs 3.46 for 5.34, and from a third of
-  // that vs at 3.91 with every coefficient within tolerance
-  // (docs/refinement.md, "Stribeck velocity starts"). Not with a first stage
-  // that replays the friction fit. 0: off; else > 1.
+  // free, the fit through every stage again from the given start (in a later
+  // round: the result so far) with that direction's vs divided by
+  // stribeck_velocity_divisor (inside its bounds; the rest as given), kept as
+  // the coordinate start's fit is. The friction replay's vs comes out two to
+  // five times high where the truth is small (docs/identification.md,
+  // session 52), and the fit from there can stall with vs between the two, in
+  // a basin the coordinate start's grid does not reach: a 0.84 kg vertical
+  // rod ended explained at 8.96 with the negative vs 9.4 mm/s for 2.1 and Fs
+  // 3.46 for 5.34, and from a third of the start's vs at 4.22, where the fit
+  // from the truth ends (docs/refinement.md, "Stribeck velocity starts"). Not
+  // with a first stage that replays the friction fit. 0: off; else > 1.
   double stribeck_velocity_divisor = 3.0;
   // Standard errors robust over runs: each parameter's error is widened to
   // the run-clustered sandwich's (how much the fitted runs, windows summed
