@@ -162,6 +162,13 @@ double SecondsSince(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
+std::string MeasureText(const RefineResult& fit) {
+  if (!fit.has_values()) return "no values";
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.3g", fit.reduced_chi_square);
+  return text;
+}
+
 std::string SecondsText(double seconds) {
   char line[40];
   std::snprintf(line, sizeof(line), "; %.1f s", seconds);
@@ -312,9 +319,7 @@ void Attempts::ScreenWith(ScreenMeasure measure, bool even_if_explained, std::st
 void Attempts::CoordinateStart() {
   // A spec whose first stage replays the friction fit would refit the moved
   // coefficients before any simulation fit: nothing to search for.
-  const bool well_above_noise = best_.result.reduced_chi_square > options_.coordinate_start_above;
-  if ((Explained() && !well_above_noise) || options_.coordinate_rounds <= 0 ||
-      stages_.front().friction_replay)
+  if (ExplainedNearNoise() || options_.coordinate_rounds <= 0 || stages_.front().friction_replay)
     return;
   const auto clock = std::chrono::steady_clock::now();
   // Neither start explains the runs, or the kept fit is well above the
@@ -326,12 +331,14 @@ void Attempts::CoordinateStart() {
     return;
   }
   const double before = best_.result.reduced_chi_square;
+  const std::string before_text = MeasureText(best_.result);
   StagedFit candidate = FitStages(moved.start, unit_, spec_, stages_, options_);
   candidate.from_moved_start = true;
-  const double after = candidate.result.reduced_chi_square;
+  const std::string after_text = MeasureText(candidate.result);
   const bool clear_gain = ClearGain(candidate.result);
   if (!clear_gain) best_.result.iterations += candidate.result.iterations;
-  const bool small_gain = !clear_gain && candidate.result.has_values() && after < before;
+  const bool small_gain =
+      !clear_gain && candidate.result.has_values() && candidate.result.reduced_chi_square < before;
   const bool kept = clear_gain && Offer(std::move(candidate), &coordinate_report_);
   if (kept) {
     moved_start_ = std::move(moved.start);
@@ -339,11 +346,16 @@ void Attempts::CoordinateStart() {
     moved_ = true;
   }
   char line[160];
-  std::snprintf(line, sizeof(line), "; the fit from it: %.3g against %.3g, %s", after, before,
+  std::snprintf(line, sizeof(line), "; the fit from it: %s against %s, %s", after_text.c_str(),
+                before_text.c_str(),
                 kept         ? "kept"
                 : small_gain ? "not kept (explained before, no clear gain)"
                              : "not kept");
   coordinate_report_ = moved.report + line + Took(clock);
+}
+
+bool Attempts::ExplainedNearNoise() const {
+  return Explained() && best_.result.reduced_chi_square <= options_.coordinate_start_above;
 }
 
 bool Attempts::ClearGain(const RefineResult& candidate) const {
@@ -353,9 +365,7 @@ bool Attempts::ClearGain(const RefineResult& candidate) const {
 }
 
 void Attempts::VelocityStarts() {
-  const double before = best_.result.reduced_chi_square;
-  const bool well_above_noise = before > options_.coordinate_start_above;
-  if ((Explained() && !well_above_noise) || stages_.front().friction_replay) return;
+  if (ExplainedNearNoise() || stages_.front().friction_replay) return;
   const auto clock = std::chrono::steady_clock::now();
   const std::vector<VelocityStart> starts =
       StribeckVelocityStarts(start_, spec_, options_.stribeck_velocity_divisor);
@@ -363,23 +373,15 @@ void Attempts::VelocityStarts() {
   char line[200];
   std::snprintf(line, sizeof(line),
                 "Stribeck velocity starts (the given start's vs divided by %g), median reduced "
-                "chi-square against %.3g:",
-                options_.stribeck_velocity_divisor, before);
+                "chi-square against %s:",
+                options_.stribeck_velocity_divisor, MeasureText(best_.result).c_str());
   std::string report = line, which;
   for (const VelocityStart& v : starts) {
     // The first kept and explained below coordinate_start_above: done.
-    if (StopRequested(options_) ||
-        (Explained() && best_.result.reduced_chi_square <= options_.coordinate_start_above))
-      break;
+    if (StopRequested(options_) || ExplainedNearNoise()) break;
     StagedFit candidate = FitStages(v.start, unit_, spec_, stages_, options_);
     candidate.from_moved_start = true;
-    if (candidate.result.has_values()) {
-      std::snprintf(line, sizeof(line), " %s %.3g", v.direction.c_str(),
-                    candidate.result.reduced_chi_square);
-    } else {
-      std::snprintf(line, sizeof(line), " %s no values", v.direction.c_str());
-    }
-    report += line;
+    report += " " + v.direction + " " + MeasureText(candidate.result);
     if (!ClearGain(candidate.result)) {
       best_.result.iterations += candidate.result.iterations;
       continue;
@@ -396,14 +398,14 @@ void Attempts::VelocityStarts() {
 void Attempts::Refit(const char* what, const std::vector<FitStage>& stages, bool robust_runs,
                      std::string* report) {
   const auto clock = std::chrono::steady_clock::now();
-  const double before = best_.result.reduced_chi_square;
+  const std::string before = MeasureText(best_.result);
   StagedFit candidate = FitStages(moved_start_, unit_, spec_, stages, options_, robust_runs);
   candidate.from_moved_start = moved_;
-  const double after = candidate.result.reduced_chi_square;
+  const std::string after = MeasureText(candidate.result);
   const bool kept = Offer(std::move(candidate), report);
   char line[200];
-  std::snprintf(line, sizeof(line), "%s: median reduced chi-square %.3g against %.3g, %s", what,
-                after, before, kept ? "kept" : "not kept");
+  std::snprintf(line, sizeof(line), "%s: median reduced chi-square %s against %s, %s", what,
+                after.c_str(), before.c_str(), kept ? "kept" : "not kept");
   *report = line + Took(clock);
 }
 
@@ -461,19 +463,19 @@ void Attempts::WindowedPolish() {
   const std::optional<std::vector<FitStage>> windowed = ShootingFirst({stages_.back()});
   if (Explained() || !options_.windowed_polish || !windowed || !best_.result.has_values()) return;
   const auto clock = std::chrono::steady_clock::now();
-  const double before = best_.result.reduced_chi_square;
+  const std::string before = MeasureText(best_.result);
   StagedFit candidate = FitStages(best_.result.params, unit_, spec_, *windowed, options_);
   candidate.from_moved_start = true;
   // What the kept fit's attempts recorded stays (as the rescue keeps it).
   candidate.result.replay_report = best_.result.replay_report;
   candidate.result.rescue_starts_tried = best_.result.rescue_starts_tried;
-  const double after = candidate.result.reduced_chi_square;
+  const std::string after = MeasureText(candidate.result);
   const bool kept = Offer(std::move(candidate), &polish_report_);
   char line[200];
   std::snprintf(line, sizeof(line),
                 "windowed polish (the kept fit's last stage again from its result, by multiple "
-                "shooting first): median reduced chi-square %.3g against %.3g, %s",
-                after, before, kept ? "kept" : "not kept");
+                "shooting first): median reduced chi-square %s against %s, %s",
+                after.c_str(), before.c_str(), kept ? "kept" : "not kept");
   polish_report_ = line + Took(clock);
 }
 

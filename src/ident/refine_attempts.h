@@ -70,6 +70,10 @@ void FromCallersStart(const RefineResult& first, RefineResult* later);
 // Why Better(candidate, kept) is false, as a report's words.
 std::string WhyNotKept(const RefineResult& candidate, const RefineResult& kept);
 
+// A fit's median reduced chi-square as a report's words ("4.22"), or "no
+// values" for a fit that has none.
+std::string MeasureText(const RefineResult& fit);
+
 // The wall time since `since` [s]; a time as "; 12.3 s", closing an
 // attempt's report line (where a refinement's time goes:
 // docs/refinement.md); and Took(since), the two together.
@@ -85,10 +89,10 @@ class Attempts {
            const std::vector<FitStage>& stages, const RefineOptions& options);
 
   // The later attempts, in order; each does nothing once the kept fit is
-  // explained (but the coordinate and velocity starts above
-  // coordinate_start_above), or
-  // when its option is off. The caller runs none after a stop
-  // (StopRequested); within one, the screens stop between candidates.
+  // explained (the coordinate and velocity starts: explained at or below
+  // coordinate_start_above), or when its option is off. The caller runs none
+  // after a stop (StopRequested); within one, the screens stop between
+  // candidates.
   void ScreenFriction();
   void CoordinateStart();
   void VelocityStarts();
@@ -112,6 +116,9 @@ class Attempts {
 
  private:
   bool Explained() const { return best_.result.explained(); }
+  // Explained at or below RefineOptions::coordinate_start_above: the
+  // coordinate and velocity starts are not tried (or no more of them).
+  bool ExplainedNearNoise() const;
   // Whether a fit from a moved start (the coordinate or a velocity start)
   // may replace the kept one: always while that is not explained, else only
   // at most coordinate_start_keep_ratio of its measure (a clear gain).

@@ -160,6 +160,35 @@ TEST(StribeckVelocityStartsTest, EachDividesOneDirectionsVelocityAlone) {
   EXPECT_TRUE(refine_internal::StribeckVelocityStarts(from, fixed, 3.0).empty());
 }
 
+// The velocity starts run on the coordinate start's trigger only: not on a
+// fit explained at or below coordinate_start_above, nor when the first
+// stage replays the friction fit (it would refit the moved vs before any
+// simulation fit).
+TEST(StribeckVelocityStartsTest, RunOnTheCoordinateStartsTriggerOnly) {
+  const testing::RefineCase& c = OneCoefficientOff();
+  const FitSpec spec = LoadFitSpec(testing::kDefaultFitSpec);
+  RefineOptions options = OnlyTheCoordinateStart(0);
+  options.stribeck_velocity_divisor = 3;
+  options.acceptable_reduced_chi_square = 1e6;  // every fit here is explained
+  options.coordinate_start_above = 1e300;
+  const RefineResult near_noise = Refine(c.start, c.unit, spec, options);
+  ASSERT_TRUE(near_noise.explained()) << near_noise.reason;
+  EXPECT_TRUE(near_noise.velocity_report.empty()) << near_noise.velocity_report;
+  options.coordinate_start_above = 1;
+  ASSERT_GT(near_noise.reduced_chi_square, options.coordinate_start_above);
+  const RefineResult above = Refine(c.start, c.unit, spec, options);
+  EXPECT_NE(above.velocity_report.find("Stribeck velocity starts"), std::string::npos)
+      << above.velocity_report;
+  EXPECT_NE(above.velocity_report.find(" positive "), std::string::npos) << above.velocity_report;
+  FitSpec replay = spec;
+  replay.stages.insert(replay.stages.begin(), FitStage{});
+  replay.stages.front().friction_replay = true;
+  const RefineResult replayed = Refine(c.start, c.unit, replay, options);
+  ASSERT_TRUE(replayed.has_values()) << replayed.reason;
+  ASSERT_GT(replayed.reduced_chi_square, options.coordinate_start_above);
+  EXPECT_TRUE(replayed.velocity_report.empty()) << replayed.velocity_report;
+}
+
 // The robustness gate's sweep-01 (seed 2026, unit 1, drawn as the sweep
 // draws it: tests/bench/sweep_draw.h): a 0.84 kg vertical rod at 2 kHz,
 // smooth stick, four strokes at 0.36 to 0.55 V that stop 1 mm short of the

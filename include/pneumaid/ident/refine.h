@@ -69,15 +69,15 @@ struct RefineOptions {
   // parameters, the stalls of issue 12 fail).
   double acceptable_reduced_chi_square = 10.0;
   // When neither the fit from the given start nor the ones from the screened
-  // and coordinate starts explain the runs: one more fit, from the moved start
-  // kept last (a Stribeck velocity start's or the coordinate start's when its
-  // fit was kept, else the screen's best candidate or a next-best one whose fit was kept; the given
-  // start when nothing moved), with each run through a Cauchy
-  // loss on its whole squared residual, quadratic up to
+  // and coordinate starts explain the runs: one more fit, from the moved
+  // start kept last (a Stribeck velocity start's or the coordinate start's
+  // when its fit was kept, else the screen's best candidate or a next-best
+  // one whose fit was kept; the given start when nothing moved), with each
+  // run through a Cauchy loss on its whole squared residual, quadratic up to
   // acceptable_reduced_chi_square times its residuals: a run the model
-  // cannot follow (a chaotic stick-slip) then no longer drags the runs it can
-  // follow into another basin. The Better fit is kept (explained first, then
-  // the lower median), as for every attempt below.
+  // cannot follow (a chaotic stick-slip) then no longer drags the runs it
+  // can follow into another basin. The Better fit is kept (explained first,
+  // then the lower median), as for every attempt below.
   bool robust_refit = true;
   // When the robust refit does not explain the runs either: one more fit
   // from the same start, with the last stage run first by multiple shooting
@@ -93,12 +93,12 @@ struct RefineOptions {
   // start it kept.
   bool windowed_refit = true;
   // When the verdict still fails (after the screen, the robust and the
-  // windowed refit above): this many more
-  // starts of the last stage, drawn (Latin hypercube) from a trust box around
-  // the given start (the component fits): each free parameter
-  // within a factor (1 +- w) of its start value, w the larger of rescue_box
-  // and 3 of its standard errors from the start's uncertainty (2 when it has
-  // none: a coefficient the component fits did not determine).
+  // windowed refit above): this many more starts of the last stage, drawn
+  // (Latin hypercube) from a trust box around the given start (the component
+  // fits): each free parameter within a factor (1 +- w) of its start value,
+  // w the larger of rescue_box and 3 of its standard errors from the start's
+  // uncertainty (2 when it has none: a coefficient the component fits did
+  // not determine).
   int rescue_starts = 6;
   double rescue_box = 0.3;
   // When still not explained after the rescue starts: the kept fit's last
