@@ -394,14 +394,15 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     }
     const Experiment& e = *log;
     const double sigma_x_m = reading_sigma_x_m * gain("x", period);
-    const internal::StuckRule stuck = internal::StuckRuleOf(options, sigma_x_m, period);
+    std::vector<double> x = e.column("x");
+    const internal::StuckRule stuck =
+        internal::StuckRuleOf(options, sigma_x_m, internal::PositionQuantum(x), period);
     const auto &p1 = e.column("p1"), &p2 = e.column("p2");
     std::vector<double> force(p1.size());
     for (std::size_t i = 0; i < force.size(); ++i) {
       force[i] = PneumaticAndGravityForce(p1[i], p2[i], rig.atmospheric_pressure_Pa,
                                           rig.area_1_m2(), rig.area_2_m2(), weight_N);
     }
-    std::vector<double> x = e.column("x");
     for (double& value : x) value -= zero_m;
     const Runs runs = internal::StuckRuns(x, stuck);
     const double force_sigma_N = std::max(

@@ -176,8 +176,8 @@ std::vector<FitExperiment> Windows(const FitExperiment& run, double sigma_x_m, d
   std::vector<double> rest_positions = {run.initial.position_m};
   if (n >= 2 * kMinWindowSamples) {
     const double period_s = (t.back() - t.front()) / static_cast<double>(n - 1);
-    const internal::StuckRule rule =
-        internal::StuckRuleOf(FrictionFitOptions{}, sigma_x_m, period_s);
+    const internal::StuckRule rule = internal::StuckRuleOf(FrictionFitOptions{}, sigma_x_m,
+                                                           internal::PositionQuantum(x), period_s);
     for (const auto& phase : internal::StuckRuns(x, rule)) {
       const std::size_t begin = internal::ArrivalSample(x, phase, rule);
       if (begin - starts.back() < kMinWindowSamples || n - begin < kMinWindowSamples) continue;

@@ -44,7 +44,17 @@ std::pair<double, double> SlopeAndCurvatureNoise(double sigma, double n) {
 
 double PositionNoise(const Unit& unit) { return std::max(NoiseSigma(unit, "x"), 1e-7); }
 
-StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double period_s) {
+double PositionQuantum(const std::vector<double>& x) {
+  double quantum = 0;
+  for (std::size_t i = 1; i < x.size(); ++i) {
+    const double step = std::fabs(x[i] - x[i - 1]);
+    if (step > 0 && (quantum == 0 || step < quantum)) quantum = step;
+  }
+  return quantum;
+}
+
+StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double quantum_m,
+                      double period_s) {
   assert(period_s > 0 && std::isfinite(period_s));
   StuckRule rule;
   rule.band_m = options.stuck_band_m + 6.0 * sigma_x_m;
@@ -53,7 +63,7 @@ StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, doubl
   rule.max_slope_m_per_sample = options.max_stuck_speed_m_per_s * period_s;
   rule.max_curvature_m_per_sample2 = options.max_stuck_acceleration_m_per_s2 * period_s * period_s;
   rule.sigma_x_m = sigma_x_m;
-  rule.rest_tolerance_m = kRestSigmas * sigma_x_m;
+  rule.rest_tolerance_m = std::max(kRestSigmas * sigma_x_m, kRestQuanta * quantum_m);
   return rule;
 }
 

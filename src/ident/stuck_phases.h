@@ -28,19 +28,32 @@ struct StuckRule {
   double rest_tolerance_m = 0;             // a reading this close to the rest is at rest
 };
 
+// The step of a quantised position log `x`: its smallest non-zero change from
+// one sample to the next (0 when it never changes). A log that is not
+// quantised (or was resampled or had a lag undone) changes by far less than
+// its noise somewhere, so this is then far below it.
+double PositionQuantum(const std::vector<double>& x);
+
 // The position noise the rule reads on `unit`'s logs: NoiseOf x (declared, or
 // estimated from the logs), at least 0.1 um (a noise-free log still has its
 // numbers' rounding).
 double PositionNoise(const Unit& unit);
 
-// A reading within this many sigma of where the rod rests is at rest.
+// A reading within this many sigma, or this many position quanta, of where
+// the rod rests is at rest: a quantised log at rest flickers by one quantum,
+// which can exceed 3 sigma (a 20 um step with a 5 um noise), and a
+// breakaway read at such a flicker falls samples before the slide starts.
 constexpr double kRestSigmas = 3.0;
+constexpr double kRestQuanta = 1.25;
 
-// The rule of `options` for a log with position noise `sigma_x_m` sampled
-// every `period_s` (> 0): the band is stuck_band_m widened by 6 sigma, the
+// The rule of `options` for a log with position noise `sigma_x_m` and
+// quantum `quantum_m` (PositionQuantum; 0: not quantised) sampled every
+// `period_s` (> 0): the band is stuck_band_m widened by 6 sigma, the
 // shortest phase min_stuck_samples or min_stuck_s, whichever is longer; a
-// reading is at rest within kRestSigmas sigma of the rest.
-StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double period_s);
+// reading is at rest within kRestSigmas sigma or kRestQuanta quanta of the
+// rest, whichever is wider.
+StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, double quantum_m,
+                      double period_s);
 
 // Runs of at least `rule.min_samples` samples whose values stay within
 // `rule.band_m` of each other, and whose motion over the run's first four

@@ -97,7 +97,7 @@ TEST(FrictionSegmentsTest, ASlideThatTurnsBackBeforeItStopsIsReplayedForwardOnly
   const FrictionFitOptions options;
   const StrokeData data = PrepareStrokes(unit, options);
   const double band =
-      internal::StuckRuleOf(options, internal::PositionNoise(unit), 1 / 2000.0).band_m;
+      internal::StuckRuleOf(options, internal::PositionNoise(unit), 0, 1 / 2000.0).band_m;
   int turning = 0, two_sided = 0;
   for (const Segment& s : data.segments) {
     if (s.direction == 0) continue;

@@ -74,7 +74,8 @@ TEST(RefineRunsTest, AWindowStartsWhereTheRodArrivedAtEachRestFromThatRest) {
   EXPECT_EQ(windows[0].measured.t_s.front(), 0.0);
   EXPECT_EQ(windows[0].initial.position_m, run.initial.position_m);
   EXPECT_EQ(windows[0].initial.p1_Pa, run.initial.p1_Pa);
-  const internal::StuckRule rule = internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, kPeriodS);
+  const internal::StuckRule rule =
+      internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, 0, kPeriodS);
   const internal::Runs phases = internal::StuckRuns(x, rule);
   std::size_t samples = windows[0].measured.size();
   for (std::size_t w = 1; w < windows.size(); ++w) {

@@ -15,7 +15,7 @@ namespace {
 constexpr double kSigmaM = 2e-6;  // position noise
 
 internal::StuckRule Rule(double period_s) {
-  return internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, period_s);
+  return internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, 0, period_s);
 }
 
 // x(t) sampled every period_s, with seeded Gaussian noise of sigma_m.
@@ -32,8 +32,8 @@ std::vector<double> Logged(double period_s, int samples, F x, double sigma_m = k
 // the shortest phase at 5 kHz, min_stuck_samples at 250 Hz.
 TEST(StuckPhasesTest, TheRuleTakesTheOptionsPerSample) {
   const FrictionFitOptions options;
-  const internal::StuckRule fast = internal::StuckRuleOf(options, kSigmaM, 2e-4);
-  const internal::StuckRule slow = internal::StuckRuleOf(options, kSigmaM, 4e-3);
+  const internal::StuckRule fast = internal::StuckRuleOf(options, kSigmaM, 0, 2e-4);
+  const internal::StuckRule slow = internal::StuckRuleOf(options, kSigmaM, 0, 4e-3);
   EXPECT_EQ(fast.min_samples, 20);
   EXPECT_EQ(slow.min_samples, options.min_stuck_samples);
   EXPECT_DOUBLE_EQ(fast.max_slope_m_per_sample, options.max_stuck_speed_m_per_s * 2e-4);
@@ -51,7 +51,7 @@ TEST(StuckPhasesTest, TheBandWidensWithTheNoise) {
   const auto longest = [&x](double sigma_m) {
     std::size_t most = 0;
     for (const auto& [begin, end] :
-         internal::StuckRuns(x, internal::StuckRuleOf(FrictionFitOptions{}, sigma_m, 1e-3))) {
+         internal::StuckRuns(x, internal::StuckRuleOf(FrictionFitOptions{}, sigma_m, 0, 1e-3))) {
       most = std::max(most, end - begin);
     }
     return most;
@@ -114,6 +114,40 @@ TEST(StuckPhasesTest, TheRodArrivesAfterThePhaseBeginsAndBreaksAwayWhereItLeaves
   EXPECT_NEAR(static_cast<double>(arrival), 14, 4);  // noise moves the crossing
   EXPECT_NEAR(static_cast<double>(internal::BreakawaySample(x, runs[0], Rule(1e-3))), 200, 1);
   EXPECT_NEAR(internal::RestPosition(x, runs[0]), 0.0, kSigmaM);
+}
+
+// A quantised log (20 um steps, 5 um of noise, 500 Hz) flickers by one step
+// at rest, more than 3 sigma: the rest tolerance is 1.25 steps, so the
+// breakaway is where the rod leaves its rest, not at the last flicker
+// before it (with 3 sigma alone: sample 96, four samples early, where the
+// force is lower and the slide's first samples look faster than they are).
+TEST(StuckPhasesTest, AQuantisedRodFlickeringAtRestBreaksAwayWhereItLeavesItsRest) {
+  constexpr double kStepM = 2e-5, kNoiseM = 5e-6, kPeriodS = 2e-3;
+  std::vector<double> x(150);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double flicker = i % 7 == 3 ? kStepM : (i % 7 == 5 ? -kStepM : 0.0);
+    const double slide = i < 100 ? 0.0 : 20.0 * std::pow((i - 99.5) * kPeriodS, 2);
+    x[i] = i < 100 ? flicker : kStepM * std::round(slide / kStepM);
+  }
+  x[97] = -kStepM;  // the last readings at rest flicker
+  x[98] = x[99] = kStepM;
+  EXPECT_DOUBLE_EQ(internal::PositionQuantum(x), kStepM);
+  const internal::StuckRule rule =
+      internal::StuckRuleOf(FrictionFitOptions{}, kNoiseM, internal::PositionQuantum(x), kPeriodS);
+  EXPECT_DOUBLE_EQ(rule.rest_tolerance_m, internal::kRestQuanta * kStepM);
+  EXPECT_DOUBLE_EQ(
+      internal::StuckRuleOf(FrictionFitOptions{}, kNoiseM, 0, kPeriodS).rest_tolerance_m,
+      internal::kRestSigmas * kNoiseM);
+  const internal::Runs runs = internal::StuckRuns(x, rule);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].first, 0u);
+  const std::size_t breakaway = internal::BreakawaySample(x, runs[0], rule);
+  EXPECT_GE(breakaway, 99u);
+  EXPECT_LE(breakaway, 100u);
+  EXPECT_EQ(internal::RestPosition(x, runs[0]), 0.0);
+  // A log that is not quantised changes by far less than its noise somewhere.
+  EXPECT_LT(internal::PositionQuantum(Logged(1e-3, 300, [](double) { return 0.0; })),
+            0.1 * kSigmaM);
 }
 
 }  // namespace
