@@ -30,8 +30,10 @@ struct StuckRule {
 
 // The step of a quantised position log `x`: its smallest non-zero change from
 // one sample to the next (0 when it never changes). A log that is not
-// quantised (or was resampled or had a lag undone) changes by far less than
-// its noise somewhere, so this is then far below it.
+// quantised changes by far less than its noise somewhere, so this is then
+// far below it; so does a quantised log read off its steps (resampled onto a
+// uniform clock across lost rows, or with a declared lag undone), which
+// then keeps the 3 sigma rule.
 double PositionQuantum(const std::vector<double>& x);
 
 // The position noise the rule reads on `unit`'s logs: NoiseOf x (declared, or

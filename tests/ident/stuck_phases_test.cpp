@@ -119,7 +119,7 @@ TEST(StuckPhasesTest, TheRodArrivesAfterThePhaseBeginsAndBreaksAwayWhereItLeaves
 // A quantised log (20 um steps, 5 um of noise, 500 Hz) flickers by one step
 // at rest, more than 3 sigma: the rest tolerance is 1.25 steps, so the
 // breakaway is where the rod leaves its rest, not at the last flicker
-// before it (with 3 sigma alone: sample 96, four samples early, where the
+// before it (with 3 sigma alone: sample 95, five samples early, where the
 // force is lower and the slide's first samples look faster than they are).
 TEST(StuckPhasesTest, AQuantisedRodFlickeringAtRestBreaksAwayWhereItLeavesItsRest) {
   constexpr double kStepM = 2e-5, kNoiseM = 5e-6, kPeriodS = 2e-3;
