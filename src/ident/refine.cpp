@@ -240,8 +240,9 @@ RefineResult LaterRounds(RefineResult r, const Parameters& start, const Unit& un
     char line[200];
     std::snprintf(line, sizeof(line),
                   "round %d (the refinement again from the result so far): median reduced "
-                  "chi-square %.3g against %.3g, %s",
-                  round, again.reduced_chi_square, r.reduced_chi_square,
+                  "chi-square %s against %s, %s",
+                  round, refine_internal::MeasureText(again).c_str(),
+                  refine_internal::MeasureText(r).c_str(),
                   kept ? "kept (the attempts above are its)" : "not kept");
     report += (report.empty() ? "" : "; ") + std::string(line) + refine_internal::Took(clock);
     if (!kept) {  // a next round would start from the same result

@@ -64,13 +64,6 @@ FitSpec WithCreepFreed(const FitSpec& held) {
   return freed;
 }
 
-std::string Measure(const RefineResult& r) {
-  if (!r.has_values()) return "no values";
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.3g", r.reduced_chi_square);
-  return text;
-}
-
 // `creep` told in the frame of the paper fit it replaces: the given start's
 // costs, held-out runs and coefficient values, the paper fit's reports.
 void InPaperFrame(const RefineResult& paper, RefineResult* creep) {
@@ -105,7 +98,7 @@ Profile FitProfile(const RefineResult& paper, const Unit& unit, const FitSpec& h
     RefineResult r = Refine(from, unit, held, inner);
     out.iterations += r.iterations;
     char item[64];
-    std::snprintf(item, sizeof(item), " %.2g m/s %s,", v, Measure(r).c_str());
+    std::snprintf(item, sizeof(item), " %.2g m/s %s,", v, MeasureText(r).c_str());
     out.report += item;
     if (r.has_values() && (!out.best || Better(r, *out.best))) out.best = std::move(r);
   }
@@ -188,8 +181,8 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   char tail[256];
   std::snprintf(tail, sizeof(tail),
                 " freed %s; v %.3g m/s (%s) at %s against the paper model's %s: %s",
-                Measure(free).c_str(), fitted_v, &creep == &free ? "fitted" : "held",
-                Measure(creep).c_str(), Measure(paper).c_str(),
+                MeasureText(free).c_str(), fitted_v, &creep == &free ? "fitted" : "held",
+                MeasureText(creep).c_str(), MeasureText(paper).c_str(),
                 keep     ? "kept"
                 : better ? "not kept (above the keep ratio)"
                          : "not kept (not better)");
@@ -203,7 +196,7 @@ RefineResult WithStickCreep(RefineResult paper, const Parameters& start, const U
   if (&creep != &free) {
     ListHeldCreepSpeed(fitted_v,
                        "held at a point of the creep fit's profile (freed, the fit ended at " +
-                           Measure(free) + " against " + Measure(creep) +
+                           MeasureText(free) + " against " + MeasureText(creep) +
                            "); the other coefficients' errors are conditional on it",
                        &creep);
   }
