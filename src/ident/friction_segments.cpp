@@ -1,6 +1,5 @@
 #include "friction_segments.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -35,55 +34,6 @@ RodReplayInput ReplayOf(const Segment& s, double mass_kg, const FrictionFitOptio
 }
 
 namespace {
-
-// While the rod sticks the chamber volumes are constant and the force varies
-// smoothly (the valve filling a closed chamber), so its noise is averaged out
-// by a quadratic fit over the last `window` samples of each stuck run. That
-// matters at breakaway: the first crossing of Fs by the raw noisy force comes
-// early, and a replay driven by it would bias Fs. A run whose force the
-// quadratic does not follow, a mean square misfit over kSmoothStuckMisfit
-// times the noise variance sigma_N^2 (a chamber near its dead volume filled
-// within a few samples, at a stop or on a fast valve), keeps its samples as
-// logged: the fit would cut the rise short, and the replay break away at a
-// fraction of the force the rod held (a 0.11 kg rod at 250 Hz: Fs 0.97 N for
-// 15.6).
-constexpr double kSmoothStuckMisfit = 25.0;
-
-// `t`, when not empty, holds the sample times of a log sampled at irregular
-// intervals: the quadratic is then in time.
-void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
-                      const std::vector<double>& t, std::vector<double>* force) {
-  for (const internal::Run& run : runs) {
-    const std::size_t begin = run.first, end = run.second;  // (a lambda below reads `end`)
-    // The first samples of a run still carry the arrest's pressure transient.
-    const std::size_t first =
-        end - std::min(window, end - begin - std::min<std::size_t>(3, end - begin));
-    // The run's last sample may already move (a run of 3 samples or fewer,
-    // which min_stuck_samples allows, leaves none).
-    const std::size_t n = end > first + 1 ? end - 1 - first : 0;
-    if (n < 8) continue;
-    Eigen::MatrixXd design(n, 3);
-    Eigen::VectorXd y(n);
-    const double centre = 0.5 * static_cast<double>(first + end - 1);
-    // Where sample i lies in the run's window, about -0.5 .. 0.5.
-    const auto coordinate = [&](std::size_t i) {
-      if (t.empty()) return (static_cast<double>(i) - centre) / static_cast<double>(n);
-      return (t[i] - 0.5 * (t[first] + t[end - 1])) / (t[end - 1] - t[first]);
-    };
-    for (std::size_t i = 0; i < n; ++i) {
-      const double s = coordinate(first + i);
-      for (int power = 0; power < 3; ++power) design(i, power) = std::pow(s, power);
-      y(i) = (*force)[first + i];
-    }
-    const Eigen::Vector3d c = design.colPivHouseholderQr().solve(y);
-    const double misfit = (design * c - y).squaredNorm() / static_cast<double>(n - 3);
-    if (misfit > kSmoothStuckMisfit * sigma_N * sigma_N) continue;
-    for (std::size_t i = first; i < end; ++i) {
-      const double s = coordinate(i);
-      (*force)[i] = c(0) + s * (c(1) + s * c(2));
-    }
-  }
-}
 
 // Residual weights of `s`: a sample n intervals from the last known state
 // (the breakaway forward, the arrest backward) carries the position noise, a
@@ -200,13 +150,28 @@ double EscapeVelocityError(const std::vector<double>& x, const std::vector<doubl
 struct StrokeLog {
   const std::vector<double>& force_N;  // smoothed where stuck (SmoothStuckForce)
   const std::vector<double>& x;
-  double period_s;                    // the median interval when irregular
-  const std::vector<double>* time_s;  // the sample times when irregular, else null
+  double period_s;                      // the median interval when irregular
+  const std::vector<double>* time_s;    // the sample times when irregular, else null
+  const std::vector<bool>& not_logged;  // samples the logger did not write (may be empty)
   internal::StuckRule stuck;  // its noise: internal::PositionNoise, times the lag inverse's gain
   double half_stroke_m;       // the stroke ends at +-half_stroke_m
   double contact_m;           // within this of an end the rod may touch the stop
   double drift_m;             // the force noise's drift per sample^2 (SetWeights)
 };
+
+// Whether the logger lost a row from the sample before the breakaway `at`
+// of a stuck run to the first sample after the run (`stuck_end`): there the
+// run's end, the breakaway sample and the force that the run's smoothing
+// reads are interpolated, and the breakaway is not read (a light rod leaving
+// a stop at 500 Hz: 1.6 N for 5.4).
+bool LostRowsAtBreakaway(const StrokeLog& log, std::size_t at, std::size_t stuck_end) {
+  if (log.not_logged.empty()) return false;
+  const std::size_t last = std::min(stuck_end, log.not_logged.size() - 1);
+  for (std::size_t i = at > 0 ? at - 1 : 0; i <= last; ++i) {
+    if (log.not_logged[i]) return true;
+  }
+  return false;
+}
 
 // A rod stuck at an end may rest on the stop, whose force is not friction:
 // its segment starts once the force points away from the stop, and only a
@@ -225,10 +190,9 @@ bool StartAtStop(const StrokeLog& log, const Runs& runs, std::size_t k, int cont
     const double travel = log.x[i] - log.x[stuck_end - 1];
     if (std::fabs(travel) > log.stuck.band_m) leaving = travel > 0 ? +1 : -1;
   }
-  if (leaving != 0) {
-    data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
-        leaving * log.force_N[internal::BreakawaySample(log.x, runs[k], log.stuck)]);
-  }
+  const std::size_t at = internal::BreakawaySample(log.x, runs[k], log.stuck);
+  if (leaving != 0 && !LostRowsAtBreakaway(log, at, stuck_end))
+    data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(leaving * log.force_N[at]);
   if (leaving == -contact) ++data->stop_departures[leaving > 0 ? 0 : 1];
   std::size_t free_from = s->begin;  // after the last sample pushing into the stop
   for (std::size_t i = s->begin; i < stuck_end; ++i) {
@@ -315,7 +279,8 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
     double escape_error_m_per_s = 0;
     if (s.direction != 0) {
       const std::size_t at = internal::BreakawaySample(x, runs[k], log.stuck);
-      s.breakaway_force_N = s.direction * log.force_N[at];
+      if (!LostRowsAtBreakaway(log, at, stuck_end))
+        s.breakaway_force_N = s.direction * log.force_N[at];
       escape_error_m_per_s = EscapeVelocityError(x, log.time_s, at, s.end, log.period_s,
                                                  options.breakaway_timing_per_s);
     }
@@ -371,6 +336,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     // Samples interpolated across rows the logger lost (a uniform clock), or
     // either end of a gap (irregular).
     std::vector<bool> in_gap;
+    // Samples the logger did not write: interpolated (a uniform clock that
+    // lost rows), or either end of a gap (irregular).
+    std::vector<bool> not_logged;
     if (period <= 0 && IrregularClock(logged.column("t"))) {
       period = MedianInterval(logged.column("t"));
       irregular = true;
@@ -378,8 +346,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
         in_gap.resize(logged.column("t").size(), false);
         in_gap[j] = in_gap[j + 1] = true;
       }
+      not_logged = in_gap;
     } else if (period <= 0) {  // read on a uniform clock instead
-      data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap));
+      data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap, &not_logged));
       log = data.resampled.back().get();
       period = UniformPeriod(log->column("t"));
     }
@@ -394,9 +363,12 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     }
     const Experiment& e = *log;
     const double sigma_x_m = reading_sigma_x_m * gain("x", period);
+    // The quantum is the logged column's: a log read on a uniform clock or
+    // with its lag undone is off the ADC's lattice, though it flickers at
+    // rest as the logged one does (by up to the lag inverse's gain).
+    const double quantum_m = internal::PositionQuantum(logged.column("x")) * gain("x", period);
     std::vector<double> x = e.column("x");
-    const internal::StuckRule stuck =
-        internal::StuckRuleOf(options, sigma_x_m, internal::PositionQuantum(x), period);
+    const internal::StuckRule stuck = internal::StuckRuleOf(options, sigma_x_m, quantum_m, period);
     const auto &p1 = e.column("p1"), &p2 = e.column("p2");
     std::vector<double> force(p1.size());
     for (std::size_t i = 0; i < force.size(); ++i) {
@@ -409,7 +381,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
         std::hypot(p1_sigma_N * gain("p1", period), p2_sigma_N * gain("p2", period)), 1e-3);
     data.time_s.push_back(irregular ? e.column("t") : std::vector<double>{});
     const std::vector<double>* time_s = irregular ? &data.time_s.back() : nullptr;
-    SmoothStuckForce(runs, options.stuck_force_samples, force_sigma_N, data.time_s.back(), &force);
+    internal::SmoothStuckForce(runs, options.stuck_force_samples, force_sigma_N, data.time_s.back(),
+                               &force);
     data.force_N.push_back(std::move(force));
     data.position_m.push_back(x);
     data.experiments.push_back(&e);
@@ -419,6 +392,7 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
                                data.position_m.back(),
                                period,
                                time_s,
+                               not_logged,
                                stuck,
                                0.5 * rig.stroke_m,
                                options.end_margin_m + 4 * sigma_x_m,

@@ -1,5 +1,6 @@
 #include "stuck_phases.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -116,6 +117,40 @@ std::size_t BreakawaySample(const std::vector<double>& x, const Run& run, const 
   std::size_t at = run.second - 1;
   while (at > run.first && std::fabs(x[at] - rested) > rule.rest_tolerance_m) --at;
   return at;
+}
+
+void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
+                      const std::vector<double>& t, std::vector<double>* force) {
+  for (const Run& run : runs) {
+    const std::size_t begin = run.first, end = run.second;  // (a lambda below reads `end`)
+    // The first samples of a run still carry the arrest's pressure transient.
+    const std::size_t first =
+        end - std::min(window, end - begin - std::min<std::size_t>(3, end - begin));
+    // The run's last sample may already move (a run of 3 samples or fewer,
+    // which min_stuck_samples allows, leaves none).
+    const std::size_t n = end > first + 1 ? end - 1 - first : 0;
+    if (n < 8) continue;
+    Eigen::MatrixXd design(n, 3);
+    Eigen::VectorXd y(n);
+    const double centre = 0.5 * static_cast<double>(first + end - 1);
+    // Where sample i lies in the run's window, about -0.5 .. 0.5.
+    const auto coordinate = [&](std::size_t i) {
+      if (t.empty()) return (static_cast<double>(i) - centre) / static_cast<double>(n);
+      return (t[i] - 0.5 * (t[first] + t[end - 1])) / (t[end - 1] - t[first]);
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      const double s = coordinate(first + i);
+      for (int power = 0; power < 3; ++power) design(i, power) = std::pow(s, power);
+      y(i) = (*force)[first + i];
+    }
+    const Eigen::Vector3d c = design.colPivHouseholderQr().solve(y);
+    const double misfit = (design * c - y).squaredNorm() / static_cast<double>(n - 3);
+    if (misfit > kSmoothStuckMisfit * sigma_N * sigma_N) continue;
+    for (std::size_t i = first; i < end; ++i) {
+      const double s = coordinate(i);
+      (*force)[i] = c(0) + s * (c(1) + s * c(2));
+    }
+  }
 }
 
 }  // namespace pneumaid::internal

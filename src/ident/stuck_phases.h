@@ -1,7 +1,7 @@
 // One home of the rule "the rod is stuck here", read off a logged position:
 // the friction fit cuts its replay segments at these phases
 // (friction_segments.h) and multiple shooting restarts its windows there
-// (refine_runs.h).
+// (refine_runs.h). And the force the rod holds while stuck, smoothed.
 #pragma once
 
 #include <cstddef>
@@ -79,5 +79,24 @@ std::size_t ArrivalSample(const std::vector<double>& x, const Run& run, const St
 // later, at a higher force; a long slide is far past it after a quarter of
 // its travel).
 std::size_t BreakawaySample(const std::vector<double>& x, const Run& run, const StuckRule& rule);
+
+// While the rod sticks the chamber volumes are constant and the force varies
+// smoothly (the valve filling a closed chamber), so its noise is averaged out
+// by a quadratic fit over the last `window` samples of each stuck run. That
+// matters at breakaway: the first crossing of Fs by the raw noisy force comes
+// early, and a replay driven by it would bias Fs. A run whose force the
+// quadratic does not follow, a mean square misfit over kSmoothStuckMisfit
+// times the noise variance sigma_N^2 (a chamber near its dead volume filled
+// within a few samples, at a stop or on a fast valve), keeps its samples as
+// logged: the fit would cut the rise short, and the replay break away at a
+// fraction of the force the rod held (a 0.11 kg rod at 250 Hz: Fs 0.97 N for
+// 15.6).
+constexpr double kSmoothStuckMisfit = 25.0;
+
+// Smooths `force` over each of `runs` so; `t`, when not empty, holds the
+// sample times of a log sampled at irregular intervals: the quadratic is
+// then in time.
+void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
+                      const std::vector<double>& t, std::vector<double>* force);
 
 }  // namespace pneumaid::internal

@@ -891,10 +891,13 @@ TEST_F(RefineSpecTest, CheckRefinableRefusesBeforeAnyFitWhatNoFitCanChange) {
 
 // On data with model mismatch (smooth stick, the rig integrated tighter) the
 // event model's cost is rougher than its stall tolerance at the scale of the
-// errors (on this unit 2.2e-3 of the cost; of six friction sets tried, the
-// one that shows it with the default single pair): the stencil measures it,
-// and the errors it widens are the same fit's, never narrower, still honest
-// (ExpectHonestErrors).
+// errors: the stencil measures it, and the errors it widens are the same
+// fit's, never narrower, still honest (ExpectHonestErrors). The roughness
+// one pair reads depends on the last bits of the arithmetic: on this unit
+// 2.2e-3 of the cost on one machine, 1.1e-3 on another (an AVX-512 EPYC,
+// session 57), where two pairs read 2.4e-3 (of four seeds there, two read
+// none at all: the stick/slip switches that make the roughness move with
+// the noise). So the test measures with two pairs.
 TEST(RefineTest, TheMeasuredCostResolutionWidensTheErrorsOnAMismatchedUnit) {
   Parameters truth = testing::HeavyHorizontalTruth();
   truth.friction.negative = {8.0, 1.0, 10.0, 0.02};
@@ -902,8 +905,10 @@ TEST(RefineTest, TheMeasuredCostResolutionWidensTheErrorsOnAMismatchedUnit) {
   const FitSpec spec = LoadFitSpec(kDefaultSpec);
   RefineOptions fixed;
   fixed.cost_resolution_directions = 0;
+  RefineOptions two_pairs;
+  two_pairs.cost_resolution_directions = 2;
   const RefineResult plain = Refine(truth, unit, spec, fixed);
-  const RefineResult measured = Refine(truth, unit, spec, RefineOptions{});
+  const RefineResult measured = Refine(truth, unit, spec, two_pairs);
   ASSERT_TRUE(plain.has_values() && measured.has_values());
   EXPECT_EQ(plain.cost_resolution, fixed.stall_tolerance);
   EXPECT_GT(measured.cost_resolution, 1.2 * fixed.stall_tolerance);
