@@ -150,28 +150,13 @@ double EscapeVelocityError(const std::vector<double>& x, const std::vector<doubl
 struct StrokeLog {
   const std::vector<double>& force_N;  // smoothed where stuck (SmoothStuckForce)
   const std::vector<double>& x;
-  double period_s;                      // the median interval when irregular
-  const std::vector<double>* time_s;    // the sample times when irregular, else null
-  const std::vector<bool>& not_logged;  // samples the logger did not write (may be empty)
+  double period_s;                    // the median interval when irregular
+  const std::vector<double>* time_s;  // the sample times when irregular, else null
   internal::StuckRule stuck;  // its noise: internal::PositionNoise, times the lag inverse's gain
   double half_stroke_m;       // the stroke ends at +-half_stroke_m
   double contact_m;           // within this of an end the rod may touch the stop
   double drift_m;             // the force noise's drift per sample^2 (SetWeights)
 };
-
-// Whether the logger lost a row from the sample before the breakaway `at`
-// of a stuck run to the first sample after the run (`stuck_end`): there the
-// run's end, the breakaway sample and the force that the run's smoothing
-// reads are interpolated, and the breakaway is not read (a light rod leaving
-// a stop at 500 Hz: 1.6 N for 5.4).
-bool LostRowsAtBreakaway(const StrokeLog& log, std::size_t at, std::size_t stuck_end) {
-  if (log.not_logged.empty()) return false;
-  const std::size_t last = std::min(stuck_end, log.not_logged.size() - 1);
-  for (std::size_t i = at > 0 ? at - 1 : 0; i <= last; ++i) {
-    if (log.not_logged[i]) return true;
-  }
-  return false;
-}
 
 // A rod stuck at an end may rest on the stop, whose force is not friction:
 // its segment starts once the force points away from the stop, and only a
@@ -190,9 +175,10 @@ bool StartAtStop(const StrokeLog& log, const Runs& runs, std::size_t k, int cont
     const double travel = log.x[i] - log.x[stuck_end - 1];
     if (std::fabs(travel) > log.stuck.band_m) leaving = travel > 0 ? +1 : -1;
   }
-  const std::size_t at = internal::BreakawaySample(log.x, runs[k], log.stuck);
-  if (leaving != 0 && !LostRowsAtBreakaway(log, at, stuck_end))
-    data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(leaving * log.force_N[at]);
+  if (leaving != 0) {
+    data->end_breakaway_N[leaving > 0 ? 0 : 1].push_back(
+        leaving * log.force_N[internal::BreakawaySample(log.x, runs[k], log.stuck)]);
+  }
   if (leaving == -contact) ++data->stop_departures[leaving > 0 ? 0 : 1];
   std::size_t free_from = s->begin;  // after the last sample pushing into the stop
   for (std::size_t i = s->begin; i < stuck_end; ++i) {
@@ -279,8 +265,7 @@ void CutSegments(const StrokeLog& log, const Runs& runs, const FrictionFitOption
     double escape_error_m_per_s = 0;
     if (s.direction != 0) {
       const std::size_t at = internal::BreakawaySample(x, runs[k], log.stuck);
-      if (!LostRowsAtBreakaway(log, at, stuck_end))
-        s.breakaway_force_N = s.direction * log.force_N[at];
+      s.breakaway_force_N = s.direction * log.force_N[at];
       escape_error_m_per_s = EscapeVelocityError(x, log.time_s, at, s.end, log.period_s,
                                                  options.breakaway_timing_per_s);
     }
@@ -336,9 +321,6 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     // Samples interpolated across rows the logger lost (a uniform clock), or
     // either end of a gap (irregular).
     std::vector<bool> in_gap;
-    // Samples the logger did not write: interpolated (a uniform clock that
-    // lost rows), or either end of a gap (irregular).
-    std::vector<bool> not_logged;
     if (period <= 0 && IrregularClock(logged.column("t"))) {
       period = MedianInterval(logged.column("t"));
       irregular = true;
@@ -346,9 +328,8 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
         in_gap.resize(logged.column("t").size(), false);
         in_gap[j] = in_gap[j + 1] = true;
       }
-      not_logged = in_gap;
     } else if (period <= 0) {  // read on a uniform clock instead
-      data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap, &not_logged));
+      data.resampled.push_back(internal::ResampledUniformly(logged, &in_gap));
       log = data.resampled.back().get();
       period = UniformPeriod(log->column("t"));
     }
@@ -363,12 +344,9 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
     }
     const Experiment& e = *log;
     const double sigma_x_m = reading_sigma_x_m * gain("x", period);
-    // The quantum is the logged column's: a log read on a uniform clock or
-    // with its lag undone is off the ADC's lattice, though it flickers at
-    // rest as the logged one does (by up to the lag inverse's gain).
-    const double quantum_m = internal::PositionQuantum(logged.column("x")) * gain("x", period);
     std::vector<double> x = e.column("x");
-    const internal::StuckRule stuck = internal::StuckRuleOf(options, sigma_x_m, quantum_m, period);
+    const internal::StuckRule stuck =
+        internal::StuckRuleOf(options, sigma_x_m, internal::PositionQuantum(x), period);
     const auto &p1 = e.column("p1"), &p2 = e.column("p2");
     std::vector<double> force(p1.size());
     for (std::size_t i = 0; i < force.size(); ++i) {
@@ -392,7 +370,6 @@ StrokeData PrepareStrokes(const Unit& unit, const FrictionFitOptions& options,
                                data.position_m.back(),
                                period,
                                time_s,
-                               not_logged,
                                stuck,
                                0.5 * rig.stroke_m,
                                options.end_margin_m + 4 * sigma_x_m,

@@ -7,7 +7,6 @@
 #include <array>
 #include <cstddef>
 #include <memory>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -66,9 +65,8 @@ struct Segment {
   double stop_position_m = 0, stop_time_guess_s = 0, stop_time_min_s = 0, stop_time_max_s = 0;
   // Where the logged slide starts and (two-sided) stops, for the weights.
   std::size_t slide_begin = 0, arrest = 0;
-  // The force magnitude at the slide's breakaway (the last sample at rest);
-  // none where the logger lost rows at it.
-  std::optional<double> breakaway_force_N;
+  // The force magnitude at the slide's breakaway (the last sample at rest).
+  double breakaway_force_N = 0;
   // 1 / (expected residual std) per sample of the segment: the position
   // noise, the drift that the force's noise integrated twice adds with the
   // distance from the nearest exactly known state (stuck, v = 0), and in a
@@ -93,7 +91,7 @@ struct StrokeData {
   std::vector<Segment> segments;
   std::vector<internal::SlideCluster> clusters;  // smooth slides no segment covers
   // Breakaway forces (magnitudes) of stuck phases at the stroke ends,
-  // positive direction first (none where the logger lost rows at one).
+  // positive direction first.
   std::vector<double> end_breakaway_N[2];
   // Slides that leave a stop, replayed or not (positive direction first).
   int stop_departures[2] = {0, 0};

@@ -15,7 +15,7 @@ namespace {
 std::vector<double> Breakaways(const StrokeData& data, int direction) {
   std::vector<double> forces;
   for (const Segment& s : data.segments) {
-    if (s.direction == direction && s.breakaway_force_N) forces.push_back(*s.breakaway_force_N);
+    if (s.direction == direction) forces.push_back(s.breakaway_force_N);
   }
   if (forces.size() >= 3) return forces;
   const std::vector<double>& at_ends = data.end_breakaway_N[direction > 0 ? 0 : 1];

@@ -58,7 +58,7 @@ StuckRule StuckRuleOf(const FrictionFitOptions& options, double sigma_x_m, doubl
                       double period_s) {
   assert(period_s > 0 && std::isfinite(period_s));
   StuckRule rule;
-  rule.band_m = options.stuck_band_m + 6.0 * sigma_x_m;
+  rule.band_m = options.stuck_band_m + std::max(6.0 * sigma_x_m, kRestQuanta * quantum_m);
   rule.min_samples = std::max(options.min_stuck_samples,
                               static_cast<int>(std::ceil(options.min_stuck_s / period_s)));
   rule.max_slope_m_per_sample = options.max_stuck_speed_m_per_s * period_s;

@@ -50,7 +50,9 @@ constexpr double kRestQuanta = 1.25;
 
 // The rule of `options` for a log with position noise `sigma_x_m` and
 // quantum `quantum_m` (PositionQuantum; 0: not quantised) sampled every
-// `period_s` (> 0): the band is stuck_band_m widened by 6 sigma, the
+// `period_s` (> 0): the band is stuck_band_m widened by 6 sigma or
+// kRestQuanta quanta, whichever is wider (a rest that flickers between two
+// levels of a 0.1 mm ADC spans 0.1 mm, more than 25 um + 6 x 2 um), the
 // shortest phase min_stuck_samples or min_stuck_s, whichever is longer; a
 // reading is at rest within kRestSigmas sigma or kRestQuanta quanta of the
 // rest, whichever is wider.

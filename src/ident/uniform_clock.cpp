@@ -7,8 +7,8 @@
 
 namespace pneumaid::internal {
 
-std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e, std::vector<bool>* in_gap,
-                                                     std::vector<bool>* interpolated) {
+std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
+                                                     std::vector<bool>* in_gap) {
   const auto& t = e.column("t");
   auto out = std::make_shared<Experiment>();
   out->entry = e.entry;
@@ -28,20 +28,15 @@ std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e, std::v
     while (j + 2 < t.size() && t[j + 1] <= clock[k]) ++j;
     left[k] = j;
   }
-  const double round_off_s = 1e-9 * period;
-  const auto between_rows = [&](std::size_t k) {
-    const std::size_t j = left[k];
-    return clock[k] > t[j] + round_off_s && clock[k] < t[j + 1] - round_off_s;
-  };
   if (in_gap != nullptr) {
     std::vector<bool> gap(t.size() - 1, false);  // per logged interval
     for (std::size_t j : SamplingGaps(t)) gap[j] = true;
     in_gap->assign(samples, false);
-    for (std::size_t k = 0; k < samples; ++k) (*in_gap)[k] = gap[left[k]] && between_rows(k);
-  }
-  if (interpolated != nullptr) {
-    interpolated->assign(samples, false);
-    for (std::size_t k = 0; k < samples; ++k) (*interpolated)[k] = between_rows(k);
+    const double round_off_s = 1e-9 * period;
+    for (std::size_t k = 0; k < samples; ++k) {
+      const std::size_t j = left[k];
+      (*in_gap)[k] = gap[j] && clock[k] > t[j] + round_off_s && clock[k] < t[j + 1] - round_off_s;
+    }
   }
   for (const auto& [name, values] : e.columns) {
     std::vector<double>& column = out->columns[name];

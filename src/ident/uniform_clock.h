@@ -16,11 +16,8 @@ namespace pneumaid::internal {
 // each sample. `in_gap`, when given, marks the clock's samples that lie
 // inside a gap of the log (an interval over kSamplingGapIntervals times the
 // median, the rule `check` notes): interpolated across rows the logger lost,
-// they are no measurement. `interpolated`, when given, marks every clock
-// sample with no logged row at its time (in a gap or across a single lost
-// row).
+// they are no measurement.
 std::shared_ptr<const Experiment> ResampledUniformly(const Experiment& e,
-                                                     std::vector<bool>* in_gap = nullptr,
-                                                     std::vector<bool>* interpolated = nullptr);
+                                                     std::vector<bool>* in_gap = nullptr);
 
 }  // namespace pneumaid::internal

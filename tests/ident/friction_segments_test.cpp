@@ -8,8 +8,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <utility>
 
 #include "../../src/ident/friction_starts.h"
 #include "../synth/synth_test_util.h"
@@ -213,69 +211,6 @@ TEST(FrictionSegmentsTest, ASlideFromAStopIsReplayedFromWhereTheForceLeavesTheSt
   no_stops.end_slide_m = 0;
   for (const Segment& s : PrepareStrokes(unit, no_stops, {}, {true, true}).segments) {
     EXPECT_LT(std::fabs((*s.position_m)[s.slide_begin]), half - zone);
-  }
-}
-
-// A light horizontal rod at 500 Hz whose x is logged in 20 um ADC steps with
-// a declared noise of 5 um flickers at rest by a step, more than 3 sigma;
-// the breakaway is read where it leaves that rest (stuck_phases.h,
-// kRestQuanta). A logger that lost 2 % of its rows (the kept rows as they
-// were) is read on a uniform clock (ResampledUniformly), off the ADC's
-// lattice: the quantum is still the logged column's, so every breakaway it
-// reads is the whole log's. With 3 sigma there, three of the six breakaways
-// at the stops read 4.1 to 4.5 N (the whole log's: 4.8 to 5.7 N), and a
-// breakaway read across lost rows 1.6 N for 5.4: those are not read.
-TEST(FrictionSegmentsTest, AQuantisedLogThatLostRowsReadsItsBreakawaysAsWhole) {
-  Parameters truth =
-      LoadParams(std::string(PNEUMAID_SOURCE_DIR) + "/configs/paper-horizontal.yaml");
-  truth.cylinder.load_mass_kg = 0.09;
-  truth.friction.positive = {4.2, 0.91, 12.7, 0.0034};
-  truth.friction.negative = {11.7, 2.42, 3.1, 0.016};
-  Protocol protocol = Strokes(2, 500, {0.45, 0.6, 0.8}, 0.002);
-  protocol.sensors["x"].sigma = 5e-6;
-  protocol.sensors["x"].quantization = 20e-6;
-  // Per log and slide start the slides' breakaways, and those at the stops.
-  struct Breakaways {
-    std::map<std::pair<std::size_t, std::size_t>, double> slides;
-    std::vector<double> at_stops[2];
-  };
-  const auto read = [&](double dropped, const char* name) {
-    Protocol p = protocol;
-    p.dropped_samples = dropped;
-    const Unit unit = testing::WriteAndReadUnit(Synthesize(truth, p, 5, "Q"), name);
-    const StrokeData data = PrepareStrokes(unit, FrictionFitOptions{});
-    EXPECT_EQ(data.resampled.empty(), dropped == 0);
-    Breakaways out;
-    for (const Segment& s : data.segments) {
-      const auto log = std::find_if(data.position_m.begin(), data.position_m.end(),
-                                    [&](const auto& x) { return &x == s.position_m; });
-      if (s.breakaway_force_N) {
-        out.slides[{log - data.position_m.begin(), s.slide_begin}] = *s.breakaway_force_N;
-      }
-    }
-    for (int d = 0; d < 2; ++d) out.at_stops[d] = data.end_breakaway_N[d];
-    return out;
-  };
-  const Breakaways whole = read(0, "friction_segments_whole");
-  const Breakaways lossy = read(0.02, "friction_segments_lossy");
-  // The resampled logs keep the whole logs' samples: a slide starts at the
-  // same sample, and its breakaway reads the same force.
-  ASSERT_GT(whole.slides.size(), 50u);
-  EXPECT_GT(lossy.slides.size(), whole.slides.size() * 8 / 10);
-  for (const auto& [at, force] : lossy.slides) {
-    const auto found = whole.slides.find(at);
-    ASSERT_NE(found, whole.slides.end()) << "log " << at.first << " sample " << at.second;
-    EXPECT_NEAR(force, found->second, 0.03 * found->second) << at.second;
-  }
-  for (int d = 0; d < 2; ++d) {
-    EXPECT_GE(lossy.at_stops[d].size() + 1, whole.at_stops[d].size()) << d;
-    for (double force : lossy.at_stops[d]) {
-      const auto nearest = std::min_element(
-          whole.at_stops[d].begin(), whole.at_stops[d].end(),
-          [&](double a, double b) { return std::fabs(a - force) < std::fabs(b - force); });
-      ASSERT_NE(nearest, whole.at_stops[d].end()) << d;
-      EXPECT_NEAR(force, *nearest, 0.03 * *nearest) << d;
-    }
   }
 }
 

@@ -150,5 +150,39 @@ TEST(StuckPhasesTest, AQuantisedRodFlickeringAtRestBreaksAwayWhereItLeavesItsRes
             0.1 * kSigmaM);
 }
 
+// A rod at rest halfway between two levels of a coarse position ADC (0.1 mm
+// steps, 2 um of noise, 2 kHz) flickers between them at random: a span of
+// 0.1 mm, wider than 25 um + 6 sigma. The band takes 1.25 quanta there, so
+// the rest is one phase up to where the rod slides away (with 6 sigma
+// alone: pieces of a few samples); at the sweep's quanta (at most 20 um for
+// 5 um of noise) the band stays 25 um + 6 sigma.
+TEST(StuckPhasesTest, ARestFlickeringBetweenTwoCoarseQuantaIsOnePhase) {
+  constexpr double kStepM = 1e-4, kPeriodS = 5e-4;
+  std::vector<double> x = Logged(kPeriodS, 600, [](double t) {
+    return 0.5 * kStepM + (t < 0.2 ? 0.0 : 0.05 * (t - 0.2));  // 50 mm/s from 0.2 s
+  });
+  for (double& value : x) value = kStepM * std::round(value / kStepM);
+  const double quantum = internal::PositionQuantum(x);
+  ASSERT_NEAR(quantum, kStepM, 1e-12);  // (the lattice's levels rounded)
+  const internal::StuckRule rule =
+      internal::StuckRuleOf(FrictionFitOptions{}, kSigmaM, quantum, kPeriodS);
+  EXPECT_NEAR(rule.band_m, FrictionFitOptions{}.stuck_band_m + internal::kRestQuanta * kStepM,
+              1e-12);
+  const internal::Runs runs = internal::StuckRuns(x, rule);
+  ASSERT_FALSE(runs.empty());
+  EXPECT_EQ(runs[0].first, 0u);
+  EXPECT_GE(runs[0].second, 395u);
+  EXPECT_LE(runs[0].second, 410u);
+  const std::size_t breakaway = internal::BreakawaySample(x, runs[0], rule);
+  EXPECT_GE(breakaway, 395u);
+  EXPECT_LE(breakaway, 405u);
+  std::size_t longest = 0;
+  for (const auto& [begin, end] : internal::StuckRuns(x, Rule(kPeriodS)))
+    longest = std::max(longest, end - begin);
+  EXPECT_LT(longest, 100u);
+  EXPECT_DOUBLE_EQ(internal::StuckRuleOf(FrictionFitOptions{}, 5e-6, 2e-5, kPeriodS).band_m,
+                   FrictionFitOptions{}.stuck_band_m + 6 * 5e-6);
+}
+
 }  // namespace
 }  // namespace pneumaid

@@ -37,7 +37,8 @@ namespace pneumaid {
 struct FrictionFitOptions {
   // The rod counts as stuck over a run of samples whose logged positions stay
   // within this band [m] (plus 6 x the position noise, declared or estimated,
-  // grown by the inverse of a declared x lag); runs shorter
+  // grown by the inverse of a declared x lag, or 1.25 position quanta on a
+  // log quantised more coarsely, whichever is wider); runs shorter
   // than min_stuck_samples are not stuck phases. (The one rule of "stuck":
   // multiple shooting, FitStage::windows, cuts its windows by it too, with
   // these defaults.)
