@@ -95,8 +95,8 @@ std::size_t BreakawaySample(const std::vector<double>& x, const Run& run, const 
 // 15.6).
 constexpr double kSmoothStuckMisfit = 25.0;
 
-// Smooths `force` over each of `runs` so; `t`, when not empty, holds the
-// sample times of a log sampled at irregular intervals: the quadratic is
+// Smooths `force` over each of `runs` that way; `t`, when not empty, holds
+// the sample times of a log sampled at irregular intervals: the quadratic is
 // then in time.
 void SmoothStuckForce(const Runs& runs, std::size_t window, double sigma_N,
                       const std::vector<double>& t, std::vector<double>* force);
